@@ -1,0 +1,79 @@
+"""gearopt: open, plugin-based design optimisation of spiral bevel gears.
+
+Public API: design files (:func:`load_design`), machine settings (:func:`basic_settings`), the plugin
+contract (:data:`hookimpl`, the ``Base*`` classes) and the plugin registries.
+"""
+
+from gearopt.blank import Blank, compute_blank
+from gearopt.design import (
+    Design,
+    Meta,
+    Misalignment,
+    PairData,
+    load_design,
+    loads_design,
+    parse_design,
+    with_overrides,
+)
+from gearopt.errors import (
+    DesignError,
+    GearoptError,
+    NotAvailableError,
+    PluginError,
+    SettingsError,
+    UnknownKeyError,
+)
+from gearopt.evaluation import BaseEvaluator, BaseObjective, Evaluation
+from gearopt.hookspecs import hookimpl, hookspec
+from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
+from gearopt.plugins import (
+    evaluators,
+    get_machine_model,
+    get_plugin_manager,
+    list_plugins,
+    machine_models,
+    objectives,
+)
+
+__version__ = "0.1.0"
+
+
+def basic_settings(design: Design, *, plugin_manager=None) -> MachineSettings:
+    """Basic machine-tool settings of a design, computed by its machine model's plugin."""
+    return get_machine_model(design.model, plugin_manager=plugin_manager).basic_settings(design)
+
+
+__all__ = [
+    "BaseEvaluator",
+    "BaseMachineModel",
+    "BaseObjective",
+    "Blank",
+    "Design",
+    "DesignError",
+    "Evaluation",
+    "GearoptError",
+    "MachineSettings",
+    "Meta",
+    "Misalignment",
+    "NotAvailableError",
+    "PairData",
+    "PluginError",
+    "SearchDimension",
+    "SettingsError",
+    "UnknownKeyError",
+    "__version__",
+    "basic_settings",
+    "compute_blank",
+    "evaluators",
+    "get_machine_model",
+    "get_plugin_manager",
+    "hookimpl",
+    "hookspec",
+    "list_plugins",
+    "load_design",
+    "loads_design",
+    "machine_models",
+    "objectives",
+    "parse_design",
+    "with_overrides",
+]

@@ -1,0 +1,403 @@
+"""Design files (TOML) and the frozen, validated dataclasses they load into.
+
+A design file has the tables ``[meta]`` (optional), ``[pair]`` (the blank data of the pair),
+``[machine]`` (``model = "..."`` plus the machine model's own keys, parsed by that model's plugin),
+``[misalignment]`` (how the pair is assembled; what the contact engine sees) and
+``[compensation]`` (alignment errors the machine settings compensate, seed 001 section 4).
+Every key carries its unit (``_mm``, ``_deg``); members are listed ``[pinion, gear]``.
+
+Example (seed 001, Table 2)::
+
+    [pair]
+    pinion_teeth = 16
+    gear_teeth = 41
+    shaft_angle_deg = 90.0
+    mean_spiral_angle_deg = 35.0
+    mean_cone_distance_mm = 91.265        # or mean_normal_module_mm = 3.397
+    face_width_mm = 32.0
+    pressure_angle_deg = 20.0
+    pinion_hand = "left"
+    outer_addendum_mm = [3.397, 3.397]
+    outer_dedendum_mm = [4.076, 4.076]
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from gearopt.blank import Blank, compute_blank, cone_distance_from_module_mm, pitch_angles_rad
+from gearopt.errors import DesignError
+from gearopt.validate import (
+    check_integer,
+    check_keys,
+    check_number,
+    read_choice,
+    read_table,
+)
+
+if TYPE_CHECKING:
+    import pluggy
+
+__all__ = [
+    "MEMBERS",
+    "PairData",
+    "Misalignment",
+    "Meta",
+    "Design",
+    "load_design",
+    "loads_design",
+    "parse_design",
+    "with_overrides",
+]
+
+MEMBERS = ("pinion", "gear")
+SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation")
+MODULE_TOLERANCE = 1e-3  # module and cone distance, when both are given, agree within 0.1 %
+
+_PAIR_KEYS = (
+    "pinion_teeth",
+    "gear_teeth",
+    "shaft_angle_deg",
+    "mean_spiral_angle_deg",
+    "mean_normal_module_mm",
+    "mean_cone_distance_mm",
+    "face_width_mm",
+    "pressure_angle_deg",
+    "pinion_hand",
+    "outer_addendum_mm",
+    "outer_dedendum_mm",
+    "mean_normal_chordal_addendum_mm",
+    "mean_normal_chordal_thickness_mm",
+)
+
+
+def _member_tuple(name: str, value: Any, *, gt: float | None = 0.0) -> tuple[float, float]:
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        value = (value, value)
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        raise DesignError(name, value, "must be a list of two numbers [pinion, gear]")
+    return tuple(  # type: ignore[return-value]
+        check_number(f"{name}[{m}]", v, gt=gt, unit="mm") for m, v in zip(MEMBERS, value, strict=True)
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class PairData:
+    """Blank data of a spiral bevel pair (``[pair]`` of a design file).
+
+    Give ``mean_cone_distance_mm`` or ``mean_normal_module_mm``; the other is derived. When both
+    are given the cone distance is used and the module only checked against it (0.1 %).
+    ``outer_addendum_mm`` and ``outer_dedendum_mm`` default to 1.0 and 1.25 mean normal modules;
+    the chordal addendum and thickness are needed only to solve the additional slope angle.
+    """
+
+    pinion_teeth: int
+    gear_teeth: int
+    mean_spiral_angle_deg: float
+    face_width_mm: float
+    shaft_angle_deg: float = 90.0
+    pressure_angle_deg: float = 20.0
+    pinion_hand: str = "left"
+    mean_cone_distance_mm: float | None = None
+    mean_normal_module_mm: float | None = None
+    outer_addendum_mm: tuple[float, float] | None = None
+    outer_dedendum_mm: tuple[float, float] | None = None
+    mean_normal_chordal_addendum_mm: tuple[float, float] | None = None
+    mean_normal_chordal_thickness_mm: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        n1 = check_integer("pair.pinion_teeth", self.pinion_teeth, ge=5, le=500)
+        check_integer("pair.gear_teeth", self.gear_teeth, ge=5, le=1000)
+        if self.gear_teeth < n1:
+            raise DesignError(
+                "pair.gear_teeth",
+                self.gear_teeth,
+                f"must be >= pair.pinion_teeth = {n1} (member 1 is the pinion, the smaller member)",
+            )
+        check_number("pair.shaft_angle_deg", self.shaft_angle_deg, gt=0.0, lt=180.0, unit="degrees")
+        psi = check_number(
+            "pair.mean_spiral_angle_deg", self.mean_spiral_angle_deg, ge=0.0, le=60.0, unit="degrees"
+        )
+        check_number("pair.pressure_angle_deg", self.pressure_angle_deg, gt=0.0, lt=45.0, unit="degrees")
+        if not isinstance(self.pinion_hand, str) or self.pinion_hand.lower() not in ("left", "right"):
+            raise DesignError("pair.pinion_hand", self.pinion_hand, "must be 'left' or 'right'")
+        set_(self, "pinion_hand", self.pinion_hand.lower())
+        for name in ("shaft_angle_deg", "mean_spiral_angle_deg", "pressure_angle_deg", "face_width_mm"):
+            set_(self, name, float(getattr(self, name)))
+
+        g1, _ = pitch_angles_rad(n1, self.gear_teeth, math.radians(self.shaft_angle_deg))
+        am, module = self.mean_cone_distance_mm, self.mean_normal_module_mm
+        if am is None and module is None:
+            raise DesignError(
+                "pair.mean_cone_distance_mm",
+                rule="give mean_cone_distance_mm or mean_normal_module_mm (the other is derived)",
+            )
+        if module is not None:
+            module = check_number("pair.mean_normal_module_mm", module, gt=0.0, unit="mm")
+        if am is None:
+            am = cone_distance_from_module_mm(
+                pinion_teeth=n1,
+                pinion_pitch_angle_rad=g1,
+                spiral_angle_rad=math.radians(psi),
+                module_mm=module,
+            )
+        am = check_number("pair.mean_cone_distance_mm", am, gt=0.0, unit="mm")
+        derived = 2.0 * am * math.sin(g1) * math.cos(math.radians(psi)) / n1
+        if module is not None and abs(module - derived) > MODULE_TOLERANCE * derived:
+            raise DesignError(
+                "pair.mean_normal_module_mm",
+                module,
+                f"must agree within 0.1 % with 2 A_m sin(g1) cos(psi_m) / N1 = {derived:.5f} mm "
+                f"from mean_cone_distance_mm = {am:g} (give one of the two, or consistent values)",
+            )
+        set_(self, "mean_cone_distance_mm", am)
+        set_(self, "mean_normal_module_mm", derived)
+
+        face = check_number("pair.face_width_mm", self.face_width_mm, gt=0.0, unit="mm")
+        if face >= 2.0 * am:
+            raise DesignError(
+                "pair.face_width_mm",
+                face,
+                f"must be < 2 mean_cone_distance_mm = {2 * am:g} (the inner cone distance "
+                "A_m - F/2 must be positive)",
+            )
+        add = self.outer_addendum_mm if self.outer_addendum_mm is not None else derived
+        ded = self.outer_dedendum_mm if self.outer_dedendum_mm is not None else 1.25 * derived
+        add = _member_tuple("pair.outer_addendum_mm", add)
+        ded = _member_tuple("pair.outer_dedendum_mm", ded)
+        for i, j in ((0, 1), (1, 0)):
+            if ded[i] < add[j]:
+                raise DesignError(
+                    f"pair.outer_dedendum_mm[{MEMBERS[i]}]",
+                    ded[i],
+                    f"must be >= outer_addendum_mm[{MEMBERS[j]}] = {add[j]:g} "
+                    "(the mating tooth's top must clear the root)",
+                )
+        set_(self, "outer_addendum_mm", add)
+        set_(self, "outer_dedendum_mm", ded)
+        pitch = math.pi * derived
+        for name in ("mean_normal_chordal_addendum_mm", "mean_normal_chordal_thickness_mm"):
+            value = getattr(self, name)
+            if value is not None:
+                value = _member_tuple(f"pair.{name}", value)
+                set_(self, name, value)
+        thickness = self.mean_normal_chordal_thickness_mm
+        if thickness is not None and sum(thickness) >= pitch:
+            raise DesignError(
+                "pair.mean_normal_chordal_thickness_mm",
+                list(thickness),
+                f"pinion + gear must be < the normal circular pitch pi m_mn = {pitch:.4f} mm",
+            )
+        chordal_add = self.mean_normal_chordal_addendum_mm
+        if chordal_add is not None:
+            for m, ca, a, d in zip(MEMBERS, chordal_add, add, ded, strict=True):
+                if ca >= a + d:
+                    raise DesignError(
+                        f"pair.mean_normal_chordal_addendum_mm[{m}]",
+                        ca,
+                        f"must be < the whole depth {a + d:g} mm",
+                    )
+
+    @property
+    def gear_hand(self) -> str:
+        """Hand of the gear: the opposite of the pinion's."""
+        return "right" if self.pinion_hand == "left" else "left"
+
+    @cached_property
+    def blank(self) -> Blank:
+        """Derived blank geometry (pitch angles, cone distances, modules, radii)."""
+        return compute_blank(self)
+
+
+_MISALIGNMENT_KEYS = ("offset_mm", "pinion_axial_mm", "gear_axial_mm", "shaft_angle_deg")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Misalignment:
+    """Displacements of the assembled pair in the housing frame (DESIGN.md for frame and signs).
+
+    ``offset_mm`` (dE) moves the pinion along +y_f, ``pinion_axial_mm`` (dA1) the pinion along its
+    axis out of mesh, ``gear_axial_mm`` (dA2) the gear along its axis out of mesh,
+    ``shaft_angle_deg`` (dGamma) makes the shaft angle Sigma + dGamma. The same keys form the
+    ``[compensation]`` table: errors the machine settings compensate (seed 001 section 4).
+    """
+
+    offset_mm: float = 0.0
+    pinion_axial_mm: float = 0.0
+    gear_axial_mm: float = 0.0
+    shaft_angle_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ("offset_mm", "pinion_axial_mm", "gear_axial_mm"):
+            value = check_number(key, getattr(self, key), gt=-10.0, lt=10.0, unit="mm")
+            object.__setattr__(self, key, value)
+        value = check_number("shaft_angle_deg", self.shaft_angle_deg, gt=-5.0, lt=5.0, unit="degrees")
+        object.__setattr__(self, "shaft_angle_deg", value)
+
+    @property
+    def is_zero(self) -> bool:
+        """True when every displacement is zero."""
+        return not any((self.offset_mm, self.pinion_axial_mm, self.gear_axial_mm, self.shaft_angle_deg))
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], where: str) -> Misalignment:
+        """Build from a TOML table, naming errors ``where.key``."""
+        check_keys(table, _MISALIGNMENT_KEYS, where)
+        try:
+            return cls(**table)
+        except DesignError as exc:
+            raise type(exc)(f"{where}.{exc.parameter}", exc.value, exc.rule) from None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Meta:
+    """Free text about a design: its name, where it comes from, notes."""
+
+    name: str = ""
+    description: str = ""
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        for key in ("name", "description", "source"):
+            if not isinstance(getattr(self, key), str):
+                raise DesignError(f"meta.{key}", getattr(self, key), "must be a string")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Design:
+    """A complete design: the pair, the machine (parsed by its model's plugin) and conditions.
+
+    ``machine`` is the machine model's own frozen settings dataclass; ``model`` names the model.
+    ``source`` keeps the parsed TOML document, so a design can be re-derived with overrides
+    (:func:`with_overrides`) and written back.
+    """
+
+    pair: PairData
+    model: str
+    machine: Any
+    misalignment: Misalignment = field(default_factory=Misalignment)
+    compensation: Misalignment = field(default_factory=Misalignment)
+    meta: Meta = field(default_factory=Meta)
+    source: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
+    path: str | None = field(default=None, compare=False)
+
+    @property
+    def blank(self) -> Blank:
+        """Derived blank geometry of the pair."""
+        return self.pair.blank
+
+    @property
+    def name(self) -> str:
+        """The design's name: ``[meta] name``, else the file's stem, else ``"design"``."""
+        if self.meta.name:
+            return self.meta.name
+        if self.path:
+            return Path(self.path).stem
+        return "design"
+
+
+def _pair_from_table(table: Mapping[str, Any]) -> PairData:
+    check_keys(table, _PAIR_KEYS, "pair")
+    for key in ("pinion_teeth", "gear_teeth", "mean_spiral_angle_deg", "face_width_mm"):
+        if key not in table:
+            raise DesignError(f"pair.{key}", rule="required key is missing")
+    return PairData(**table)
+
+
+def parse_design(
+    data: Mapping[str, Any],
+    *,
+    plugin_manager: pluggy.PluginManager | None = None,
+    path: str | None = None,
+) -> Design:
+    """Build a :class:`Design` from a parsed TOML document.
+
+    The ``[machine]`` table is handed to the machine model named by its ``model`` key, found
+    among the registered plugins (``plugin_manager``, default: the built-ins and every installed
+    plugin).
+    """
+    from gearopt.plugins import get_machine_model
+
+    if not isinstance(data, Mapping):
+        raise DesignError("design", data, "must be a TOML document (a table of tables)")
+    check_keys(data, SECTIONS, "")
+    tables = {name: read_table(data, name, "") for name in SECTIONS}
+    if "pair" not in data:
+        raise DesignError("pair", rule="the [pair] table is required")
+    if "machine" not in data:
+        raise DesignError("machine", rule="the [machine] table is required (model = \"...\")")
+    pair = _pair_from_table(tables["pair"])
+    machine_table = dict(tables["machine"])
+    if "model" not in machine_table:
+        raise DesignError("machine.model", rule="required key is missing")
+    model_name = machine_table.pop("model")
+    if not isinstance(model_name, str):
+        raise DesignError("machine.model", model_name, "must be a string naming a machine model")
+    model = get_machine_model(model_name, plugin_manager=plugin_manager)
+    machine = model.parse_machine(machine_table, pair)
+    meta_table = tables["meta"]
+    check_keys(meta_table, ("name", "description", "source"), "meta")
+    return Design(
+        pair=pair,
+        model=model.name,
+        machine=machine,
+        misalignment=Misalignment.from_table(tables["misalignment"], "misalignment"),
+        compensation=Misalignment.from_table(tables["compensation"], "compensation"),
+        meta=Meta(**meta_table),
+        source=copy.deepcopy(dict(data)),
+        path=path,
+    )
+
+
+def loads_design(text: str, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
+    """Parse a design from TOML text."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError("design", rule=f"malformed TOML: {exc}") from None
+    return parse_design(data, plugin_manager=plugin_manager)
+
+
+def load_design(path: str | Path, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
+    """Load and validate a design TOML file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DesignError("design file", str(path), "does not exist") from None
+    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
+        raise DesignError("design file", str(path), f"cannot be read as UTF-8 text ({exc})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError("design file", str(path), f"malformed TOML: {exc}") from None
+    return parse_design(data, plugin_manager=plugin_manager, path=str(path))
+
+
+def with_overrides(
+    design: Design,
+    overrides: Mapping[str, Any],
+    *,
+    plugin_manager: pluggy.PluginManager | None = None,
+) -> Design:
+    """Return a new design with dotted keys replaced, e.g.
+    ``{"machine.pinion.inner_cutter_radius_mm": 76.0}``; the result is validated anew."""
+    data = copy.deepcopy(dict(design.source))
+    for dotted, value in overrides.items():
+        parts = dotted.split(".")
+        node = data
+        for part in parts[:-1]:
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise DesignError(dotted, value, f"'{part}' is not a table, cannot hold '{parts[-1]}'")
+            node = child
+        node[parts[-1]] = value
+    return parse_design(data, plugin_manager=plugin_manager, path=design.path)

@@ -1,0 +1,92 @@
+"""The evaluator and objective contracts.
+
+An evaluator turns a design (plus conditions such as a misalignment) into named metrics: scalars
+for Optuna and dashboards, arrays for curves and patterns. An objective turns the evaluations of
+a trial into one number that Optuna minimises (or a constraint value, feasible when <= 0).
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from gearopt.errors import PluginError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from gearopt.design import Design
+
+__all__ = ["Evaluation", "BaseEvaluator", "BaseObjective"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Evaluation:
+    """What an evaluator returns.
+
+    Attributes
+    ----------
+    evaluator
+        Name of the evaluator that produced it.
+    metrics
+        Finite scalars named with their units (``te_peak_to_peak_arcsec``); booleans as 0/1.
+    arrays
+        Curves and fields (``phi1_deg``, ``te_arcsec``), small enough to store per trial.
+    conditions
+        The conditions that produced it (misalignment, grid, ...), so a number can be traced.
+    """
+
+    evaluator: str
+    metrics: Mapping[str, float]
+    arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
+    conditions: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for key, value in self.metrics.items():
+            if not isinstance(value, int | float) or not math.isfinite(float(value)):
+                raise PluginError(
+                    f"evaluator {self.evaluator!r} metric {key!r}", value, "must be a finite number"
+                )
+
+
+class BaseEvaluator(abc.ABC):
+    """Computes metrics of a design: TCA, backlash, chain error, loaded contact, ...
+
+    Instances are stateless and picklable; ``evaluate`` is a pure function of its arguments and
+    runs in worker processes. ``name`` is unique across plugins.
+    """
+
+    name: ClassVar[str]
+    description: ClassVar[str] = ""
+
+    @abc.abstractmethod
+    def evaluate(self, design: Design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
+        """Evaluate ``design`` under ``conditions`` (evaluator-specific, documented by it)."""
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}>"
+
+
+class BaseObjective(abc.ABC):
+    """Turns a trial's evaluations into one value for Optuna.
+
+    ``kind`` is ``"objective"`` (minimised or maximised per ``direction``) or ``"constraint"``
+    (feasible when the value is <= 0, passed to ``trial.set_constraint``). ``requires`` names the
+    evaluators whose results ``value`` reads.
+    """
+
+    name: ClassVar[str]
+    description: ClassVar[str] = ""
+    kind: ClassVar[str] = "objective"
+    direction: ClassVar[str] = "minimize"
+    requires: ClassVar[tuple[str, ...]] = ()
+
+    @abc.abstractmethod
+    def value(self, evaluations: Mapping[str, Evaluation], **options: Any) -> float:
+        """Return a finite value from the evaluations (keyed by evaluator name)."""
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}>"

@@ -1,0 +1,95 @@
+"""The gearopt plugin contract: hook specifications (the plugin author's manual).
+
+A plugin is a module (or an object) with functions marked ``@gearopt.hookimpl`` whose names are
+the hooks below. Make it known to gearopt through the entry-point group ``gearopt`` of your
+distribution, exactly as the built-ins do::
+
+    # pyproject.toml of your distribution
+    [project.entry-points.gearopt]
+    my-machine = "my_package.my_machine"
+
+    # my_package/my_machine.py
+    import gearopt
+
+    class MyMachine(gearopt.BaseMachineModel):
+        name = "my-machine"
+        ...
+
+    @gearopt.hookimpl
+    def gearopt_machine_models():
+        return [MyMachine()]
+
+Every hook is called once each time a plugin manager is built (``gearopt.get_plugin_manager()``),
+in the coordinator and in each worker process; return fresh, stateless, picklable objects and do
+no expensive work at import or call time. Names are unique across all plugins: a duplicate is a
+:class:`~gearopt.errors.PluginError` naming both plugins. Prove your objects with the contract
+suites of :mod:`gearopt.testing`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import pluggy
+
+if TYPE_CHECKING:
+    from gearopt.evaluation import BaseEvaluator, BaseObjective
+    from gearopt.machine import BaseMachineModel
+
+PROJECT_NAME = "gearopt"
+hookspec = pluggy.HookspecMarker(PROJECT_NAME)
+hookimpl = pluggy.HookimplMarker(PROJECT_NAME)
+
+
+@hookspec
+def gearopt_machine_models() -> list[BaseMachineModel]:
+    """Return the machine models this plugin provides.
+
+    Returns
+    -------
+    list of gearopt.BaseMachineModel
+        Instances; each ``name`` (e.g. ``"cyclo-palloid"``) is what a design file's
+        ``[machine] model`` selects. A model parses its own ``[machine]`` table into a frozen
+        dataclass (``parse_machine``), computes basic settings (``basic_settings``), declares its
+        tunable keys (``search_space``) and generates flanks (``generate_flank``).
+
+    Notes
+    -----
+    Called once per plugin manager; every plugin's answer is collected (no first-result rule).
+    A model name that another plugin already provides raises :class:`gearopt.errors.PluginError`
+    when the models are listed.
+    """
+
+
+@hookspec
+def gearopt_evaluators() -> list[BaseEvaluator]:
+    """Return the evaluators this plugin provides.
+
+    Returns
+    -------
+    list of gearopt.BaseEvaluator
+        Instances; ``evaluate(design, conditions)`` returns a :class:`gearopt.Evaluation` with
+        finite scalar ``metrics`` named with units, optional ``arrays`` and the ``conditions``
+        that produced them. Evaluators run in worker processes and must not touch storage.
+
+    Notes
+    -----
+    Called once per plugin manager; all answers are collected; names are unique across plugins.
+    """
+
+
+@hookspec
+def gearopt_objectives() -> list[BaseObjective]:
+    """Return the objectives and constraints this plugin provides.
+
+    Returns
+    -------
+    list of gearopt.BaseObjective
+        Instances; ``value(evaluations, **options)`` maps the evaluations of one trial (keyed by
+        evaluator name; ``requires`` lists the evaluators it reads) to one finite float.
+        ``kind = "constraint"`` values are feasible when <= 0.
+
+    Notes
+    -----
+    Called once per plugin manager; all answers are collected; names are unique across plugins.
+    """

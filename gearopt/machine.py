@@ -1,0 +1,133 @@
+"""The machine-model contract: what a plugin's machine model provides.
+
+A machine model knows its settings dataclass (``parse_machine``), how to compute the basic
+machine-tool settings of both members from the blank (``basic_settings``), which of its design keys
+are tunable within which bounds (``search_space``) and, once its generator exists, how to generate a
+member's tooth flank (``generate_flank``). Subclass :class:`BaseMachineModel`, return an instance
+from a ``gearopt_machine_models`` hookimpl, and run :mod:`gearopt.testing` against it.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from gearopt.errors import NotAvailableError, PluginError
+
+if TYPE_CHECKING:
+    from gearopt.design import Design, PairData
+
+__all__ = ["BaseMachineModel", "MachineSettings", "SearchDimension"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class SearchDimension:
+    """One tunable design key and its bounds, as a study's search space uses it.
+
+    Attributes
+    ----------
+    key
+        Dotted design key, e.g. ``"machine.pinion.inner_cutter_radius_mm"``.
+    low, high
+        Inclusive bounds in the key's unit; every value between them gives a valid design.
+    log
+        Sample on a log scale.
+    """
+
+    key: str
+    low: float
+    high: float
+    log: bool = False
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):
+            raise PluginError(
+                f"search dimension {self.key}", (self.low, self.high), "needs finite low < high"
+            )
+        if self.log and self.low <= 0.0:
+            raise PluginError(f"search dimension {self.key}", self.low, "log scale needs low > 0")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MachineSettings:
+    """Basic machine-tool settings of a pair: one settings dataclass per member.
+
+    ``pinion`` and ``gear`` are the model's own frozen dataclasses whose fields are scalars named
+    with their units (``inner_machine_distance_mm``, ``machine_root_angle_deg``); dimensionless
+    ratios are named for what they are (``gear_to_cradle_roll``).
+    """
+
+    model: str
+    pinion: Any
+    gear: Any
+    notes: tuple[str, ...] = ()
+
+    def member(self, name: str) -> Any:
+        """Settings of ``"pinion"`` or ``"gear"``."""
+        if name not in ("pinion", "gear"):
+            raise ValueError(f"member must be 'pinion' or 'gear', got {name!r}")
+        return getattr(self, name)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready ``{"model": ..., "pinion": {...}, "gear": {...}, "notes": [...]}``."""
+        return {
+            "model": self.model,
+            "pinion": dataclasses.asdict(self.pinion),
+            "gear": dataclasses.asdict(self.gear),
+            "notes": list(self.notes),
+        }
+
+
+class BaseMachineModel(abc.ABC):
+    """A cutting machine and process that generates spiral bevel tooth flanks.
+
+    Instances are stateless and picklable (joblib workers rebuild or receive them). Every method
+    validates what it is given and raises a :class:`~gearopt.errors.GearoptError` subclass that
+    names the parameter, its value and the rule; none returns NaN.
+
+    Class attributes
+    ----------------
+    name
+        Unique model name used in design files (``[machine] model = "cyclo-palloid"``); lower case
+        words joined by hyphens.
+    description
+        One line for ``gearopt plugins``.
+    """
+
+    name: ClassVar[str]
+    description: ClassVar[str] = ""
+
+    @abc.abstractmethod
+    def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> Any:
+        """Validate the ``[machine]`` table (without ``model``) and return a frozen dataclass.
+
+        Unknown keys are refused (:func:`gearopt.validate.check_keys`), with error names of the form
+        ``machine.<member>.<key>``.
+        """
+
+    @abc.abstractmethod
+    def basic_settings(self, design: Design) -> MachineSettings:
+        """Compute the basic machine-tool settings of both members from the blank and the
+        machine table, including the compensation of ``design.compensation`` if the model
+        supports it (and an error naming ``compensation`` if it does not but it is non-zero)."""
+
+    @abc.abstractmethod
+    def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
+        """The design keys a study may tune, with bounds inside which every design is valid."""
+
+    def generate_flank(self, design: Design, *, member: str, flank: str, grid: Any = None) -> Any:
+        """Generate ``member``'s ``flank`` ("concave" or "convex") as a FlankMap.
+
+        Models without a generator raise :class:`~gearopt.errors.NotAvailableError`.
+        """
+        raise NotAvailableError(
+            f"machine model {self.name!r}",
+            rule="does not generate tooth flanks (no generate_flank implementation)",
+        )
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}>"
