@@ -1,7 +1,7 @@
 """gearopt: open, plugin-based design optimisation of spiral bevel gears.
 
-Public API: design files (:func:`load_design`), machine settings (:func:`basic_settings`), the plugin
-contract (:data:`hookimpl`, the ``Base*`` classes) and the plugin registries.
+Public API: design files (:func:`load_design`), machine settings (:func:`basic_settings`), the
+plugin contract (:data:`hookimpl`, the ``Base*`` classes) and the plugin registries.
 """
 
 from gearopt.blank import Blank, compute_blank

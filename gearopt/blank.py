@@ -18,12 +18,16 @@ if TYPE_CHECKING:
 __all__ = ["Blank", "compute_blank", "pitch_angles_rad", "cone_distance_from_module_mm"]
 
 
-def pitch_angles_rad(pinion_teeth: int, gear_teeth: int, shaft_angle_rad: float) -> tuple[float, float]:
+def pitch_angles_rad(
+    pinion_teeth: int, gear_teeth: int, shaft_angle_rad: float
+) -> tuple[float, float]:
     """Pitch angles (rad) of pinion and gear: tan g1 = sin S / (N2/N1 + cos S), g2 = S - g1.
 
     The same relation with S + dS gives seed 001's auxiliary pitch angles (eqs 49-50).
     """
-    g1 = math.atan2(math.sin(shaft_angle_rad), gear_teeth / pinion_teeth + math.cos(shaft_angle_rad))
+    g1 = math.atan2(
+        math.sin(shaft_angle_rad), gear_teeth / pinion_teeth + math.cos(shaft_angle_rad)
+    )
     return g1, shaft_angle_rad - g1
 
 
@@ -31,8 +35,10 @@ def cone_distance_from_module_mm(
     *, pinion_teeth: int, pinion_pitch_angle_rad: float, spiral_angle_rad: float, module_mm: float
 ) -> float:
     """Mean cone distance from the mean normal module: A_m = m_mn N1 / (2 sin g1 cos psi_m)."""
-    return module_mm * pinion_teeth / (
-        2.0 * math.sin(pinion_pitch_angle_rad) * math.cos(spiral_angle_rad)
+    return (
+        module_mm
+        * pinion_teeth
+        / (2.0 * math.sin(pinion_pitch_angle_rad) * math.cos(spiral_angle_rad))
     )
 
 

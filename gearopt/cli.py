@@ -33,7 +33,9 @@ def _table(rows: list[tuple[str, ...]], header: tuple[str, ...]) -> str:
     lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
     lines.append("  ".join("-" * w for w in widths))
     for row in rows:
-        cells = [row[0].ljust(widths[0])] + [c.rjust(w) for c, w in zip(row[1:], widths[1:], strict=True)]
+        cells = [row[0].ljust(widths[0])] + [
+            c.rjust(w) for c, w in zip(row[1:], widths[1:], strict=True)
+        ]
         lines.append("  ".join(cells))
     return "\n".join(lines)
 
@@ -58,8 +60,14 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
             )
         )
         return 0
-    rows = [(e.kind, e.name, f"{e.distribution} {e.version}".strip(), e.description) for e in entries]
-    print(_table(rows, ("kind", "name", "distribution", "description")) if rows else "no plugins found")
+    rows = [
+        (e.kind, e.name, f"{e.distribution} {e.version}".strip(), e.description) for e in entries
+    ]
+    print(
+        _table(rows, ("kind", "name", "distribution", "description"))
+        if rows
+        else "no plugins found"
+    )
     return 0
 
 
@@ -88,7 +96,8 @@ def _cmd_settings(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``gearopt`` command."""
     parser = argparse.ArgumentParser(
-        prog="gearopt", description="Spiral bevel gear design: machine settings, TCA, Optuna studies."
+        prog="gearopt",
+        description="Spiral bevel gear design: machine settings, TCA, Optuna studies.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("plugins", help="list machine models, evaluators and objectives")

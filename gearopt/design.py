@@ -38,7 +38,6 @@ from gearopt.validate import (
     check_integer,
     check_keys,
     check_number,
-    read_choice,
     read_table,
 )
 
@@ -84,7 +83,8 @@ def _member_tuple(name: str, value: Any, *, gt: float | None = 0.0) -> tuple[flo
     if not isinstance(value, list | tuple) or len(value) != 2:
         raise DesignError(name, value, "must be a list of two numbers [pinion, gear]")
     return tuple(  # type: ignore[return-value]
-        check_number(f"{name}[{m}]", v, gt=gt, unit="mm") for m, v in zip(MEMBERS, value, strict=True)
+        check_number(f"{name}[{m}]", v, gt=gt, unit="mm")
+        for m, v in zip(MEMBERS, value, strict=True)
     )
 
 
@@ -124,13 +124,27 @@ class PairData:
             )
         check_number("pair.shaft_angle_deg", self.shaft_angle_deg, gt=0.0, lt=180.0, unit="degrees")
         psi = check_number(
-            "pair.mean_spiral_angle_deg", self.mean_spiral_angle_deg, ge=0.0, le=60.0, unit="degrees"
+            "pair.mean_spiral_angle_deg",
+            self.mean_spiral_angle_deg,
+            ge=0.0,
+            le=60.0,
+            unit="degrees",
         )
-        check_number("pair.pressure_angle_deg", self.pressure_angle_deg, gt=0.0, lt=45.0, unit="degrees")
-        if not isinstance(self.pinion_hand, str) or self.pinion_hand.lower() not in ("left", "right"):
+        check_number(
+            "pair.pressure_angle_deg", self.pressure_angle_deg, gt=0.0, lt=45.0, unit="degrees"
+        )
+        if not isinstance(self.pinion_hand, str) or self.pinion_hand.lower() not in (
+            "left",
+            "right",
+        ):
             raise DesignError("pair.pinion_hand", self.pinion_hand, "must be 'left' or 'right'")
         set_(self, "pinion_hand", self.pinion_hand.lower())
-        for name in ("shaft_angle_deg", "mean_spiral_angle_deg", "pressure_angle_deg", "face_width_mm"):
+        for name in (
+            "shaft_angle_deg",
+            "mean_spiral_angle_deg",
+            "pressure_angle_deg",
+            "face_width_mm",
+        ):
             set_(self, name, float(getattr(self, name)))
 
         g1, _ = pitch_angles_rad(n1, self.gear_teeth, math.radians(self.shaft_angle_deg))
@@ -239,13 +253,17 @@ class Misalignment:
         for key in ("offset_mm", "pinion_axial_mm", "gear_axial_mm"):
             value = check_number(key, getattr(self, key), gt=-10.0, lt=10.0, unit="mm")
             object.__setattr__(self, key, value)
-        value = check_number("shaft_angle_deg", self.shaft_angle_deg, gt=-5.0, lt=5.0, unit="degrees")
+        value = check_number(
+            "shaft_angle_deg", self.shaft_angle_deg, gt=-5.0, lt=5.0, unit="degrees"
+        )
         object.__setattr__(self, "shaft_angle_deg", value)
 
     @property
     def is_zero(self) -> bool:
         """True when every displacement is zero."""
-        return not any((self.offset_mm, self.pinion_axial_mm, self.gear_axial_mm, self.shaft_angle_deg))
+        return not any(
+            (self.offset_mm, self.pinion_axial_mm, self.gear_axial_mm, self.shaft_angle_deg)
+        )
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], where: str) -> Misalignment:
@@ -333,7 +351,7 @@ def parse_design(
     if "pair" not in data:
         raise DesignError("pair", rule="the [pair] table is required")
     if "machine" not in data:
-        raise DesignError("machine", rule="the [machine] table is required (model = \"...\")")
+        raise DesignError("machine", rule='the [machine] table is required (model = "...")')
     pair = _pair_from_table(tables["pair"])
     machine_table = dict(tables["machine"])
     if "model" not in machine_table:
@@ -374,7 +392,9 @@ def load_design(path: str | Path, *, plugin_manager: pluggy.PluginManager | None
     except FileNotFoundError:
         raise DesignError("design file", str(path), "does not exist") from None
     except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
-        raise DesignError("design file", str(path), f"cannot be read as UTF-8 text ({exc})") from None
+        raise DesignError(
+            "design file", str(path), f"cannot be read as UTF-8 text ({exc})"
+        ) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -397,7 +417,9 @@ def with_overrides(
         for part in parts[:-1]:
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
-                raise DesignError(dotted, value, f"'{part}' is not a table, cannot hold '{parts[-1]}'")
+                raise DesignError(
+                    dotted, value, f"'{part}' is not a table, cannot hold '{parts[-1]}'"
+                )
             node = child
         node[parts[-1]] = value
     return parse_design(data, plugin_manager=plugin_manager, path=design.path)

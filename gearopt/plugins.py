@@ -88,7 +88,9 @@ def _distributions(pm: pluggy.PluginManager) -> dict[int, tuple[str, str]]:
     return found
 
 
-def list_plugins(pm: pluggy.PluginManager | None = None, kind: str | None = None) -> list[PluginEntry]:
+def list_plugins(
+    pm: pluggy.PluginManager | None = None, kind: str | None = None
+) -> list[PluginEntry]:
     """Every machine model, evaluator and objective, with the distribution that provides it.
 
     Raises :class:`PluginError` when a hook returns something that is not a list of the right

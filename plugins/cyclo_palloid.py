@@ -14,7 +14,7 @@ Design keys (``[machine]``; member keys in ``[machine.pinion]`` / ``[machine.gea
 
     [machine.pinion]
     inner_cutter_radius_mm = 75.0           # r_ci (inner blades cut the convex flank)
-    outer_cutter_radius_mm = 75.0           # r_co (outer blades cut the concave flank); default r_ci
+    outer_cutter_radius_mm = 75.0           # r_co (outer blades: concave flank); default r_ci
     additional_slope_angle_deg = 0.103669   # dnu (eqs 33-38); "auto" = solved from the thickness
     blade_parabola_coefficient_per_mm = 0.0 # a_p (eq 2)
     parabola_apex_mm = 0.0                  # u_o (eq 2)
@@ -72,7 +72,9 @@ AUTO = "auto"
 # --- kernels: pure functions of floats, radians inside -------------------------------------------
 
 
-def slope_angle_rad(*, blade_module_mm: float, blade_groups: int, inner_cutter_radius_mm: float) -> float:
+def slope_angle_rad(
+    *, blade_module_mm: float, blade_groups: int, inner_cutter_radius_mm: float
+) -> float:
     """Slope angle nu = asin(m_b N_b / (2 r_ci)) (seed 001 eqs 5, 9)."""
     return math.asin(blade_module_mm * blade_groups / (2.0 * inner_cutter_radius_mm))
 
@@ -200,7 +202,7 @@ def _parse_member(
     if isinstance(dnu, str):
         if dnu.lower() != AUTO:
             raise DesignError(
-                f"{where}.additional_slope_angle_deg", dnu, "must be a number in degrees or \"auto\""
+                f"{where}.additional_slope_angle_deg", dnu, 'must be a number in degrees or "auto"'
             )
         dnu = AUTO
         for key in ("mean_normal_chordal_addendum_mm", "mean_normal_chordal_thickness_mm"):
@@ -208,7 +210,7 @@ def _parse_member(
                 raise DesignError(
                     f"{where}.additional_slope_angle_deg",
                     dnu,
-                    f"\"auto\" solves the thickness, so pair.{key} is required",
+                    f'"auto" solves the thickness, so pair.{key} is required',
                 )
     else:
         dnu = read_number(merged, "additional_slope_angle_deg", where, gt=-5.0, lt=5.0)
@@ -265,8 +267,8 @@ class CycloPalloid(BaseMachineModel):
                 if "inner_cutter_radius_mm" not in defaults:
                     raise DesignError(
                         f"machine.{member}",
-                        rule="table [machine.%s] is required (or give inner_cutter_radius_mm in "
-                        "[machine] for both members)" % member,
+                        rule=f"table [machine.{member}] is required (or give "
+                        "inner_cutter_radius_mm in [machine] for both members)",
                     )
             sub = read_table(table, member, "machine")
             members[member] = _parse_member(sub, defaults, f"machine.{member}", pair, rho)
@@ -314,7 +316,10 @@ class CycloPalloid(BaseMachineModel):
             values: dict[str, Any] = {}
             for k in ("inner", "outer"):
                 md, q2 = machine_distance_and_cradle_angle(
-                    mean_cone_distance_mm=am, spiral_angle_rad=psi, cutter_radius_mm=radii[k], nu_rad=nu_k[k]
+                    mean_cone_distance_mm=am,
+                    spiral_angle_rad=psi,
+                    cutter_radius_mm=radii[k],
+                    nu_rad=nu_k[k],
                 )
                 values[f"{k}_machine_distance_mm"] = md
                 values[f"{k}_cradle_angle_deg"] = math.degrees(q2)
@@ -375,7 +380,9 @@ class CycloPalloid(BaseMachineModel):
                     )
                 )
             dims.append(
-                SearchDimension(key=prefix + "blade_parabola_coefficient_per_mm", low=0.0, high=0.005)
+                SearchDimension(
+                    key=prefix + "blade_parabola_coefficient_per_mm", low=0.0, high=0.005
+                )
             )
         return tuple(dims)
 
