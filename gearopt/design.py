@@ -139,13 +139,6 @@ class PairData:
         ):
             raise DesignError("pair.pinion_hand", self.pinion_hand, "must be 'left' or 'right'")
         set_(self, "pinion_hand", self.pinion_hand.lower())
-        for name in (
-            "shaft_angle_deg",
-            "mean_spiral_angle_deg",
-            "pressure_angle_deg",
-            "face_width_mm",
-        ):
-            set_(self, name, float(getattr(self, name)))
 
         g1, _ = pitch_angles_rad(n1, self.gear_teeth, math.radians(self.shaft_angle_deg))
         am, module = self.mean_cone_distance_mm, self.mean_normal_module_mm
@@ -176,6 +169,9 @@ class PairData:
         set_(self, "mean_normal_module_mm", derived)
 
         face = check_number("pair.face_width_mm", self.face_width_mm, gt=0.0, unit="mm")
+        for name in ("shaft_angle_deg", "mean_spiral_angle_deg", "pressure_angle_deg"):
+            set_(self, name, float(getattr(self, name)))
+        set_(self, "face_width_mm", face)
         if face >= 2.0 * am:
             raise DesignError(
                 "pair.face_width_mm",
@@ -346,8 +342,8 @@ def parse_design(
 
     if not isinstance(data, Mapping):
         raise DesignError("design", data, "must be a TOML document (a table of tables)")
-    check_keys(data, SECTIONS, "")
     tables = {name: read_table(data, name, "") for name in SECTIONS}
+    check_keys(data, SECTIONS, "")
     if "pair" not in data:
         raise DesignError("pair", rule="the [pair] table is required")
     if "machine" not in data:

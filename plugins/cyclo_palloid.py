@@ -213,7 +213,7 @@ def _parse_member(
                     f'"auto" solves the thickness, so pair.{key} is required',
                 )
     else:
-        dnu = read_number(merged, "additional_slope_angle_deg", where, gt=-5.0, lt=5.0)
+        dnu = read_number(merged, "additional_slope_angle_deg", where, 0.0, gt=-5.0, lt=5.0)
         nu = math.asin(rho_mm / rci)
         nu_prime = nu + math.radians(dnu)
         if not 0.0 < nu_prime < math.pi / 2:

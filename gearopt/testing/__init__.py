@@ -1,0 +1,25 @@
+"""Contract test suites that plugin authors run against their own plugins (needs pytest).
+
+As ``optuna.testing`` does for storages, gearopt ships the checks every machine model must pass;
+a plugin proves itself with a few lines::
+
+    # tests/test_my_machine.py
+    import pytest
+    from gearopt.testing import MachineModelContract
+    from my_package.my_machine import MyMachine
+
+    class TestMyMachine(MachineModelContract):
+        @pytest.fixture
+        def machine_model(self):
+            return MyMachine()
+
+        @pytest.fixture
+        def design_text(self):
+            return open("tests/my_design.toml").read()   # a valid design using the model
+
+The built-in machine models run the same suite in gearopt's own tests.
+"""
+
+from gearopt.testing.machine_models import MachineModelContract
+
+__all__ = ["MachineModelContract"]

@@ -1,0 +1,38 @@
+"""Shared fixtures: paths, the published seed cases, designs."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+import gearopt
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDIES = ROOT / "studies"
+SEED_CASES = ROOT.parent / "shared" / "reference" / "seed_cases.json"
+
+
+@pytest.fixture(scope="session")
+def seed_cases() -> dict:
+    """The seeds' published inputs and outputs (../shared/reference/seed_cases.json).
+
+    CI always has ../shared; elsewhere the published-number tests are skipped if it is missing.
+    """
+    if not SEED_CASES.exists():
+        if os.environ.get("CI"):
+            pytest.fail(f"{SEED_CASES} is missing on CI")
+        pytest.skip(f"{SEED_CASES} not found (the shared folder beside the project)")
+    return json.loads(SEED_CASES.read_text())
+
+
+@pytest.fixture(scope="session")
+def table3_design() -> gearopt.Design:
+    return gearopt.load_design(STUDIES / "seed001_table3.toml")
+
+
+@pytest.fixture(scope="session")
+def table3_text() -> str:
+    return (STUDIES / "seed001_table3.toml").read_text()
