@@ -262,8 +262,10 @@ BAD = [
     (
         "slope angle below zero",
         (
-            "inner_cutter_radius_mm = 75.0\nouter_cutter_radius_mm = 75.0\nadditional_slope_angle_deg = 0.103669",
-            "inner_cutter_radius_mm = 400.0\nouter_cutter_radius_mm = 400.0\nadditional_slope_angle_deg = -2.0",
+            "inner_cutter_radius_mm = 75.0\nouter_cutter_radius_mm = 75.0\n"
+            "additional_slope_angle_deg = 0.103669",
+            "inner_cutter_radius_mm = 400.0\nouter_cutter_radius_mm = 400.0\n"
+            "additional_slope_angle_deg = -2.0",
         ),
         DesignError,
         "machine.pinion.additional_slope_angle_deg",
