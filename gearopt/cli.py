@@ -93,6 +93,27 @@ def _cmd_settings(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from gearopt.bench import run_benchmarks
+
+    results = run_benchmarks(args.names or None, repeats=args.repeats)
+    out: dict[str, Any] = {"threads": 1, "repeats": args.repeats}
+    for name, result in results.items():
+        out[name] = result["median_ms"]
+        out.update(result["info"])
+    out["runs_ms"] = {name: result["runs_ms"] for name, result in results.items()}
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    rows = [
+        (name, f"{r['median_ms']:.4f}", ", ".join(f"{k}={v}" for k, v in r["info"].items()))
+        for name, r in results.items()
+    ]
+    print(f"medians over {args.repeats} fresh processes, 1 thread (BLAS/OpenMP)")
+    print(_table(rows, ("benchmark", "median", "conditions")))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``gearopt`` command."""
     parser = argparse.ArgumentParser(
@@ -107,6 +128,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("design", help="design TOML file")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_settings)
+    p = sub.add_parser("bench", help="time the kernels (medians over fresh one-thread processes)")
+    p.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
+    p.add_argument("--repeats", type=int, default=5, help="fresh processes per benchmark")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_bench)
     return parser
 
 

@@ -1,0 +1,110 @@
+"""Benchmarks for ``gearopt bench``: medians over fresh processes on one thread.
+
+Each benchmark is a function ``() -> (milliseconds, info)`` that times one run of its kernel
+(after any warm-up it needs) and returns extra facts to print beside the time (grid size, set
+size). :func:`run_benchmarks` runs every repeat in a fresh interpreter with the BLAS/OpenMP
+thread counts set to 1 and reports the median, so import caches, allocator state and a second
+core do not flatter the numbers. Timings are never asserted in tests.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterable
+from importlib import import_module
+
+__all__ = ["BENCHMARKS", "run_benchmarks", "time_call_ms"]
+
+# name -> "module:function"; the function returns (milliseconds, info dict)
+BENCHMARKS: dict[str, str] = {
+    "basic_settings_ms": "gearopt.bench:bench_basic_settings",
+}
+
+ONE_THREAD = {
+    name: "1"
+    for name in (
+        "OMP_NUM_THREADS",
+        "OPENBLAS_NUM_THREADS",
+        "MKL_NUM_THREADS",
+        "BLIS_NUM_THREADS",
+        "NUMEXPR_NUM_THREADS",
+        "VECLIB_MAXIMUM_THREADS",
+    )
+}
+
+
+def time_call_ms(func: Callable[[], object], *, number: int = 1) -> float:
+    """Wall time of ``number`` calls of ``func`` divided by ``number``, in milliseconds."""
+    start = time.perf_counter()
+    for _ in range(number):
+        func()
+    return (time.perf_counter() - start) * 1e3 / number
+
+
+def bench_basic_settings() -> tuple[float, dict]:
+    """Cyclo-palloid basic settings of the seed 001 Table 3 design (both members)."""
+    from gearopt.design import loads_design
+    from gearopt.plugins import get_machine_model
+
+    text = _study_text("seed001_table3.toml")
+    design = loads_design(text)
+    model = get_machine_model(design.model)
+    model.basic_settings(design)  # warm-up
+    return time_call_ms(lambda: model.basic_settings(design), number=200), {
+        "design": "seed001_table3"
+    }
+
+
+def _study_text(name: str) -> str:
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "studies" / name
+    if path.exists():
+        return path.read_text()
+    from gearopt.errors import NotAvailableError
+
+    raise NotAvailableError("benchmark design", str(path), "needs a source checkout (studies/)")
+
+
+def _run_one(name: str) -> None:
+    module, func = BENCHMARKS[name].split(":")
+    ms, info = getattr(import_module(module), func)()
+    print(json.dumps({"ms": ms, "info": info}))
+
+
+def run_benchmarks(names: Iterable[str] | None = None, *, repeats: int = 5) -> dict[str, dict]:
+    """Run benchmarks, each ``repeats`` times in fresh one-thread processes; report medians.
+
+    Returns ``{name: {"median_ms", "runs_ms", "info"}}``.
+    """
+    names = list(names or BENCHMARKS)
+    env = {**os.environ, **ONE_THREAD}
+    results = {}
+    for name in names:
+        if name not in BENCHMARKS:
+            from gearopt.errors import GearoptError
+
+            raise GearoptError("benchmark", name, f"unknown; known: {sorted(BENCHMARKS)}")
+        runs, info = [], {}
+        for _ in range(repeats):
+            out = subprocess.run(
+                [sys.executable, "-m", "gearopt.bench", name],
+                env=env,
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+            record = json.loads(out.stdout.strip().splitlines()[-1])
+            runs.append(record["ms"])
+            info = record["info"]
+        results[name] = {"median_ms": statistics.median(runs), "runs_ms": runs, "info": info}
+    return results
+
+
+if __name__ == "__main__":
+    _run_one(sys.argv[1])
