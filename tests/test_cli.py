@@ -1,0 +1,79 @@
+"""The gearopt command: settings, plugins, bench, and one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from gearopt.cli import main
+
+from .conftest import STUDIES
+
+CONTRACT_KEYS = (
+    "slope_angle_deg",
+    "additional_slope_angle_deg",
+    "inner_machine_distance_mm",
+    "inner_cradle_angle_deg",
+    "outer_machine_distance_mm",
+    "outer_cradle_angle_deg",
+    "machine_root_angle_deg",
+    "machine_center_to_back_mm",
+    "blank_offset_mm",
+    "sliding_base_mm",
+    "gear_to_cradle_roll",
+    "gear_to_blade_roll",
+)
+
+
+def test_settings_json_has_the_contract_keys(capsys, seed_cases):
+    assert main(["settings", str(STUDIES / "seed001_table3.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    ref = seed_cases["cyclo_palloid_seed001"]["expected_table3"]
+    for member in ("pinion", "gear"):
+        for key in CONTRACT_KEYS:
+            assert isinstance(out[member][key], float), (member, key)
+        assert out[member]["inner_machine_distance_mm"] == pytest.approx(
+            ref[member]["inner_machine_distance_mm"], abs=1e-4
+        )
+    assert out["model"] == "cyclo-palloid"
+    assert out["blank"]["pitch_angle_deg"][0] == pytest.approx(21.318, abs=5e-4)
+
+
+def test_settings_table_is_readable(capsys):
+    assert main(["settings", str(STUDIES / "seed001_table3.toml")]) == 0
+    text = capsys.readouterr().out
+    assert "inner_machine_distance_mm" in text and "86.280827" in text and "pinion" in text
+
+
+def test_plugins_lists_the_builtin(capsys):
+    assert main(["plugins"]) == 0
+    assert "cyclo-palloid" in capsys.readouterr().out
+    assert main(["plugins", "--json"]) == 0
+    entries = json.loads(capsys.readouterr().out)
+    assert {"kind": "machine-model", "name": "cyclo-palloid"}.items() <= entries[0].items()
+
+
+def test_bad_design_is_one_line_on_stderr_with_status_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        (STUDIES / "seed001_table3.toml")
+        .read_text()
+        .replace("blade_groups = 5", "blade_groups = 0")
+    )
+    run = subprocess.run(
+        [sys.executable, "-m", "gearopt.cli", "settings", str(bad)], capture_output=True, text=True
+    )
+    assert run.returncode == 2
+    assert run.stdout == ""
+    assert run.stderr.strip().splitlines() == [
+        "gearopt: error: DesignError: machine.blade_groups = 0: must be >= 1 and <= 30"
+    ]
+
+
+def test_bench_json_reports_medians(capsys):
+    assert main(["bench", "--json", "--repeats", "1", "basic_settings_ms"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["threads"] == 1 and out["basic_settings_ms"] > 0.0
