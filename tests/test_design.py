@@ -352,7 +352,7 @@ def test_missing_file_and_directory(tmp_path):
 
 
 def test_errors_are_value_errors_and_carry_their_parts():
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError) as info:  # a GearoptError is a ValueError
         gearopt.PairData(
             pinion_teeth=3,
             gear_teeth=41,
@@ -360,14 +360,7 @@ def test_errors_are_value_errors_and_carry_their_parts():
             face_width_mm=10.0,
             mean_normal_module_mm=3.0,
         )
-    try:
-        gearopt.PairData(
-            pinion_teeth=3,
-            gear_teeth=41,
-            mean_spiral_angle_deg=35.0,
-            face_width_mm=10.0,
-            mean_normal_module_mm=3.0,
-        )
-    except GearoptError as exc:
-        assert (exc.parameter, exc.value) == ("pair.pinion_teeth", 3)
-        assert str(exc) == "pair.pinion_teeth = 3: must be >= 5 and <= 500"
+    exc = info.value
+    assert isinstance(exc, GearoptError)
+    assert (exc.parameter, exc.value) == ("pair.pinion_teeth", 3)
+    assert str(exc) == "pair.pinion_teeth = 3: must be >= 5 and <= 500"
