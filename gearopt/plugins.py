@@ -8,6 +8,7 @@ entry-point group ``gearopt``; nothing special-cases the built-ins. The manager 
 from __future__ import annotations
 
 import functools
+import weakref
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -54,11 +55,20 @@ def get_plugin_manager(
     """
     pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
     pm.add_hookspecs(hookspecs)
-    if entry_points:
-        pm.load_setuptools_entrypoints(ENTRY_POINT_GROUP)
-    for plugin in plugins:
-        pm.register(plugin)
-    pm.check_pending()
+    try:
+        if entry_points:
+            pm.load_setuptools_entrypoints(ENTRY_POINT_GROUP)
+        for plugin in plugins:
+            pm.register(plugin)
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        raise PluginError(
+            f"plugin {exc.plugin!r}", rule=f"breaks the hook specifications: {exc}"
+        ) from exc
+    except (ImportError, AttributeError, SyntaxError) as exc:
+        raise PluginError(
+            f"entry-point group {ENTRY_POINT_GROUP!r}", rule=f"a plugin failed to load: {exc!r}"
+        ) from exc
     return pm
 
 
@@ -88,20 +98,31 @@ def _distributions(pm: pluggy.PluginManager) -> dict[int, tuple[str, str]]:
     return found
 
 
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def list_plugins(
     pm: pluggy.PluginManager | None = None, kind: str | None = None
 ) -> list[PluginEntry]:
     """Every machine model, evaluator and objective, with the distribution that provides it.
 
+    The hooks are called once per manager and set of registered plugins; the answer is cached.
     Raises :class:`PluginError` when a hook returns something that is not a list of the right
     base class, or when two plugins provide the same name.
     """
     pm = pm or default_plugin_manager()
+    signature = tuple(sorted(id(p) for p in pm.get_plugins()))
+    cached = _CACHE.get(pm)
+    if cached is None or cached[0] != signature:
+        cached = (signature, _collect(pm))
+        _CACHE[pm] = cached
+    return [e for e in cached[1] if kind is None or e.kind == kind]
+
+
+def _collect(pm: pluggy.PluginManager) -> list[PluginEntry]:
     dists = _distributions(pm)
     entries: list[PluginEntry] = []
     for this_kind, (hook_name, base) in _KINDS.items():
-        if kind is not None and this_kind != kind:
-            continue
         seen: dict[str, str] = {}
         for impl in getattr(pm.hook, hook_name).get_hookimpls():
             result = impl.function()

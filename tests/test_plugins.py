@@ -33,6 +33,22 @@ def test_factory_builds_a_fresh_manager_each_time():
     assert get_plugin_manager() is not get_plugin_manager()
 
 
+def test_hooks_are_called_once_per_manager():
+    calls = []
+
+    class Counting:
+        @gearopt.hookimpl
+        def gearopt_objectives(self):
+            calls.append(1)
+            return []
+
+    pm = get_plugin_manager(entry_points=False, plugins=[Counting()])
+    for _ in range(3):
+        gearopt.objectives(pm)
+        gearopt.machine_models(pm)
+    assert len(calls) == 1
+
+
 def test_builtin_found_through_the_entry_point_group():
     entries = list_plugins(get_plugin_manager())
     cyclo = [e for e in entries if e.name == "cyclo-palloid"]
@@ -86,7 +102,7 @@ def test_unknown_hook_in_a_plugin_is_refused():
         def gearopt_machine_model(self):  # missing "s"
             return []
 
-    with pytest.raises(Exception, match="unknown hook"):
+    with pytest.raises(PluginError, match="unknown hook"):
         get_plugin_manager(entry_points=False, plugins=[Typo()])
 
 
