@@ -1,0 +1,166 @@
+"""The cyclo-palloid generating family r(u, theta, psi_cr) and its meshing function (seed 001).
+
+One blade system (inner or outer) of the dual head, as seed 001 writes it for a right-hand
+member: the cutting edge in the blade frame (eqs 2-4), the cutter (eqs 7-8), the cutter rotation
+theta (eqs 15-16), the cradle rotation psi_cr (eqs 17-19), the work (eqs 20-23). Everything is
+evaluated in the machine frame S_m, where the derivatives are cross products:
+
+* d r / d psi_cr: the cradle turns about z_m, the work about its axis a_w by m_gc psi_cr;
+* d r / d theta: the cutter turns about its axis through its centre, the work by -m_gb theta;
+
+so ``f = (r_u x r_theta) . r_psi`` (eq 31) and the axial-plane coordinates of the work point
+(L along a_w, R from the axis) need no work-frame transform; only the polar angle does.
+
+Outer blades are the inner blade's edge mirrored in its front plane (the edge faces the other
+way); inner blades cut the convex flank, outer blades the concave flank.
+
+Machine settings outside seed 001's chain (machine centre to back dX_D, blank offset dE_m, sliding
+base dX_B) translate the work frame in S_m: along a_w, along y_m and along z_m.
+
+All functions accept complex arrays (complex-step derivatives).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["BladeSystem", "family", "pitch_line_start"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class BladeSystem:
+    """Constants of one blade system of one member's machine (radians and mm).
+
+    ``side`` is +1 for the inner blade (convex flank) and -1 for the outer blade (concave).
+    """
+
+    side: int
+    cutter_radius_mm: float
+    assembly_angle_rad: float  # delta_k = nu'_k (eqs 11, 38)
+    machine_distance_mm: float  # M_dk (eq 34)
+    cradle_angle_rad: float  # q_2k (eq 35)
+    spiral_angle_rad: float  # psi_m
+    pressure_angle_rad: float  # alpha_k on the front plane
+    rake_angle_rad: float  # alpha_r (eq 4)
+    parabola_per_mm: float  # a_p (eq 2)
+    parabola_apex_mm: float  # u_o (eq 2)
+    machine_root_angle_rad: float  # gamma_m (eq 22)
+    gear_to_cradle_roll: float  # m_gc (eq 25)
+    gear_to_blade_roll: float  # m_gb (eq 37)
+    work_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)  # (dX_D, dE_m, dX_B)
+
+    @property
+    def work_axis(self) -> NDArray:
+        """Unit vector of the work axis in S_m (eq 22: the cone axis makes gamma_m with x_m)."""
+        g = self.machine_root_angle_rad
+        return np.array([math.cos(g), 0.0, math.sin(g)])
+
+    @property
+    def work_origin(self) -> NDArray:
+        """Origin of the work frame in S_m (the cone apex, moved by dX_D, dE_m, dX_B)."""
+        dxd, dem, dxb = self.work_offset_mm
+        return dxd * self.work_axis + np.array([0.0, dem, dxb])
+
+
+def _edge(b: BladeSystem, u):
+    """Cutting-edge point and tangent in the cutter frame S_c (eqs 2-4, 7-8)."""
+    sa, ca = math.sin(b.pressure_angle_rad), math.cos(b.pressure_angle_rad)
+    q = b.parabola_per_mm * (u - b.parabola_apex_mm) ** 2
+    dq = 2.0 * b.parabola_per_mm * (u - b.parabola_apex_mm)
+    xa = b.side * (-u * sa - q * ca)
+    ya = u * ca - q * sa
+    dxa = b.side * (-sa - dq * ca)
+    dya = ca - dq * sa
+    cr, sr = math.cos(b.rake_angle_rad), math.sin(b.rake_angle_rad)
+    cd, sd = math.cos(b.assembly_angle_rad), math.sin(b.assembly_angle_rad)
+    # S_a -> S_b (eq 4, z_a = 0) -> S_c (eq 8)
+    xb, zb = xa * cr, -xa * sr
+    dxb, dzb = dxa * cr, -dxa * sr
+    point = (xb * cd - zb * sd + b.cutter_radius_mm, ya, xb * sd + zb * cd)
+    tangent = (dxb * cd - dzb * sd, dya, dxb * sd + dzb * cd)
+    return point, tangent
+
+
+def _to_machine(b: BladeSystem, vec, theta, psi, *, translate: bool):
+    """S_c -> S_ck' (eq 16, rot_y(-theta)) -> S_d (eq 19) -> S_m (eq 18, rot_z(psi_cr))."""
+    x, y, z = vec
+    ct, st = np.cos(theta), np.sin(theta)
+    xp, zp = x * ct - z * st, x * st + z * ct
+    e = b.spiral_angle_rad - b.assembly_angle_rad
+    se, ce = math.sin(e), math.cos(e)
+    xd = xp * se + zp * ce
+    yd = -xp * ce + zp * se
+    zd = -y
+    if translate:
+        xd = xd + b.machine_distance_mm * math.cos(b.cradle_angle_rad)
+        yd = yd + b.machine_distance_mm * math.sin(b.cradle_angle_rad)
+    cp, sp = np.cos(psi), np.sin(psi)
+    return np.stack([xd * cp - yd * sp, xd * sp + yd * cp, zd * np.ones_like(xd)], axis=-1)
+
+
+def family(b: BladeSystem, u, theta, psi):
+    """Point and partial derivatives of the generating family in S_m, relative to the work.
+
+    Parameters
+    ----------
+    u, theta, psi
+        Blade parameter (mm), cutter phase and cradle angle (rad), arrays of one shape ``S``.
+
+    Returns
+    -------
+    dict
+        ``point`` (S, 3) in S_m; ``r_u``, ``r_theta``, ``r_psi`` (S, 3): the partial
+        derivatives of the work-frame point expressed in S_m; ``normal`` = r_u x r_theta;
+        ``meshing`` = normal . r_psi (eq 31); ``axial_mm`` L and ``radius_mm`` R of the point
+        in the work's axial plane.
+    """
+    u, theta, psi = np.broadcast_arrays(u, theta, psi)
+    point_c, tangent_c = _edge(b, u)
+    point = _to_machine(b, point_c, theta, psi, translate=True)
+    r_u = _to_machine(b, tangent_c, theta, psi, translate=False)
+    zero = np.zeros_like(u)
+    centre = _to_machine(b, (zero, zero, zero), theta, psi, translate=True)
+    cutter_axis = _to_machine(b, (zero, -np.ones_like(u), zero), theta, psi, translate=False)
+    axis, origin = b.work_axis, b.work_origin
+    rel = point - origin
+    work_spin = np.cross(axis, rel)  # velocity of the work point per unit work rotation
+    cradle_spin = np.cross(np.array([0.0, 0.0, 1.0]), point)
+    # d/d psi: cradle about z_m, work by m_gc psi (eq 23); relative to the work
+    r_psi = cradle_spin - b.gear_to_cradle_roll * work_spin
+    # d/d theta: cutter about its axis (rot_y(-theta): -y_c), work by -m_gb theta (eq 23)
+    r_theta = np.cross(cutter_axis, point - centre) + b.gear_to_blade_roll * work_spin
+    normal = np.cross(r_u, r_theta)
+    axial = rel @ axis
+    radial = rel - axial[..., None] * axis
+    return {
+        "point": point,
+        "r_u": r_u,
+        "r_theta": r_theta,
+        "r_psi": r_psi,
+        "normal": normal,
+        "meshing": np.sum(normal * r_psi, axis=-1),
+        "axial_mm": axial,
+        "radius_mm": np.sqrt(np.sum(radial * radial, axis=-1)),
+    }
+
+
+def pitch_line_start(b: BladeSystem, cone_distance_mm):
+    """Closed-form (u, theta, psi_cr) where the blade's pitch point meets the pitch line.
+
+    With u = 0 the edge point lies in the cradle plane on the circle of radius r_c about the
+    cutter centre O_c = M_d (cos q_2, sin q_2); the law of cosines gives the cutter phase at which
+    it is ``cone_distance_mm`` from O_m, and an atan2 the cradle angle that puts it on x_m, the
+    line where the crown gear's pitch plane touches the work's pitch cone.
+    """
+    s = np.asarray(cone_distance_mm, dtype=float)
+    md, q2, rc = b.machine_distance_mm, b.cradle_angle_rad, b.cutter_radius_mm
+    e = b.spiral_angle_rad - b.assembly_angle_rad
+    phi = q2 + np.arcsin((s**2 - md**2 - rc**2) / (2.0 * md * rc))
+    theta = phi - e
+    xd = rc * np.sin(phi) + md * math.cos(q2)
+    yd = -rc * np.cos(phi) + md * math.sin(q2)
+    return np.zeros_like(s), theta, -np.arctan2(yd, xd)
