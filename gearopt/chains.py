@@ -931,9 +931,10 @@ def select_change_gears(
 
     # pass 2: every (c, d) within the bound, in blocks
     if np.isfinite(bound):
-        slack = 1.0 + 1e-12
-        lo = np.searchsorted(cd_ratio, (ratio - bound * slack) / ab_ratio, side="left")
-        hi = np.searchsorted(cd_ratio, (ratio + bound * slack) / ab_ratio, side="right")
+        # widened by 1e-12 relative: pair ratios are rounded, the quadrants' errors are not
+        low, high = (ratio - bound) / ab_ratio, (ratio + bound) / ab_ratio
+        lo = np.searchsorted(cd_ratio, low * (1.0 - 1e-12), side="left")
+        hi = np.searchsorted(cd_ratio, high * (1.0 + 1e-12), side="right")
     else:
         lo = np.zeros(target.size, dtype=np.int64)
         hi = np.full(target.size, cd_ratio.size, dtype=np.int64)
