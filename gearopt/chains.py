@@ -38,7 +38,7 @@ import math
 import os
 import tomllib
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -83,6 +83,9 @@ __all__ = [
     "check_quadrant",
     "select_change_gears",
     "choose_change_gears",
+    "Quadrant",
+    "MachineResult",
+    "evaluate_machine",
 ]
 
 ELEMENT_KINDS = ("spur", "bevel", "worm", "worm_wheel", "rack")
@@ -1244,21 +1247,12 @@ class ChainResult:
 
     def as_dict(self, *, elements: bool = True) -> dict[str, Any]:
         """JSON-ready dictionary (with the per-element and per-mesh rows unless told not to)."""
-        out: dict[str, Any] = {
-            "machine": self.machine,
-            "chain": self.chain,
-            "gears": dict(self.gears),
-            "input_angle_deg": self.input_angle_deg,
-            "theoretical_ratio": self.theoretical_ratio,
-            "max_ratio": self.max_ratio,
-            "min_ratio": self.min_ratio,
-            "ratio_error": self.ratio_error,
-            "ratio_error_plus": self.ratio_error_plus,
-            "ratio_error_minus": self.ratio_error_minus,
-            "ratio_error_percent": self.ratio_error_percent,
-            "angle_error_deg": self.angle_error_deg,
-            "pitch_error_um": self.pitch_error_um,
+        out = {
+            f.name: getattr(self, f.name)
+            for f in fields(self)
+            if f.name not in ("elements", "meshes")
         }
+        out["gears"] = dict(self.gears)
         if elements:
             out["elements"] = [vars(r) for r in self.elements]
             out["meshes"] = [vars(r) for r in self.meshes]
@@ -1363,3 +1357,117 @@ def choose_change_gears(
     errors = np.broadcast_to(np.asarray(out["ratio_error"], dtype=float), (len(tied),))
     pick = int(np.argmin(errors))
     return tuple(int(g) for g in quads[pick]), quads, np.array(errors)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Quadrant:
+    """The change gears of one chain's quadrant and how well they give its required ratio.
+
+    ``required_ratio`` and ``error`` (ratio minus required) are None when the divisor (work or
+    crown teeth) was not given; ``candidates`` and ``candidate_ratio_errors`` are the quadrants
+    weighed by :func:`choose_change_gears` when the gears were chosen, else None.
+    """
+
+    chain: str
+    gears: tuple[int, int, int, int]
+    ratio: float
+    required_ratio: float | None
+    error: float | None
+    chosen: bool
+    candidates: np.ndarray | None = field(default=None, compare=False, repr=False)
+    candidate_ratio_errors: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (without the candidates)."""
+        return {
+            "gears": list(self.gears),
+            "ratio": self.ratio,
+            "required_ratio": self.required_ratio,
+            "error": self.error,
+            "chosen": self.chosen,
+        }
+
+
+@dataclass(frozen=True, kw_only=True)
+class MachineResult:
+    """Every chain of a machine for one work gear: its quadrants and chain errors by name."""
+
+    quadrants: Mapping[str, Quadrant]
+    chains: Mapping[str, ChainResult]
+
+
+def evaluate_machine(
+    machine: Machine,
+    *,
+    work: WorkGear,
+    crown_teeth: float | None = None,
+    gears: Mapping[str, Sequence[int]] | None = None,
+    input_angles_deg: Mapping[str, float] | None = None,
+    candidates: int = 50,
+) -> MachineResult:
+    """Set up every quadrant and evaluate every chain of ``machine`` for the gear being cut.
+
+    A quadrant given in ``gears`` (chain name -> ``(a, b, c, d)``) is checked by the set's rule;
+    one not given is chosen by :func:`choose_change_gears` for its required ratio (``constant /
+    work teeth``, or ``constant / crown_teeth``, which must then be given). Chains passing fewer
+    slots are set up first, so the envelope chain sees the indexing quadrant it passes through.
+    ``input_angles_deg`` overrides chains' input angles per cycle (the cradle swing).
+    """
+    gears = dict(gears or {})
+    angles = dict(input_angles_deg or {})
+    for name in (*gears, *angles):
+        machine.chain(name)  # unknown chain names are errors
+    with_slots = [c for c in machine.chains if c.change_gear_slots is not None]
+    order = sorted(with_slots, key=lambda c: len(machine.slots_of(c.name)))
+    teeth: dict[str, int] = {}
+    quadrants: dict[str, Quadrant] = {}
+    for spec in order:
+        assert spec.change_gear_slots is not None
+        divisor_known = spec.change_gear_divisor == "work_teeth" or crown_teeth is not None
+        ratio = (
+            required_ratio(machine, spec.name, work_teeth=work.teeth, crown_teeth=crown_teeth)
+            if divisor_known
+            else None
+        )
+        quads = errors = None
+        if spec.name in gears:
+            quad = tuple(machine.quadrant_gears(spec.name, gears[spec.name]).values())
+        elif ratio is None:
+            raise DesignError(
+                "crown_teeth",
+                rule=f"give the {spec.name} change gears a, b, c, d, or the crown gear's teeth "
+                "to choose them from the machine's set",
+            )
+        else:
+            fixed = {s: teeth[s] for s in machine.slots_of(spec.name) if s in teeth}
+            quad, quads, errors = choose_change_gears(
+                machine,
+                spec.name,
+                ratio,
+                fixed,
+                candidates=candidates,
+                input_angle_deg=angles.get(spec.name),
+            )
+        teeth.update(zip(spec.change_gear_slots, quad, strict=True))
+        value = quad[0] * quad[2] / (quad[1] * quad[3])
+        quadrants[spec.name] = Quadrant(
+            chain=spec.name,
+            gears=quad,  # type: ignore[arg-type]
+            ratio=value,
+            required_ratio=ratio,
+            error=None if ratio is None else value - ratio,
+            chosen=spec.name not in gears,
+            candidates=quads,
+            candidate_ratio_errors=errors,
+        )
+    chains = {
+        spec.name: chain_error(
+            machine,
+            spec.name,
+            gears={s: teeth[s] for s in machine.slots_of(spec.name)},
+            input_angle_deg=angles.get(spec.name),
+            work=work,
+        )
+        for spec in machine.chains
+    }
+    return MachineResult(quadrants=quadrants, chains=chains)

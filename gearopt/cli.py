@@ -95,16 +95,19 @@ def _cmd_settings(args: argparse.Namespace) -> int:
     return 0
 
 
-def _parse_gears(text: str | None, option: str) -> list[int] | None:
-    if text is None:
-        return None
+def _parse_teeth(text: str, option: str, *, count: int | None = None) -> list[int]:
+    rule = (
+        "must be four tooth counts a,b,c,d (a/b x c/d)"
+        if count == 4
+        else ("must be tooth counts separated by commas")
+    )
     try:
-        gears = [int(part) for part in text.replace(" ", "").split(",")]
+        teeth = [int(part) for part in text.replace(" ", "").split(",") if part]
     except ValueError:
-        raise DesignError(option, text, "must be four tooth counts a,b,c,d (a/b x c/d)") from None
-    if len(gears) != 4:
-        raise DesignError(option, text, "must be four tooth counts a,b,c,d (a/b x c/d)")
-    return gears
+        raise DesignError(option, text, rule) from None
+    if count is not None and len(teeth) != count:
+        raise DesignError(option, text, rule)
+    return teeth
 
 
 def _chain_text(name: str, out: dict[str, Any]) -> str:
@@ -129,10 +132,11 @@ def _chain_text(name: str, out: dict[str, Any]) -> str:
     lines = [f"{name} chain of {out['machine']!r} (change gears {gears or 'none'})"]
     if "change_gears" in out:
         choice = out["change_gears"]
-        lines.append(
-            f"quadrant {choice['gears']}: ratio {choice['ratio']:.8f} for "
-            f"{choice['required_ratio']:.8f} (error {choice['error']:.3e})"
-        )
+        how = "chosen from the set" if choice["chosen"] else "given"
+        line = f"quadrant {choice['gears']} ({how}): ratio {choice['ratio']:.8f}"
+        if choice["required_ratio"] is not None:
+            line += f" for {choice['required_ratio']:.8f} (error {choice['error']:+.3e})"
+        lines.append(line)
     lines += ["", _table(summary, ("result", "value")), ""]
     columns = {
         "revolutions": "n",
@@ -155,13 +159,7 @@ def _chain_text(name: str, out: dict[str, Any]) -> str:
 
 
 def _cmd_chain(args: argparse.Namespace) -> int:
-    from gearopt.chains import (
-        WorkGear,
-        chain_error,
-        choose_change_gears,
-        load_machine,
-        required_ratio,
-    )
+    from gearopt.chains import WorkGear, evaluate_machine, load_machine
 
     machine = load_machine(args.machine)
     work = WorkGear(
@@ -169,63 +167,30 @@ def _cmd_chain(args: argparse.Namespace) -> int:
         normal_module_mm=args.normal_module_mm,
         spiral_angle_deg=args.spiral_angle_deg,
     )
-    given = {
-        "indexing": _parse_gears(args.indexing_gears, "--indexing-gears"),
-        "envelope": _parse_gears(args.envelope_gears, "--envelope-gears"),
+    gears = {
+        chain: _parse_teeth(text, f"--{chain}-gears", count=4)
+        for chain, text in (("indexing", args.indexing_gears), ("envelope", args.envelope_gears))
+        if text is not None
     }
-    angles = {"envelope": args.cradle_swing_deg} if args.cradle_swing_deg is not None else {}
-    gears: dict[str, int] = {}
-    choices: dict[str, dict[str, Any]] = {}
-    # chains passing fewer slots first: the envelope chain passes the indexing quadrant too
-    for spec in sorted(machine.chains, key=lambda c: len(machine.slots_of(c.name))):
-        if spec.change_gear_slots is None:
-            continue
-        quad = given.get(spec.name)
-        if quad is None:
-            if spec.change_gear_divisor == "crown_teeth" and args.crown_teeth is None:
-                raise DesignError(
-                    f"--{spec.name}-gears",
-                    rule=f"give the {spec.name} change gears a,b,c,d, or --crown-teeth to "
-                    "choose them from the machine's set",
-                )
-            ratio = required_ratio(
-                machine, spec.name, work_teeth=work.teeth, crown_teeth=args.crown_teeth
-            )
-            fixed = {s: gears[s] for s in machine.slots_of(spec.name) if s in gears}
-            quad = list(
-                choose_change_gears(
-                    machine, spec.name, ratio, fixed, input_angle_deg=angles.get(spec.name)
-                )[0]
-            )
-        gears.update(machine.quadrant_gears(spec.name, quad))
-        if spec.change_gear_divisor == "work_teeth" or args.crown_teeth is not None:
-            ratio = required_ratio(
-                machine, spec.name, work_teeth=work.teeth, crown_teeth=args.crown_teeth
-            )
-            value = quad[0] * quad[2] / (quad[1] * quad[3])
-            choices[spec.name] = {
-                "gears": list(quad),
-                "ratio": value,
-                "required_ratio": ratio,
-                "error": value - ratio,
-            }
+    result = evaluate_machine(
+        machine,
+        work=work,
+        crown_teeth=args.crown_teeth,
+        gears=gears,
+        input_angles_deg={}
+        if args.cradle_swing_deg is None
+        else {"envelope": args.cradle_swing_deg},
+    )
     out: dict[str, Any] = {}
-    for spec in machine.chains:
-        result = chain_error(
-            machine,
-            spec.name,
-            gears={s: gears[s] for s in machine.slots_of(spec.name)},
-            input_angle_deg=angles.get(spec.name),
-            work=work,
-        )
-        out[spec.name] = result.as_dict()
-        out[spec.name]["work"] = {
+    for name, chain in result.chains.items():
+        out[name] = chain.as_dict()
+        out[name]["work"] = {
             "teeth": work.teeth,
             "normal_module_mm": work.normal_module_mm,
             "spiral_angle_deg": work.spiral_angle_deg,
         }
-        if spec.name in choices:
-            out[spec.name]["change_gears"] = choices[spec.name]
+        if name in result.quadrants:
+            out[name]["change_gears"] = result.quadrants[name].as_dict()
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
@@ -233,9 +198,9 @@ def _cmd_chain(args: argparse.Namespace) -> int:
         f"work gear: z = {work.teeth}, m_n = {work.normal_module_mm:g} mm, "
         f"beta = {work.spiral_angle_deg:g} deg"
     )
-    for name, result in out.items():
+    for name, chain_out in out.items():
         print()
-        print(_chain_text(name, result))
+        print(_chain_text(name, chain_out))
     return 0
 
 
@@ -274,13 +239,6 @@ def _cmd_change_gears(args: argparse.Namespace) -> int:
     ]
     print(_table(rows, ("a/b/c/d", "ratio", "error", "error %")))
     return 0
-
-
-def _parse_teeth(text: str, option: str) -> list[int]:
-    try:
-        return [int(part) for part in text.replace(" ", "").split(",") if part]
-    except ValueError:
-        raise DesignError(option, text, "must be tooth counts separated by commas") from None
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:

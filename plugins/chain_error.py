@@ -38,16 +38,7 @@ from typing import Any
 import numpy as np
 
 from gearopt import hookimpl
-from gearopt.chains import (
-    Machine,
-    WorkGear,
-    chain_error,
-    check_quadrant,
-    choose_change_gears,
-    load_machine,
-    required_ratio,
-    select_change_gears,
-)
+from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
 from gearopt.design import MEMBERS, Design
 from gearopt.errors import DesignError
 from gearopt.evaluation import BaseEvaluator, Evaluation
@@ -56,6 +47,15 @@ from gearopt.validate import check_integer, check_keys, check_number
 __all__ = ["ChainErrorEvaluator", "bench_change_gears"]
 
 DEFAULT_MACHINE = "zftkk250x5"
+METRICS = (
+    "theoretical_ratio",
+    "max_ratio",
+    "min_ratio",
+    "ratio_error",
+    "ratio_error_percent",
+    "angle_error_deg",
+    "pitch_error_um",
+)
 _FIXED_KEYS = (
     "machine",
     "member",
@@ -66,12 +66,6 @@ _FIXED_KEYS = (
     "cradle_swing_deg",
     "candidates",
 )
-
-
-def _chain_order(machine: Machine) -> list[str]:
-    """Chains with a quadrant, those passing fewer slots first (their gears are fixed first)."""
-    chains = [c.name for c in machine.chains if c.change_gear_slots is not None]
-    return sorted(chains, key=lambda name: len(machine.slots_of(name)))
 
 
 class ChainErrorEvaluator(BaseEvaluator):
@@ -86,10 +80,10 @@ class ChainErrorEvaluator(BaseEvaluator):
         if not isinstance(name, str):
             raise DesignError("conditions.machine", name, "must be a machine name or file path")
         machine = load_machine(name)
-        chains = _chain_order(machine)
+        quadrants = [c.name for c in machine.chains if c.change_gear_slots is not None]
         allowed = (
             *_FIXED_KEYS,
-            *(f"{c}_gears" for c in chains),
+            *(f"{c}_gears" for c in quadrants),
             *(f"{c.name}_input_angle_deg" for c in machine.chains),
         )
         check_keys(conditions, allowed, "conditions")
@@ -119,9 +113,6 @@ class ChainErrorEvaluator(BaseEvaluator):
             conditions.get("crown_teeth", design.blank.crown_gear_teeth),
             gt=0.0,
         )
-        candidates = check_integer(
-            "conditions.candidates", conditions.get("candidates", 50), ge=1, le=10_000
-        )
         angles = {
             c.name: conditions[f"{c.name}_input_angle_deg"]
             for c in machine.chains
@@ -129,55 +120,31 @@ class ChainErrorEvaluator(BaseEvaluator):
         }
         if "cradle_swing_deg" in conditions:
             angles["envelope"] = conditions["cradle_swing_deg"]
-
-        gears: dict[str, int] = {}
+        given = {c: conditions[f"{c}_gears"] for c in quadrants if f"{c}_gears" in conditions}
+        result = evaluate_machine(
+            machine,
+            work=work,
+            crown_teeth=crown,
+            gears=given,
+            input_angles_deg=angles,
+            candidates=check_integer(
+                "conditions.candidates", conditions.get("candidates", 50), ge=1, le=10_000
+            ),
+        )
         metrics: dict[str, float] = {}
         arrays: dict[str, np.ndarray] = {}
-        chosen: dict[str, list[int]] = {}
-        for chain in chains:
-            slots = machine.chain(chain).change_gear_slots
-            assert slots is not None
-            ratio = required_ratio(machine, chain, work_teeth=work.teeth, crown_teeth=crown)
-            given = conditions.get(f"{chain}_gears")
-            if given is not None:
-                quad = check_quadrant(
-                    machine.change_gears, list(given), where=f"conditions.{chain}_gears"
-                )
-            else:
-                quad, quads, errors = choose_change_gears(
-                    machine,
-                    chain,
-                    ratio,
-                    gears,
-                    candidates=candidates,
-                    input_angle_deg=angles.get(chain),
-                )
-                arrays[f"{chain}_candidate_gears"] = quads
-                arrays[f"{chain}_candidate_ratio_error"] = errors
-            gears.update(zip(slots, quad, strict=True))
-            chosen[chain] = list(quad)
-            quad_ratio = quad[0] * quad[2] / (quad[1] * quad[3])
-            metrics[f"{chain}_change_gear_error"] = quad_ratio - ratio
-            metrics[f"{chain}_change_gear_error_percent"] = 100.0 * (quad_ratio - ratio) / ratio
-        for spec in machine.chains:
-            result = chain_error(
-                machine,
-                spec.name,
-                gears={s: gears[s] for s in machine.slots_of(spec.name)},
-                input_angle_deg=angles.get(spec.name),
-                work=work,
+        for chain, quadrant in result.quadrants.items():
+            assert quadrant.error is not None and quadrant.required_ratio is not None
+            metrics[f"{chain}_change_gear_error"] = quadrant.error
+            metrics[f"{chain}_change_gear_error_percent"] = (
+                100.0 * quadrant.error / quadrant.required_ratio
             )
-            for key in (
-                "theoretical_ratio",
-                "max_ratio",
-                "min_ratio",
-                "ratio_error",
-                "ratio_error_percent",
-                "angle_error_deg",
-                "pitch_error_um",
-            ):
-                metrics[f"{spec.name}_{key}"] = float(getattr(result, key))
-            angles.setdefault(spec.name, result.input_angle_deg)
+            if quadrant.candidates is not None:
+                arrays[f"{chain}_candidate_gears"] = quadrant.candidates
+                arrays[f"{chain}_candidate_ratio_error"] = quadrant.candidate_ratio_errors
+        for chain, chain_result in result.chains.items():
+            for key in METRICS:
+                metrics[f"{chain}_{key}"] = float(getattr(chain_result, key))
         return Evaluation(
             evaluator=self.name,
             metrics=metrics,
@@ -189,8 +156,8 @@ class ChainErrorEvaluator(BaseEvaluator):
                 "normal_module_mm": work.normal_module_mm,
                 "spiral_angle_deg": work.spiral_angle_deg,
                 "crown_teeth": crown,
-                "input_angles_deg": angles,
-                **{f"{c}_gears": q for c, q in chosen.items()},
+                "input_angles_deg": {c: r.input_angle_deg for c, r in result.chains.items()},
+                **{f"{c}_gears": list(q.gears) for c, q in result.quadrants.items()},
             },
         )
 

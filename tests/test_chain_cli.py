@@ -122,3 +122,10 @@ def test_chain_errors_are_one_line(capsys, argv, fragment):
 def test_unknown_machine(capsys):
     assert main(["change-gears", "nosuch", "--ratio", "1.0"]) == 2
     assert "unknown machine" in capsys.readouterr().err
+
+
+def test_chain_needs_envelope_gears_or_the_crown_gear(capsys):
+    argv = [a for a in CHAIN_Z15 if a not in ("--envelope-gears", "40,64,62,52")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "crown_teeth" in err and "envelope change gears" in err
