@@ -96,11 +96,9 @@ def _cmd_settings(args: argparse.Namespace) -> int:
 
 
 def _parse_teeth(text: str, option: str, *, count: int | None = None) -> list[int]:
-    rule = (
-        "must be four tooth counts a,b,c,d (a/b x c/d)"
-        if count == 4
-        else ("must be tooth counts separated by commas")
-    )
+    rule = "must be tooth counts separated by commas"
+    if count == 4:
+        rule = "must be four tooth counts a,b,c,d (a/b x c/d)"
     try:
         teeth = [int(part) for part in text.replace(" ", "").split(",") if part]
     except ValueError:
@@ -172,14 +170,9 @@ def _cmd_chain(args: argparse.Namespace) -> int:
         for chain, text in (("indexing", args.indexing_gears), ("envelope", args.envelope_gears))
         if text is not None
     }
+    swing = {} if args.cradle_swing_deg is None else {"envelope": args.cradle_swing_deg}
     result = evaluate_machine(
-        machine,
-        work=work,
-        crown_teeth=args.crown_teeth,
-        gears=gears,
-        input_angles_deg={}
-        if args.cradle_swing_deg is None
-        else {"envelope": args.cradle_swing_deg},
+        machine, work=work, crown_teeth=args.crown_teeth, gears=gears, input_angles_deg=swing
     )
     out: dict[str, Any] = {}
     for name, chain in result.chains.items():
