@@ -1284,27 +1284,18 @@ def chain_error(
     for name, teeth in gears.items():
         check_integer(f"gears.{name}", teeth, ge=1, le=_MAX_TEETH)
     out = chain_error_arrays(machine, chain, gears, input_angle_deg=input_angle_deg)
-    rows = []
-    for name, values in out["elements"].items():
-        rows.append(
-            ElementRow(
-                element=name,
-                shaft=values["shaft"],
-                teeth=int(values["teeth"]),
-                **{
-                    k: float(v) for k, v in values.items() if k not in ("shaft", "teeth", "element")
-                },
-            )
+    rows = tuple(
+        ElementRow(
+            element=name,
+            shaft=values["shaft"],
+            teeth=int(values["teeth"]),
+            **{k: float(v) for k, v in values.items() if k not in ("shaft", "teeth")},
         )
+        for name, values in out["elements"].items()
+    )
     meshes = tuple(
-        MeshRow(
-            driver=m["driver"],
-            driven=m["driven"],
-            theoretical_ratio=float(m["theoretical_ratio"]),
-            max_ratio=float(m["max_ratio"]),
-            min_ratio=float(m["min_ratio"]),
-        )
-        for m in out["meshes"]
+        MeshRow(**{k: v if isinstance(v, str) else float(v) for k, v in mesh.items()})
+        for mesh in out["meshes"]
     )
     theory = float(out["theoretical_ratio"])
     angle_error = float(out["angle_error_deg"])
@@ -1323,7 +1314,7 @@ def chain_error(
         ratio_error_percent=float(out["ratio_error_percent"]),
         angle_error_deg=angle_error,
         pitch_error_um=None if work is None else float(normal_pitch_error_um(angle_error, work)),
-        elements=tuple(rows),
+        elements=rows,
         meshes=meshes,
     )
 
