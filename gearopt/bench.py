@@ -23,6 +23,7 @@ __all__ = ["BENCHMARKS", "run_benchmarks", "time_call_ms"]
 # name -> "module:function"; the function returns (milliseconds, info dict)
 BENCHMARKS: dict[str, str] = {
     "basic_settings_ms": "gearopt.bench:bench_basic_settings",
+    "change_gears_ms": "gearopt_plugins.chain_error:bench_change_gears",
 }
 
 ONE_THREAD = {
