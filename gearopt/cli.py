@@ -30,15 +30,25 @@ def _format_value(value: Any) -> str:
     return str(value)
 
 
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell.split(",")[0])
+    except ValueError:
+        return False
+    return True
+
+
 def _table(rows: list[tuple[str, ...]], header: tuple[str, ...]) -> str:
+    """Plain-text table: first column and text left-aligned, numbers right-aligned."""
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
-    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True)).rstrip()]
     lines.append("  ".join("-" * w for w in widths))
     for row in rows:
         cells = [row[0].ljust(widths[0])] + [
-            c.rjust(w) for c, w in zip(row[1:], widths[1:], strict=True)
+            c.rjust(w) if _is_number(c) else c.ljust(w)
+            for c, w in zip(row[1:], widths[1:], strict=True)
         ]
-        lines.append("  ".join(cells))
+        lines.append("  ".join(cells).rstrip())
     return "\n".join(lines)
 
 
