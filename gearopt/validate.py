@@ -141,6 +141,14 @@ def check_integer(name: str, value: Any, *, ge: int | None = None, le: int | Non
 _REQUIRED = object()
 
 
+def _lookup(table: Mapping[str, Any], key: str, where: str, default: Any) -> tuple[str, bool]:
+    """Dotted name of ``key`` and whether it is present; a missing required key raises."""
+    name = f"{where}.{key}" if where else key
+    if key not in table and default is _REQUIRED:
+        raise DesignError(name, rule="required key is missing")
+    return name, key in table
+
+
 def read_number(
     table: Mapping[str, Any],
     key: str,
@@ -153,10 +161,8 @@ def read_number(
     le: float | None = None,
 ) -> float:
     """Read a finite float, optionally bounded; ``default`` makes the key optional."""
-    name = f"{where}.{key}" if where else key
-    if key not in table:
-        if default is _REQUIRED:
-            raise DesignError(name, rule="required key is missing")
+    name, present = _lookup(table, key, where, default)
+    if not present:
         return default
     return check_number(name, table[key], gt=gt, ge=ge, lt=lt, le=le, unit=_unit_of(key))
 
@@ -171,10 +177,8 @@ def read_integer(
     le: int | None = None,
 ) -> int:
     """Read an integer (a float such as ``16.0`` or ``16.5`` is refused), optionally bounded."""
-    name = f"{where}.{key}" if where else key
-    if key not in table:
-        if default is _REQUIRED:
-            raise DesignError(name, rule="required key is missing")
+    name, present = _lookup(table, key, where, default)
+    if not present:
         return default
     return check_integer(name, table[key], ge=ge, le=le)
 
