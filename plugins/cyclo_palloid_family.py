@@ -122,17 +122,19 @@ def family(b: BladeSystem, u, theta, psi):
     point_c, tangent_c = _edge(b, u)
     point = _to_machine(b, point_c, theta, psi, translate=True)
     r_u = _to_machine(b, tangent_c, theta, psi, translate=False)
-    zero = np.zeros_like(u)
-    centre = _to_machine(b, (zero, zero, zero), theta, psi, translate=True)
-    cutter_axis = _to_machine(b, (zero, -np.ones_like(u), zero), theta, psi, translate=False)
+    # the cutter axis -y_c is +z_m (eq 19: z_d = -y_c; the cradle turns about z_m); its centre
+    # O_c = M_d (cos q_2, sin q_2, 0) turns with the cradle
+    z_m = np.array([0.0, 0.0, 1.0])
+    md, q2 = b.machine_distance_mm, b.cradle_angle_rad
+    centre_angle = psi + q2
+    centre = np.stack([md * np.cos(centre_angle), md * np.sin(centre_angle), 0.0 * psi], axis=-1)
     axis, origin = b.work_axis, b.work_origin
     rel = point - origin
     work_spin = np.cross(axis, rel)  # velocity of the work point per unit work rotation
-    cradle_spin = np.cross(np.array([0.0, 0.0, 1.0]), point)
     # d/d psi: cradle about z_m, work by m_gc psi (eq 23); relative to the work
-    r_psi = cradle_spin - b.gear_to_cradle_roll * work_spin
-    # d/d theta: cutter about its axis (rot_y(-theta): -y_c), work by -m_gb theta (eq 23)
-    r_theta = np.cross(cutter_axis, point - centre) + b.gear_to_blade_roll * work_spin
+    r_psi = np.cross(z_m, point) - b.gear_to_cradle_roll * work_spin
+    # d/d theta: cutter about its axis, work by -m_gb theta (eq 23)
+    r_theta = np.cross(z_m, point - centre) + b.gear_to_blade_roll * work_spin
     normal = np.cross(r_u, r_theta)
     axial = rel @ axis
     radial = rel - axial[..., None] * axis
