@@ -10,6 +10,7 @@ are printed as one line naming the parameter, its value and the rule (exit statu
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from collections.abc import Sequence
@@ -187,11 +188,7 @@ def _cmd_chain(args: argparse.Namespace) -> int:
     out: dict[str, Any] = {}
     for name, chain in result.chains.items():
         out[name] = chain.as_dict()
-        out[name]["work"] = {
-            "teeth": work.teeth,
-            "normal_module_mm": work.normal_module_mm,
-            "spiral_angle_deg": work.spiral_angle_deg,
-        }
+        out[name]["work"] = dataclasses.asdict(work)
         if name in result.quadrants:
             out[name]["change_gears"] = result.quadrants[name].as_dict()
     if args.json:
