@@ -37,7 +37,8 @@ from typing import Any
 from gearopt import hookimpl
 from gearopt.blank import pitch_angles_rad
 from gearopt.design import MEMBERS, Design, PairData
-from gearopt.errors import DesignError, NotAvailableError
+from gearopt.errors import DesignError
+from gearopt.flank import FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.validate import (
     check_keys,
@@ -45,6 +46,7 @@ from gearopt.validate import (
     read_number,
     read_table,
 )
+from gearopt_plugins.cyclo_palloid_generation import generate_flank, solve_additional_slope_angle
 
 __all__ = [
     "CycloPalloid",
@@ -245,6 +247,69 @@ def _parse_member(
     )
 
 
+def member_settings(design: Design, member: str, additional_slope_angle_deg: float):
+    """Basic settings of one member for a given additional slope angle (eqs 5-14, 25, 30-38,
+    and the compensation of section 4, eqs 49-59)."""
+    pair, machine, comp = design.pair, design.machine, design.compensation
+    am = pair.blank.mean_cone_distance_mm
+    psi = math.radians(pair.mean_spiral_angle_deg)
+    # eqs 49-52: the auxiliary pitch angles of the pair redesigned for Sigma + dGamma
+    sigma = math.radians(pair.shaft_angle_deg + comp.shaft_angle_deg)
+    gamma_m = pitch_angles_rad(pair.pinion_teeth, pair.gear_teeth, sigma)[MEMBERS.index(member)]
+    offsets = {
+        "pinion": (comp.pinion_axial_mm, comp.offset_mm),  # eqs 58-59
+        "gear": (comp.gear_axial_mm, 0.0),  # eq 57
+    }
+    spec = machine.member(member)
+    rci, rco = spec.inner_cutter_radius_mm, spec.outer_cutter_radius_mm
+    nu = slope_angle_rad(
+        blade_module_mm=machine.blade_module_mm,
+        blade_groups=machine.blade_groups,
+        inner_cutter_radius_mm=rci,
+    )
+    nu_prime = nu + math.radians(additional_slope_angle_deg)
+    e, gamma = eccentricity(
+        inner_cutter_radius_mm=rci, outer_cutter_radius_mm=rco, slope_angle_rad=nu_prime
+    )
+    nu_k = {"inner": nu_prime, "outer": nu_prime - gamma}  # eqs 11, 38
+    radii = {"inner": rci, "outer": rco}
+    rho_prime = rci * math.sin(nu_prime)
+    rho_cr = am * math.cos(psi)
+    values: dict[str, Any] = {}
+    for k in ("inner", "outer"):
+        md, q2 = machine_distance_and_cradle_angle(
+            mean_cone_distance_mm=am,
+            spiral_angle_rad=psi,
+            cutter_radius_mm=radii[k],
+            nu_rad=nu_k[k],
+        )
+        values[f"{k}_machine_distance_mm"] = md
+        values[f"{k}_cradle_angle_deg"] = math.degrees(q2)
+        values[f"{k}_assembly_angle_deg"] = math.degrees(nu_k[k])
+        values[f"{k}_rolling_circle_radius_mm"] = md * rho_prime / (rho_prime + rho_cr)
+        values[f"{k}_base_circle_radius_mm"] = md * rho_cr / (rho_prime + rho_cr)
+    center_to_back, blank_offset = offsets[member]
+    return CycloPalloidSettings(
+        slope_angle_deg=math.degrees(nu),
+        additional_slope_angle_deg=float(additional_slope_angle_deg),
+        inner_cutter_radius_mm=rci,
+        outer_cutter_radius_mm=rco,
+        blade_module_mm=machine.blade_module_mm,
+        blade_groups=machine.blade_groups,
+        eccentricity_mm=e,
+        eccentricity_angle_deg=math.degrees(gamma),
+        machine_root_angle_deg=math.degrees(gamma_m),
+        machine_center_to_back_mm=center_to_back,
+        blank_offset_mm=blank_offset,
+        sliding_base_mm=0.0,
+        gear_to_cradle_roll=1.0 / math.sin(gamma_m),  # eqs 25, 53-54
+        gear_to_blade_roll=rho_prime / (math.sin(gamma_m) * rho_cr),  # eqs 37, 55-56
+        roll_circle_radius_mm=rho_prime,
+        crown_gear_radius_mm=rho_cr,
+        **values,
+    )
+
+
 # --- the model -----------------------------------------------------------------------------------
 
 
@@ -275,85 +340,41 @@ class CycloPalloid(BaseMachineModel):
         return CycloPalloidMachine(blade_groups=nb, blade_module_mm=mb, **members)
 
     def basic_settings(self, design: Design) -> MachineSettings:
-        pair, machine, comp = design.pair, design.machine, design.compensation
-        blank = pair.blank
-        am = blank.mean_cone_distance_mm
-        psi = math.radians(pair.mean_spiral_angle_deg)
-        # eqs 49-52: the auxiliary pitch angles of the pair redesigned for Sigma + dGamma
-        sigma = math.radians(pair.shaft_angle_deg + comp.shaft_angle_deg)
-        root_angles = pitch_angles_rad(pair.pinion_teeth, pair.gear_teeth, sigma)
-        offsets = {
-            "pinion": (comp.pinion_axial_mm, comp.offset_mm),  # eqs 58-59
-            "gear": (comp.gear_axial_mm, 0.0),  # eq 57
-        }
         settings = {}
-        for index, member in enumerate(MEMBERS):
-            spec = machine.member(member)
-            where = f"machine.{member}.additional_slope_angle_deg"
+        for member in MEMBERS:
+            spec = design.machine.member(member)
             if spec.is_auto:
-                raise NotAvailableError(
-                    where,
-                    AUTO,
-                    "solving the additional slope angle from the tooth thickness (seed 001 eqs "
-                    "39-48) needs the flank generator, which is not implemented yet; enter the "
-                    "angle in degrees",
-                )
-            rci, rco = spec.inner_cutter_radius_mm, spec.outer_cutter_radius_mm
-            nu = slope_angle_rad(
-                blade_module_mm=machine.blade_module_mm,
-                blade_groups=machine.blade_groups,
-                inner_cutter_radius_mm=rci,
-            )
-            nu_prime = nu + math.radians(spec.additional_slope_angle_deg)
-            e, gamma = eccentricity(
-                inner_cutter_radius_mm=rci, outer_cutter_radius_mm=rco, slope_angle_rad=nu_prime
-            )
-            nu_k = {"inner": nu_prime, "outer": nu_prime - gamma}  # eqs 11, 38
-            radii = {"inner": rci, "outer": rco}
-            rho_prime = rci * math.sin(nu_prime)
-            rho_cr = am * math.cos(psi)
-            gamma_m = root_angles[index]
-            values: dict[str, Any] = {}
-            for k in ("inner", "outer"):
-                md, q2 = machine_distance_and_cradle_angle(
-                    mean_cone_distance_mm=am,
-                    spiral_angle_rad=psi,
-                    cutter_radius_mm=radii[k],
-                    nu_rad=nu_k[k],
-                )
-                values[f"{k}_machine_distance_mm"] = md
-                values[f"{k}_cradle_angle_deg"] = math.degrees(q2)
-                values[f"{k}_assembly_angle_deg"] = math.degrees(nu_k[k])
-                values[f"{k}_rolling_circle_radius_mm"] = md * rho_prime / (rho_prime + rho_cr)
-                values[f"{k}_base_circle_radius_mm"] = md * rho_cr / (rho_prime + rho_cr)
-            center_to_back, blank_offset = offsets[member]
-            settings[member] = CycloPalloidSettings(
-                slope_angle_deg=math.degrees(nu),
-                additional_slope_angle_deg=float(spec.additional_slope_angle_deg),
-                inner_cutter_radius_mm=rci,
-                outer_cutter_radius_mm=rco,
-                blade_module_mm=machine.blade_module_mm,
-                blade_groups=machine.blade_groups,
-                eccentricity_mm=e,
-                eccentricity_angle_deg=math.degrees(gamma),
-                machine_root_angle_deg=math.degrees(gamma_m),
-                machine_center_to_back_mm=center_to_back,
-                blank_offset_mm=blank_offset,
-                sliding_base_mm=0.0,
-                gear_to_cradle_roll=1.0 / math.sin(gamma_m),  # eqs 25, 53-54
-                gear_to_blade_roll=rho_prime / (math.sin(gamma_m) * rho_cr),  # eqs 37, 55-56
-                roll_circle_radius_mm=rho_prime,
-                crown_gear_radius_mm=rho_cr,
-                **values,
-            )
+                settings[member] = solve_additional_slope_angle(
+                    design, member, lambda dnu_deg, m=member: member_settings(design, m, dnu_deg)
+                ).settings
+            else:
+                settings[member] = member_settings(design, member, spec.additional_slope_angle_deg)
         notes = []
-        if not comp.is_zero:
+        if not design.compensation.is_zero:
             notes.append(
                 "settings compensate [compensation] (seed 001 section 4): machine root angles and "
                 "roll ratios for Sigma + dGamma (eqs 49-56), dXD1 = dA1, dEm1 = dE, dXD2 = dA2 "
                 "(eqs 57-59); cutter settings unchanged"
             )
+        auto = [m for m in MEMBERS if design.machine.member(m).is_auto]
+        if auto:
+            notes.append(
+                f"additional slope angle of the {' and '.join(auto)} solved from the mean normal "
+                "chordal thickness (seed 001 eqs 39-48)"
+            )
         return MachineSettings(model=self.name, notes=tuple(notes), **settings)
+
+    def generate_flank(
+        self, design: Design, *, member: str, flank: str, grid: FlankGrid | None = None
+    ) -> FlankMap:
+        """The member's convex (inner blades) or concave (outer blades) flank, tooth 0.
+
+        See :mod:`gearopt_plugins.cyclo_palloid_generation` for the phase of the outer blades,
+        the masks and the tooth numbering.
+        """
+        check_member_and_flank(member, flank)
+        settings = self.basic_settings(design).member(member)
+        return generate_flank(design, member, flank, settings, grid=grid or FlankGrid())
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine = design.machine

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BladeSystem", "family", "pitch_line_start"]
+__all__ = ["BladeSystem", "components", "family", "pitch_line_start"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,21 +85,61 @@ def _edge(b: BladeSystem, u):
     return point, tangent
 
 
-def _to_machine(b: BladeSystem, vec, theta, psi, *, translate: bool):
-    """S_c -> S_ck' (eq 16, rot_y(-theta)) -> S_d (eq 19) -> S_m (eq 18, rot_z(psi_cr))."""
+def _to_machine(b: BladeSystem, vec, ct, st, cp, sp, *, translate: bool):
+    """S_c -> S_ck' (eq 16, rot_y(-theta)) -> S_d (eq 19) -> S_m (eq 18, rot_z(psi_cr)).
+
+    Components in, components out (``ct, st, cp, sp``: cos/sin of theta and psi_cr).
+    """
     x, y, z = vec
-    ct, st = np.cos(theta), np.sin(theta)
     xp, zp = x * ct - z * st, x * st + z * ct
     e = b.spiral_angle_rad - b.assembly_angle_rad
     se, ce = math.sin(e), math.cos(e)
     xd = xp * se + zp * ce
     yd = -xp * ce + zp * se
-    zd = -y
     if translate:
         xd = xd + b.machine_distance_mm * math.cos(b.cradle_angle_rad)
         yd = yd + b.machine_distance_mm * math.sin(b.cradle_angle_rad)
-    cp, sp = np.cos(psi), np.sin(psi)
-    return np.stack([xd * cp - yd * sp, xd * sp + yd * cp, zd * np.ones_like(xd)], axis=-1)
+    return xd * cp - yd * sp, xd * sp + yd * cp, -y
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def components(b: BladeSystem, u, theta, psi) -> dict[str, tuple]:
+    """:func:`family` as ``(x, y, z)`` component tuples (the fast path of the envelope solver)."""
+    ct, st, cp, sp = np.cos(theta), np.sin(theta), np.cos(psi), np.sin(psi)
+    point_c, tangent_c = _edge(b, u)
+    px, py, pz = _to_machine(b, point_c, ct, st, cp, sp, translate=True)
+    r_u = _to_machine(b, tangent_c, ct, st, cp, sp, translate=False)
+    # the cutter axis -y_c is +z_m (eq 19: z_d = -y_c; the cradle turns about z_m); its centre
+    # O_c = M_d (cos q_2, sin q_2, 0) turns with the cradle
+    md, q2 = b.machine_distance_mm, b.cradle_angle_rad
+    cq, sq = math.cos(q2), math.sin(q2)
+    cx, cy = md * (cq * cp - sq * sp), md * (sq * cp + cq * sp)
+    g = b.machine_root_angle_rad
+    ca, sa = math.cos(g), math.sin(g)
+    ox, oy, oz = (float(v) for v in b.work_origin)
+    rx, ry, rz = px - ox, py - oy, pz - oz
+    # a_w x rel: velocity of the work point per unit work rotation
+    wx, wy, wz = -sa * ry, sa * rx - ca * rz, ca * ry
+    mgc, mgb = b.gear_to_cradle_roll, b.gear_to_blade_roll
+    # d/d psi: cradle about z_m, work by m_gc psi (eq 23); relative to the work
+    r_psi = (-py - mgc * wx, px - mgc * wy, -mgc * wz)
+    # d/d theta: cutter about its axis, work by -m_gb theta (eq 23)
+    r_theta = (cy - py + mgb * wx, px - cx + mgb * wy, mgb * wz)
+    normal = _cross(r_u, r_theta)
+    axial = rx * ca + rz * sa
+    return {
+        "point": (px, py, pz),
+        "r_u": r_u,
+        "r_theta": r_theta,
+        "r_psi": r_psi,
+        "normal": normal,
+        "meshing": normal[0] * r_psi[0] + normal[1] * r_psi[1] + normal[2] * r_psi[2],
+        "axial_mm": axial,
+        "radius_mm": np.sqrt(rx * rx + ry * ry + rz * rz - axial * axial),
+    }
 
 
 def family(b: BladeSystem, u, theta, psi):
@@ -119,35 +159,10 @@ def family(b: BladeSystem, u, theta, psi):
         in the work's axial plane.
     """
     u, theta, psi = np.broadcast_arrays(u, theta, psi)
-    point_c, tangent_c = _edge(b, u)
-    point = _to_machine(b, point_c, theta, psi, translate=True)
-    r_u = _to_machine(b, tangent_c, theta, psi, translate=False)
-    # the cutter axis -y_c is +z_m (eq 19: z_d = -y_c; the cradle turns about z_m); its centre
-    # O_c = M_d (cos q_2, sin q_2, 0) turns with the cradle
-    z_m = np.array([0.0, 0.0, 1.0])
-    md, q2 = b.machine_distance_mm, b.cradle_angle_rad
-    centre_angle = psi + q2
-    centre = np.stack([md * np.cos(centre_angle), md * np.sin(centre_angle), 0.0 * psi], axis=-1)
-    axis, origin = b.work_axis, b.work_origin
-    rel = point - origin
-    work_spin = np.cross(axis, rel)  # velocity of the work point per unit work rotation
-    # d/d psi: cradle about z_m, work by m_gc psi (eq 23); relative to the work
-    r_psi = np.cross(z_m, point) - b.gear_to_cradle_roll * work_spin
-    # d/d theta: cutter about its axis, work by -m_gb theta (eq 23)
-    r_theta = np.cross(z_m, point - centre) + b.gear_to_blade_roll * work_spin
-    normal = np.cross(r_u, r_theta)
-    axial = rel @ axis
-    radial = rel - axial[..., None] * axis
-    return {
-        "point": point,
-        "r_u": r_u,
-        "r_theta": r_theta,
-        "r_psi": r_psi,
-        "normal": normal,
-        "meshing": np.sum(normal * r_psi, axis=-1),
-        "axial_mm": axial,
-        "radius_mm": np.sqrt(np.sum(radial * radial, axis=-1)),
-    }
+    out = components(b, u, theta, psi)
+    for key in ("point", "r_u", "r_theta", "r_psi", "normal"):
+        out[key] = np.stack(np.broadcast_arrays(*out[key]), axis=-1)
+    return out
 
 
 def pitch_line_start(b: BladeSystem, cone_distance_mm):

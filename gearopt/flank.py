@@ -1,0 +1,242 @@
+"""FlankMap: one tooth flank sampled on a regular grid of the member's axial plane.
+
+Every machine model hands its generated flanks to the rest of gearopt in this one form, so the
+contact engine, the thickness measurement and the plots never see a machine.
+
+Member frame: origin at the pitch-cone apex, ``z`` along the member axis from the apex toward the
+back (heel), ``x`` and ``y`` across; the polar angle Theta = atan2(y, x). Axial-plane coordinates:
+L = z and R = sqrt(x^2 + y^2). The grid is regular along the pitch-cone generatrix (``face_mm``,
+the cone distance s from the apex, toe to heel) and normal to it (``profile_mm``, the height h
+above the pitch cone, root to top), so that
+
+    L = s cos(gamma) - h sin(gamma),    R = s sin(gamma) + h cos(gamma)
+
+with gamma the pitch angle: a rotation of the L x R grid that makes the uniform-depth tooth a
+rectangle. Node ``[i, j]`` is (face_mm[i], profile_mm[j]).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.interpolate import RectBivariateSpline
+
+from gearopt.errors import GearoptError
+
+__all__ = ["FlankGrid", "FlankMap", "MEMBERS", "FLANKS", "HANDS", "check_member_and_flank"]
+
+MEMBERS = ("pinion", "gear")
+FLANKS = ("convex", "concave")
+HANDS = ("left", "right")
+
+
+def check_member_and_flank(member: str, flank: str) -> None:
+    """Raise a GearoptError unless ``member`` and ``flank`` name a member and a flank."""
+    if member not in MEMBERS:
+        raise GearoptError("member", member, f"must be one of {MEMBERS}")
+    if flank not in FLANKS:
+        raise GearoptError("flank", flank, f"must be one of {FLANKS}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class FlankGrid:
+    """Grid size of a FlankMap: ``n_face`` nodes toe to heel, ``n_profile`` root to top."""
+
+    n_face: int = 25
+    n_profile: int = 13
+
+    def __post_init__(self):
+        for name in ("n_face", "n_profile"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not 4 <= value <= 401:
+                raise GearoptError(f"grid.{name}", value, "must be an integer from 4 to 401")
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(n_face, n_profile)``."""
+        return (self.n_face, self.n_profile)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FlankMap:
+    """A generated tooth flank on a regular axial-plane grid (see the module docstring).
+
+    Attributes
+    ----------
+    member, flank, hand
+        ``"pinion"``/``"gear"``, ``"convex"``/``"concave"``, ``"left"``/``"right"``.
+    teeth
+        Number of teeth of the member (the angular pitch is 2 pi / teeth).
+    tooth
+        Index of the tooth: tooth k is tooth 0 turned by k pitches (positive Theta).
+    pitch_angle_deg
+        Pitch angle gamma of the grid's axes.
+    face_mm, profile_mm
+        ``(n_f,)`` cone distances and ``(n_p,)`` heights above the pitch cone of the nodes.
+    polar_angle_rad
+        ``(n_f, n_p)`` Theta of the flank at each node.
+    points_mm, normals
+        ``(n_f, n_p, 3)`` flank points and unit normals in the member frame; the normal points out
+        of the tooth material into the tooth space.
+    residual
+        ``(n_f, n_p)`` meshing residual of the generation, normalised by |N| A_m.
+    mask
+        ``(n_f, n_p)`` True where the node lies on the generated flank (converged, before the
+        envelope's fold, within the tool). Values at other nodes are finite but meaningless.
+    parameters
+        ``(n_f, n_p, 3)`` the model's generation parameters at each node (model-specific).
+    """
+
+    member: str
+    flank: str
+    hand: str
+    teeth: int
+    tooth: int = 0
+    pitch_angle_deg: float
+    face_mm: NDArray
+    profile_mm: NDArray
+    polar_angle_rad: NDArray
+    points_mm: NDArray
+    normals: NDArray
+    residual: NDArray
+    mask: NDArray
+    parameters: NDArray = field(repr=False)
+    notes: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        n_f, n_p = len(self.face_mm), len(self.profile_mm)
+        for name, shape in (
+            ("polar_angle_rad", (n_f, n_p)),
+            ("points_mm", (n_f, n_p, 3)),
+            ("normals", (n_f, n_p, 3)),
+            ("residual", (n_f, n_p)),
+            ("mask", (n_f, n_p)),
+        ):
+            value = np.asarray(getattr(self, name))
+            if value.shape != shape:
+                raise GearoptError(f"FlankMap.{name}", value.shape, f"must have shape {shape}")
+            if value.dtype != bool and not np.all(np.isfinite(value)):
+                raise GearoptError(f"FlankMap.{name}", rule="must be finite at every node")
+        if self.member not in MEMBERS or self.flank not in FLANKS or self.hand not in HANDS:
+            raise GearoptError(
+                "FlankMap", (self.member, self.flank, self.hand), "unknown member/flank/hand"
+            )
+
+    # --- grid -------------------------------------------------------------------------------
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(n_face, n_profile)``."""
+        return (len(self.face_mm), len(self.profile_mm))
+
+    @property
+    def pitch_rad(self) -> float:
+        """Angular pitch 2 pi / teeth."""
+        return 2.0 * math.pi / self.teeth
+
+    @cached_property
+    def axial_mm(self) -> NDArray:
+        """``(n_f, n_p)`` L of the nodes."""
+        g = math.radians(self.pitch_angle_deg)
+        return self.face_mm[:, None] * math.cos(g) - self.profile_mm[None, :] * math.sin(g)
+
+    @cached_property
+    def radius_mm(self) -> NDArray:
+        """``(n_f, n_p)`` R of the nodes."""
+        g = math.radians(self.pitch_angle_deg)
+        return self.face_mm[:, None] * math.sin(g) + self.profile_mm[None, :] * math.cos(g)
+
+    def to_grid(self, axial_mm, radius_mm) -> tuple[NDArray, NDArray]:
+        """Face and profile coordinates ``(s, h)`` of axial-plane points ``(L, R)``."""
+        g = math.radians(self.pitch_angle_deg)
+        axial_mm, radius_mm = np.asarray(axial_mm), np.asarray(radius_mm)
+        s = axial_mm * math.cos(g) + radius_mm * math.sin(g)
+        h = -axial_mm * math.sin(g) + radius_mm * math.cos(g)
+        return s, h
+
+    @property
+    def generated_depth_mm(self) -> NDArray:
+        """``(n_f,)`` lowest height h of a generated node in each face column (NaN-free: a
+        column with no generated node reports the top of the grid)."""
+        h = np.where(self.mask, self.profile_mm[None, :], np.inf)
+        low = h.min(axis=1)
+        return np.where(np.isfinite(low), low, self.profile_mm[-1])
+
+    # --- interpolation ----------------------------------------------------------------------
+
+    @cached_property
+    def polar_spline(self) -> RectBivariateSpline:
+        """Bicubic spline Theta(s, h) through all nodes (evaluate it on generated nodes only)."""
+        return RectBivariateSpline(self.face_mm, self.profile_mm, self.polar_angle_rad)
+
+    def polar_angle_at(self, face_mm, profile_mm, *, dface: int = 0, dprofile: int = 0) -> NDArray:
+        """Theta (or its derivatives) at grid coordinates ``(s, h)`` by the bicubic spline."""
+        return self.polar_spline(
+            np.asarray(face_mm), np.asarray(profile_mm), dx=dface, dy=dprofile, grid=False
+        )
+
+    def point_at(self, face_mm, profile_mm) -> NDArray:
+        """``(..., 3)`` points of the flank at grid coordinates ``(s, h)`` (spline)."""
+        s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
+        g = math.radians(self.pitch_angle_deg)
+        big_l = s * math.cos(g) - h * math.sin(g)
+        big_r = s * math.sin(g) + h * math.cos(g)
+        theta = self.polar_angle_at(s, h)
+        return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
+
+    def inside(self, face_mm, profile_mm) -> NDArray:
+        """True where ``(s, h)`` lies within a cell whose four corners are generated nodes."""
+        s, h = np.asarray(face_mm, float), np.asarray(profile_mm, float)
+        i = np.clip(np.searchsorted(self.face_mm, s) - 1, 0, len(self.face_mm) - 2)
+        j = np.clip(np.searchsorted(self.profile_mm, h) - 1, 0, len(self.profile_mm) - 2)
+        m = self.mask
+        cell = m[i, j] & m[i + 1, j] & m[i, j + 1] & m[i + 1, j + 1]
+        within = (s >= self.face_mm[0]) & (s <= self.face_mm[-1])
+        within &= (h >= self.profile_mm[0]) & (h <= self.profile_mm[-1])
+        return cell & within
+
+    # --- symmetry ---------------------------------------------------------------------------
+
+    def rotated(self, angle_rad: float, *, teeth: int = 0) -> FlankMap:
+        """The flank turned by ``angle_rad`` about the member axis (``teeth`` adds to ``tooth``)."""
+        c, s = math.cos(angle_rad), math.sin(angle_rad)
+        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        return replace(
+            self,
+            tooth=self.tooth + teeth,
+            polar_angle_rad=self.polar_angle_rad + angle_rad,
+            points_mm=self.points_mm @ rot.T,
+            normals=self.normals @ rot.T,
+        )
+
+    def tooth_turned(self, k: int) -> FlankMap:
+        """The same flank on tooth ``tooth + k`` (turned by k pitches)."""
+        return self.rotated(k * self.pitch_rad, teeth=k)
+
+    def mirrored(self) -> FlankMap:
+        """The mirror image in the member's x-z plane: the flank of the opposite hand."""
+        flip = np.array([1.0, -1.0, 1.0])
+        return replace(
+            self,
+            hand="left" if self.hand == "right" else "right",
+            polar_angle_rad=-self.polar_angle_rad,
+            points_mm=self.points_mm * flip,
+            normals=self.normals * flip,
+        )
+
+    def summary(self) -> dict:
+        """JSON-ready summary: grid, generated share, residual, generated depth."""
+        generated = self.mask
+        return {
+            "member": self.member,
+            "flank": self.flank,
+            "hand": self.hand,
+            "grid": list(self.shape),
+            "generated_nodes": int(generated.sum()),
+            "max_residual": float(self.residual[generated].max(initial=0.0)),
+            "lowest_generated_height_mm": float(self.generated_depth_mm.max()),
+        }

@@ -1,0 +1,358 @@
+"""Cyclo-palloid flank generation: seed 001's envelope (eqs 15-31) on a FlankMap grid.
+
+Each flank is the envelope of one blade system of the dual head (inner blades: convex flank,
+outer blades: concave flank) solved by :func:`gearopt.envelope.solve_envelope`; this module
+supplies the generating family (:class:`CycloPalloidFamily`), the blade systems from the basic
+settings, and the relative angular position of the two flanks, which sets the tooth thickness.
+
+Phase of the outer blades (seed 001 does not state it). The inner and outer disks turn at the same
+rate; a blade group's outer blade sits half a blade-group pitch, pi / N_b, behind its inner blade,
+measured about the inner disk's axis a_i, which is the cutter head's axis (the outer disk is the
+eccentric one, displaced by e of eq 10). At the instant the inner blade's reference point P_i is at
+the pitch point M, the outer blade's reference point P_o is where the ray from O_ci at the polar
+angle of M minus pi / N_b meets the outer blade circle (radius r_co about O_co); it reaches M
+(theta_o = 0, the position P'_o of Fig. 3) after the outer disk turns by
+``outer_phase_rad`` (= pi / N_b exactly when r_co = r_ci), while the work turns by m_gb times
+that (eq 23). So the concave flank is the outer blade's envelope turned about the work axis by
+m_gb * outer_phase_rad relative to the convex one: with r_ci = r_co and dnu = 0 that is exactly
+half a pitch (pi / N), the additional slope angle changes it through m'_gb (eq 37), and unequal
+radii change it through the phase.
+
+Indexing. With dnu = 0 the work turns by m_gb 2 pi / N_b = 2 pi / N per blade group, so the
+next group cuts the next tooth. With dnu != 0 the paper's kinematics (eq 37) does not index
+exactly (m'_gb != N_b / N); as seed 001 does, the generated tooth space is the one cut by one
+blade group and the other teeth are copies turned by whole pitches 2 pi / N (what a machine that
+re-indexes per tooth space would cut).
+
+Tooth numbering: tooth 0 is the tooth whose convex flank passes through the pitch point M
+(polar angle 0 in the member frame of a right-hand member at the machine's zero); its concave
+flank is the outer blade's envelope on the other side of the same tooth.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.design import MEMBERS, Design
+from gearopt.envelope import flank_map, solve_envelope
+from gearopt.errors import SettingsError
+from gearopt.flank import FlankGrid, FlankMap
+from gearopt.solve import newton
+from gearopt.thickness import NormalSection
+from gearopt_plugins.cyclo_palloid_family import (
+    BladeSystem,
+    components,
+    family,
+    pitch_line_start,
+)
+
+__all__ = [
+    "CycloPalloidFamily",
+    "ThicknessSolution",
+    "blade_systems",
+    "generate_flank",
+    "outer_phase_rad",
+    "solve_additional_slope_angle",
+    "tooth_turn_rad",
+]
+
+BLADE_OF_FLANK = {"convex": "inner", "concave": "outer"}
+
+
+@dataclass(frozen=True, kw_only=True)
+class CycloPalloidFamily:
+    """One blade system as a :class:`gearopt.envelope.GeneratingFamily`, q = (u, theta, psi_cr).
+
+    ``tip_depth_mm`` is the depth of the blade's tip below the cradle (pitch) plane, the
+    member's dedendum: the blade ends there, so it generates nothing lower.
+    """
+
+    blade: BladeSystem
+    scale_mm: float
+    tip_depth_mm: float
+    max_step: tuple[float, float, float] = (1.0, 0.05, 0.05)
+
+    def axial_radial_meshing(self, q):
+        fam = components(self.blade, q[..., 0], q[..., 1], q[..., 2])
+        n = fam["normal"]
+        norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+        return fam["axial_mm"], fam["radius_mm"], fam["meshing"] / (norm * self.scale_mm)
+
+    def pitch_row(self, cone_distance_mm):
+        return np.stack(pitch_line_start(self.blade, cone_distance_mm), axis=-1)
+
+    def work_rotation_rad(self, q):
+        """psi_g of eq 23."""
+        b = self.blade
+        return b.gear_to_cradle_roll * q[..., 2] - b.gear_to_blade_roll * q[..., 1]
+
+    def geometry(self, q) -> dict[str, NDArray]:
+        b = self.blade
+        fam = family(b, q[..., 0], q[..., 1], q[..., 2])
+        g = b.machine_root_angle_rad
+        sg, cg = math.sin(g), math.cos(g)
+        psi_g = self.work_rotation_rad(q)
+        cp, sp = np.cos(psi_g), np.sin(psi_g)
+
+        def to_work(v):
+            # eq 22 (M_qm) then eq 21 (M_gq = rot_z(-psi_g))
+            xq = sg * v[..., 0] - cg * v[..., 2]
+            yq = v[..., 1]
+            zq = cg * v[..., 0] + sg * v[..., 2]
+            return np.stack([cp * xq + sp * yq, -sp * xq + cp * yq, zq], axis=-1)
+
+        point = to_work(fam["point"] - b.work_origin)
+        normal = to_work(fam["normal"])
+        normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+        # the inner blade's body lies radially outside its edge, the outer blade's inside, and
+        # r_u x r_theta points away from the inner cutter axis (tests check it on the tooth)
+        return {"point": point, "normal": b.side * normal}
+
+    def blade_height_mm(self, u):
+        """Height of the edge point above the cradle plane's tip side: y_c of eqs 2-8."""
+        b = self.blade
+        q = b.parabola_per_mm * (u - b.parabola_apex_mm) ** 2
+        return u * math.cos(b.pressure_angle_rad) - q * math.sin(b.pressure_angle_rad)
+
+    def within_tool(self, q):
+        return self.blade_height_mm(q[..., 0]) >= -self.tip_depth_mm - 1e-9
+
+
+def blade_systems(design: Design, member: str, settings: Any) -> dict[str, BladeSystem]:
+    """The inner and outer blade systems of ``member`` from its basic ``settings``."""
+    spec = design.machine.member(member)
+    out = {}
+    for side, name in ((1, "inner"), (-1, "outer")):
+        out[name] = BladeSystem(
+            side=side,
+            cutter_radius_mm=getattr(settings, f"{name}_cutter_radius_mm"),
+            assembly_angle_rad=math.radians(getattr(settings, f"{name}_assembly_angle_deg")),
+            machine_distance_mm=getattr(settings, f"{name}_machine_distance_mm"),
+            cradle_angle_rad=math.radians(getattr(settings, f"{name}_cradle_angle_deg")),
+            spiral_angle_rad=math.radians(design.pair.mean_spiral_angle_deg),
+            pressure_angle_rad=math.radians(spec.profile_pressure_angle_deg),
+            rake_angle_rad=math.radians(spec.rake_angle_deg),
+            parabola_per_mm=spec.blade_parabola_coefficient_per_mm,
+            parabola_apex_mm=spec.parabola_apex_mm,
+            machine_root_angle_rad=math.radians(settings.machine_root_angle_deg),
+            gear_to_cradle_roll=settings.gear_to_cradle_roll,
+            gear_to_blade_roll=settings.gear_to_blade_roll,
+            work_offset_mm=(
+                settings.machine_center_to_back_mm,
+                settings.blank_offset_mm,
+                settings.sliding_base_mm,
+            ),
+        )
+    return out
+
+
+def tooth_turn_rad(design: Design, member: str, flank: str, systems: dict[str, BladeSystem]):
+    """Turn of the flank's envelope about the work axis that places it on tooth 0.
+
+    The convex flank is not turned. The concave flank of tooth 0 is the outer blade's envelope
+    turned by one pitch less the work's rotation while the group's outer blade leads its inner
+    blade (the tooth space is cut between their passages).
+    """
+    if flank == "convex":
+        return 0.0
+    teeth = design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth
+    phase = outer_phase_rad(
+        blade_groups=design.machine.blade_groups,
+        inner=systems["inner"],
+        outer=systems["outer"],
+        mean_cone_distance_mm=design.blank.mean_cone_distance_mm,
+    )
+    return 2.0 * math.pi / teeth - systems["outer"].gear_to_blade_roll * phase
+
+
+def _family(design: Design, member: str, blade: BladeSystem) -> CycloPalloidFamily:
+    blank = design.blank
+    return CycloPalloidFamily(
+        blade=blade,
+        scale_mm=blank.mean_cone_distance_mm,
+        tip_depth_mm=blank.mean_dedendum_mm[MEMBERS.index(member)],
+    )
+
+
+def generate_flank(
+    design: Design, member: str, flank: str, settings: Any, *, grid: FlankGrid
+) -> FlankMap:
+    """FlankMap of ``member``'s ``flank`` on tooth 0 for the given basic settings."""
+    index = MEMBERS.index(member)
+    blank = design.blank
+    systems = blade_systems(design, member, settings)
+    family_ = _family(design, member, systems[BLADE_OF_FLANK[flank]])
+    where = f"{member} {flank} flank"
+    solution = solve_envelope(
+        family_,
+        cone_distances_mm=(blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
+        heights_mm=(-blank.mean_dedendum_mm[index], blank.mean_addendum_mm[index]),
+        pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
+        grid=grid,
+        where=where,
+    )
+    if solution.mask.sum() < 4:
+        raise SettingsError(where, rule="the settings generate (almost) nothing of this flank")
+    return flank_map(
+        family_,
+        solution,
+        member=member,
+        flank=flank,
+        hand=blank.hand[index],
+        teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
+        turn_rad=tooth_turn_rad(design, member, flank, systems),
+        notes=(f"{BLADE_OF_FLANK[flank]} blades (cyclo-palloid)",),
+    )
+
+
+def outer_phase_rad(
+    *,
+    blade_groups: int,
+    inner: BladeSystem,
+    outer: BladeSystem,
+    mean_cone_distance_mm: float,
+) -> float:
+    """Outer-disk rotation from the inner blade at M to its group's outer blade at M.
+
+    Both reference points move in the cradle plane (z_m = 0); the half blade-group pitch is
+    measured about the inner disk's axis (see the module docstring).
+    """
+    m = np.array([mean_cone_distance_mm, 0.0])
+
+    def centre_and_angle(b: BladeSystem):
+        e = b.spiral_angle_rad - b.assembly_angle_rad
+        radial = np.array([math.sin(e), -math.cos(e)])  # eq 19 at u = 0, theta = 0
+        return m - b.cutter_radius_mm * radial, math.atan2(radial[1], radial[0])
+
+    o_i, a_i = centre_and_angle(inner)
+    o_o, a_o = centre_and_angle(outer)
+    ray = a_i + math.pi / blade_groups  # ahead of the inner blade (theta turns it about +z_m)
+    d = np.array([math.cos(ray), math.sin(ray)])
+    w = o_i - o_o
+    bq = float(d @ w)
+    t = -bq + math.sqrt(bq * bq - float(w @ w) + outer.cutter_radius_mm**2)
+    p = o_i + t * d - o_o
+    return float((math.atan2(p[1], p[0]) - a_o) % (2.0 * math.pi))
+
+
+@dataclass(frozen=True, kw_only=True)
+class ThicknessSolution:
+    """The additional slope angle that gives the requested chordal thickness (eqs 39-48)."""
+
+    additional_slope_angle_deg: float
+    settings: Any
+    thickness_mm: float
+    residual_mm: float
+
+
+def solve_additional_slope_angle(
+    design: Design, member: str, settings_for: Callable[[float], Any]
+) -> ThicknessSolution:
+    """Solve seed 001 eqs 39-48 for the member's additional slope angle.
+
+    Eight unknowns: blade parameter, cutter phase and cradle angle of the chordal point on each
+    flank (M_i on the convex, M_o on the concave flank), the additional slope angle dnu and the
+    tooth's angular position phi. Eight equations: the two meshing equations (41-42) and the
+    positions of the two points in S_n (43-48). ``settings_for(dnu_deg)`` gives the member's
+    basic settings for a trial dnu (eqs 33-38).
+    """
+    pair = design.pair
+    index = MEMBERS.index(member)
+    blank = design.blank
+    target = pair.mean_normal_chordal_thickness_mm[index]
+    depth = blank.mean_addendum_mm[index] - pair.mean_normal_chordal_addendum_mm[index]
+    section = NormalSection(
+        cone_distance_mm=blank.mean_cone_distance_mm,
+        pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
+        spiral_angle_rad=math.radians(pair.mean_spiral_angle_deg),
+        spiral_sign=1,  # solved on the right-hand member; the left hand is its mirror
+    )
+    where = f"machine.{member}.additional_slope_angle_deg"
+
+    def state(dnu_mrad):
+        settings = settings_for(math.degrees(dnu_mrad * 1e-3))
+        systems = blade_systems(design, member, settings)
+        return settings, systems
+
+    def points(x):
+        settings, systems = state(x[6])
+        out = []
+        for k, flank in enumerate(("convex", "concave")):
+            fam = _family(design, member, systems[BLADE_OF_FLANK[flank]])
+            q = np.asarray(x[3 * k : 3 * k + 3])
+            g = fam.geometry(q)
+            turn = tooth_turn_rad(design, member, flank, systems)
+            c, s = math.cos(turn), math.sin(turn)
+            p = g["point"]
+            p = np.array([c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]])
+            _, _, f = fam.axial_radial_meshing(q)
+            out.append((section.coordinates(p, x[7]), float(f)))
+        return out
+
+    def residual(x):
+        (p1, f1), (p2, f2) = points(x)
+        return [
+            f1 * 1e3,
+            p1[0] - depth,
+            p1[2],
+            f2 * 1e3,
+            p2[0] - depth,
+            p2[2],
+            p1[1] + p2[1],
+            p2[1] - p1[1] - target,
+        ]
+
+    # start: the pitch-line points at M and the middle of the tooth at dnu = 0
+    _, systems = state(0.0)
+    x0 = []
+    for flank in ("convex", "concave"):
+        b = systems[BLADE_OF_FLANK[flank]]
+        x0.extend(np.ravel(np.stack(pitch_line_start(b, np.array([blank.mean_cone_distance_mm])))))
+    teeth = pair.pinion_teeth if member == "pinion" else pair.gear_teeth
+    x0 = np.array([*x0, 0.0, 0.5 * math.pi / teeth])
+    x0[0] = x0[3] = depth / math.cos(math.radians(pair.pressure_angle_deg))
+    steps = np.array([1e-5, 1e-7, 1e-7, 1e-5, 1e-7, 1e-7, 1e-5, 1e-7])
+
+    def batch(x, idx):
+        return np.array([residual(row) for row in x])
+
+    def jacobian(x, idx):
+        # central differences: the settings (eqs 33-38) are plain-float code, no complex step
+        out = np.empty((len(x), 8, 8))
+        for k in range(8):
+            dx = np.zeros(8)
+            dx[k] = steps[k]
+            out[:, :, k] = (batch(x + dx, idx) - batch(x - dx, idx)) / (2.0 * steps[k])
+        return out
+
+    sol = newton(
+        batch,
+        x0[None, :],
+        jac=jacobian,
+        tol=1e-11,
+        max_iter=30,
+        max_step=[1.0, 0.05, 0.05, 1.0, 0.05, 0.05, 5.0, 0.05],
+    )
+    worst = float(np.max(np.abs(sol.residual)))
+    if not sol.all_converged:
+        raise SettingsError(
+            where,
+            "auto",
+            f"no additional slope angle gives the chordal thickness {target} mm "
+            f"(eqs 39-48 did not converge, residual {worst:.2e} after {sol.iterations} steps)",
+        )
+    x = sol.x[0]
+    settings, _ = state(x[6])
+    (p1, _), (p2, _) = points(x)
+    return ThicknessSolution(
+        additional_slope_angle_deg=math.degrees(x[6] * 1e-3),
+        settings=settings,
+        thickness_mm=float(p2[1] - p1[1]),
+        residual_mm=worst,
+    )
