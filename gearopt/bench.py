@@ -24,6 +24,8 @@ __all__ = ["BENCHMARKS", "run_benchmarks", "time_call_ms"]
 BENCHMARKS: dict[str, str] = {
     "basic_settings_ms": "gearopt.bench:bench_basic_settings",
     "change_gears_ms": "gearopt_plugins.chain_error:bench_change_gears",
+    "flank_generation_ms": "gearopt.bench:bench_flank_generation",
+    "thickness_solve_ms": "gearopt.bench:bench_thickness_solve",
 }
 
 ONE_THREAD = {
@@ -58,6 +60,42 @@ def bench_basic_settings() -> tuple[float, dict]:
     model.basic_settings(design)  # warm-up
     return time_call_ms(lambda: model.basic_settings(design), number=200), {
         "design": "seed001_table3"
+    }
+
+
+def bench_flank_generation() -> tuple[float, dict]:
+    """Both flanks of the seed 001 Table 3 pinion (the member whose envelope folds) on the
+    default FlankMap grid, settings included; one warm-up run first."""
+    from gearopt.design import loads_design
+    from gearopt.flank import FlankGrid
+    from gearopt.plugins import get_machine_model
+
+    design = loads_design(_study_text("seed001_table3.toml"))
+    model = get_machine_model(design.model)
+    grid = FlankGrid()
+
+    def run():
+        model.generate_flanks(design, member="pinion", grid=grid)
+
+    run()
+    return time_call_ms(run, number=5), {
+        "flank_grid": list(grid.shape),
+        "flank_member": "seed001_table3 pinion, both flanks",
+    }
+
+
+def bench_thickness_solve() -> tuple[float, dict]:
+    """Additional slope angle of the seed 001 Table 3 pinion solved from its chordal thickness
+    (eqs 39-48, "auto"), settings included."""
+    from gearopt.design import loads_design, with_overrides
+    from gearopt.plugins import get_machine_model
+
+    design = loads_design(_study_text("seed001_table3.toml"))
+    design = with_overrides(design, {"machine.pinion.additional_slope_angle_deg": "auto"})
+    model = get_machine_model(design.model)
+    model.basic_settings(design)
+    return time_call_ms(lambda: model.basic_settings(design), number=3), {
+        "thickness_member": "seed001_table3 pinion"
     }
 
 

@@ -1,21 +1,22 @@
 """Envelope of a generating family on a FlankMap grid: the solver every machine model shares.
 
-A machine model describes its generation as a :class:`GeneratingFamily`: the tool point
-r(q) in the member frame, q = (q_0, q_1, q_2) = (blade parameter, tool phase, roll angle) or
-whatever three parameters the machine has. At each grid node (s, h) of the axial plane the
-solver finds q with
+A machine model describes its generation as a :class:`GeneratingFamily`: the tool point r(q) of
+one or more flanks (a dual head's inner and outer blades, say), q = (q_0, q_1, q_2) = (blade
+parameter, tool phase, roll angle) or whatever three parameters the machine has. At each grid
+node (s, h) of the axial plane the solver finds q with
 
     L(q) = s cos(gamma) - h sin(gamma),   R(q) = s sin(gamma) + h cos(gamma),   f(q) = 0
 
-(f the meshing function, seed 001 eq 31) by Newton's method batched over the whole grid:
-Jacobians by complex step (all three perturbations in one call), a first-order predictor from the
-pitch row (h = 0, where the model knows a start), step clipping per unknown.
+(f the meshing function, seed 001 eq 31) by Newton's method batched over every node of every
+flank: Jacobians by complex step (all three perturbations in one call), a second-order predictor
+from the pitch line (h = 0, where the model knows a start), step clipping per unknown, and one
+repair pass that restarts a failed node from its converged neighbour.
 
 Then the region the tool really generates (DESIGN.md, pitfalls): a node is generated when Newton
-converged there, the Jacobian keeps the sign it has on the pitch row (a sign change marks the
-envelope's fold: below it Newton lands on the folded-back sheet), it is connected to the top land
-through generated nodes of its face column, it lies ``fold_trim_mm`` or more above the first
-folded node of its column, and the model says the tool reaches it (the blade's tip).
+converged there, the Jacobian keeps the sign it has on the pitch line (a sign change marks the
+envelope's fold: below it Newton lands on the folded-back sheet), it is connected to the pitch row
+through such nodes of its face column, it lies ``fold_trim_mm`` or more above the first folded or
+failed node of its column, and the model says the tool reaches it (the blade's tip).
 """
 
 from __future__ import annotations
@@ -38,87 +39,121 @@ _H = 1e-30  # complex step
 class GeneratingFamily(Protocol):
     """What a machine model provides to :func:`solve_envelope` (all angles in radians).
 
-    ``axial_radial_meshing(q)`` must use only numpy functions that accept complex input (complex
-    step): no ``abs``, no comparisons, no ``np.linalg`` on the parameters.
+    A family generates ``n_flanks`` flanks of one member at once; every method takes, beside the
+    parameters ``q`` ``(..., 3)``, the integer array ``flank`` (broadcastable to ``q[..., 0]``)
+    that says which flank each point belongs to. ``axial_radial_meshing`` must use only numpy
+    functions that accept complex input (complex step): no ``abs``, no comparisons, no
+    ``np.linalg`` on the parameters.
     """
 
+    #: number of flanks the family generates (flank indices 0 .. n_flanks - 1)
+    n_flanks: int
     #: largest change of each parameter per Newton step (e.g. 1 mm, 0.05 rad, 0.05 rad)
     max_step: tuple[float, float, float]
     #: length scale of the residuals, mm (the mean cone distance A_m)
     scale_mm: float
 
-    def axial_radial_meshing(self, q: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """``(L, R, f / (|N| A_m))`` of the tool points ``q`` ``(..., 3)`` (complex-safe)."""
+    def axial_radial_meshing(self, q: NDArray, flank: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """``(L, R, f / (|N| A_m))`` of the tool points ``q`` (complex-safe)."""
         ...
 
     def pitch_row(self, cone_distance_mm: NDArray) -> NDArray:
-        """``(n, 3)`` parameters of the flank points on the pitch line (h = 0), approximately."""
+        """``(n_flanks, n, 3)`` parameters of the flank points on the pitch line (h = 0),
+        approximately."""
         ...
 
-    def geometry(self, q: NDArray) -> dict[str, NDArray]:
+    def geometry(self, q: NDArray, flank: NDArray) -> dict[str, NDArray]:
         """``point`` and unit ``normal`` ``(..., 3)`` in the member frame of a right-hand member,
         the normal pointing out of the tooth material."""
         ...
 
-    def within_tool(self, q: NDArray) -> NDArray:
+    def within_tool(self, q: NDArray, flank: NDArray) -> NDArray:
         """``(...)`` True where the tool has the point ``q`` (e.g. above the blade's tip)."""
         ...
 
 
 @dataclass(frozen=True, kw_only=True)
 class EnvelopeSolution:
-    """Parameters and diagnostics at every node of a ``(n_f, n_p)`` grid."""
+    """Parameters and diagnostics at every node of ``n_flanks`` grids ``(n_f, n_p)``.
+
+    Every array has the leading shape ``(n_flanks, n_f, n_p)``.
+    """
 
     face_mm: NDArray
     profile_mm: NDArray
     pitch_angle_rad: float
     q: NDArray
-    residual: NDArray  # (n_f, n_p, 3) scaled residuals
+    residual: NDArray  # (..., 3) scaled residuals
     converged: NDArray
     unfolded: NDArray
     within_tool: NDArray
     mask: NDArray
+    sheet: NDArray  # nodes on the envelope's sheet, connected to the pitch row
     iterations: int
 
 
-def _residual_and_jacobian(family, q, big_l, big_r):
+def _residual_and_jacobian(family, q, flank, big_l, big_r):
     """Scaled residuals ``(n, 3)`` and Jacobians ``(n, 3, 3)`` by one complex-step call."""
-    n = len(q)
     qs = np.repeat(q[None].astype(complex), 3, axis=0)
     for k in range(3):
         qs[k, :, k] += 1j * _H
-    lc, rc, gc = family.axial_radial_meshing(qs)
+    lc, rc, gc = family.axial_radial_meshing(qs, flank)
     a = family.scale_mm
-    res = np.stack([(lc - big_l) / a, (rc - big_r) / a, gc], axis=-1)  # (3, n, 3)
-    f = res[0].real
-    jac = np.moveaxis(res.imag / _H, 0, -1)  # (n, 3 eq, 3 var)
-    assert jac.shape == (n, 3, 3)
-    return f, jac
+    res = np.stack([(lc - big_l) / a, (rc - big_r) / a, gc], axis=-1)  # (3 var, n, 3 eq)
+    return res[0].real, np.moveaxis(res.imag / _H, 0, -1)
 
 
-def _newton(family, q, big_l, big_r, *, tol, max_iter):
-    """Batched Newton with per-unknown step clipping; returns (q, f, jac, converged, iters)."""
+def _residual(family, q, flank, big_l, big_r):
+    """Scaled residuals ``(n, 3)`` alone (a real evaluation: a fraction of the Jacobian's cost)."""
+    big_lq, big_rq, g = family.axial_radial_meshing(q, flank)
+    a = family.scale_mm
+    return np.stack([(big_lq - big_l) / a, (big_rq - big_r) / a, g], axis=-1)
+
+
+def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6)):
+    """Batched Newton-Shamanskii iteration with per-unknown step clipping.
+
+    Each iteration makes a Newton step with a fresh Jacobian, then a chord step with the same
+    Jacobian from a real evaluation of the residual (convergence of order three for the cost of
+    little more than one complex-step evaluation). Returns ``(q, f, jac, converged, iters)``
+    with ``jac`` evaluated at the final ``q``.
+
+    ``give_up = (k, r)``: after k iterations a node whose scaled residual is still above r is
+    not in Newton's quadratic range (it lies past the envelope's fold or needs a better start)
+    and stops iterating; it is reported as not converged.
+    """
     limit = np.asarray(family.max_step, float)
     active = np.ones(len(q), bool)
-    f, jac = _residual_and_jacobian(family, q, big_l, big_r)
+    f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
     iterations = 0
+
+    def clipped(step):
+        scale = np.min(limit / np.maximum(np.abs(step), 1e-300), axis=1)
+        return step * np.minimum(scale, 1.0)[:, None]
+
     while iterations < max_iter:
         norm = np.max(np.abs(f), axis=1)
         active = np.isfinite(norm) & (norm > tol) & active
+        if iterations >= give_up[0]:
+            active &= norm < give_up[1]
         if not active.any():
             break
         iterations += 1
         idx = np.flatnonzero(active)
         ja = jac[idx]
         ok = np.abs(np.linalg.det(ja)) > 1e-300
-        step = np.zeros((len(idx), 3))
-        if ok.any():
-            step[ok] = np.linalg.solve(ja[ok], -f[idx[ok]][..., None])[..., 0]
-        scale = np.min(limit / np.maximum(np.abs(step), 1e-300), axis=1)
-        step *= np.minimum(scale, 1.0)[:, None]
         active[idx[~ok]] = False
+        idx, ja = idx[ok], ja[ok]
+        step = clipped(np.linalg.solve(ja, -f[idx][..., None])[..., 0])
         q[idx] += step
-        f[idx], jac[idx] = _residual_and_jacobian(family, q[idx], big_l[idx], big_r[idx])
+        # chord step: same Jacobian, residual from a real evaluation
+        fr = _residual(family, q[idx], flank[idx], big_l[idx], big_r[idx])
+        far = np.max(np.abs(fr), axis=1) > tol
+        chord = clipped(np.linalg.solve(ja[far], -fr[far][..., None])[..., 0])
+        q[idx[far]] += chord
+        f[idx], jac[idx] = _residual_and_jacobian(
+            family, q[idx], flank[idx], big_l[idx], big_r[idx]
+        )
     norm = np.max(np.abs(f), axis=1)
     return q, f, jac, np.isfinite(norm) & (norm <= tol), iterations
 
@@ -144,14 +179,7 @@ def solve_envelope(
     fold_trim_mm: float = 0.3,
     where: str = "flank",
 ) -> EnvelopeSolution:
-    """Solve the envelope at every node of ``grid`` over the given face and profile ranges.
-
-    Continuation along the profile: the pitch row (h = 0 when it lies in the range, else the row
-    nearest to it) is solved from the model's start; then the rows above and below it are solved
-    together, step by step outward, each from its inner neighbour plus the first-order predictor
-    ``dq/dh`` of that neighbour's Jacobian. A column stops at its first node that does not
-    converge or that lies past the fold (the Jacobian's determinant changes sign): the nodes
-    beyond keep the predictor's values (finite, masked out).
+    """Solve the envelope at every node of ``grid`` for every flank of ``family``.
 
     Parameters
     ----------
@@ -173,72 +201,94 @@ def solve_envelope(
     Raises
     ------
     SettingsError
-        When Newton fails on the pitch row (the settings generate no flank there).
+        When Newton fails on the pitch line (the settings generate no flank there).
     """
     s = np.linspace(*cone_distances_mm, grid.n_face)
     h = np.linspace(*heights_mm, grid.n_profile)
-    n_f, n_p = grid.shape
+    k, (n_f, n_p) = family.n_flanks, grid.shape
     cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
-    big_l = s[:, None] * cg - h[None, :] * sg
-    big_r = s[:, None] * sg + h[None, :] * cg
-    j0 = int(np.argmin(np.abs(h)))
-    # the row nearest the pitch line, from the model's start on the pitch line
-    start = np.array(family.pitch_row(s), float)
-    jac = _residual_and_jacobian(family, start, s * cg, s * sg)[1]
-    start += h[j0] * _predictor(family, jac, sg, cg)
+    flank = np.broadcast_to(np.arange(k)[:, None, None], (k, n_f, n_p))
+    big_l = np.broadcast_to(s[:, None] * cg - h[None, :] * sg, (k, n_f, n_p))
+    big_r = np.broadcast_to(s[:, None] * sg + h[None, :] * cg, (k, n_f, n_p))
+    # the pitch line (h = 0) from the model's start there (often exact: no iteration)
+    row_l, row_r = np.tile(s * cg, k), np.tile(s * sg, k)
+    row_flank = flank[:, :, 0].ravel()
     q0, _, jac0, ok, iterations = _newton(
-        family, start, big_l[:, j0], big_r[:, j0], tol=tol, max_iter=2 * max_iter
+        family,
+        np.array(family.pitch_row(s), float).reshape(-1, 3),
+        row_flank,
+        row_l,
+        row_r,
+        tol=tol,
+        max_iter=2 * max_iter,
     )
     if not ok.all():
+        bad = int(np.flatnonzero(~ok)[0])
         raise SettingsError(
             where,
-            rule=f"no envelope at cone distance {s[~ok][0]:.3f} mm, height {h[j0]:.3f} mm "
-            "(Newton did not converge): the machine settings do not generate this flank",
+            rule=f"no envelope on the pitch line of flank {bad // n_f} at cone distance "
+            f"{s[bad % n_f]:.3f} mm (Newton did not converge): the machine settings do not "
+            "generate this flank",
         )
-    sign0 = np.sign(np.linalg.det(jac0))
-    # every node at once from the first-order predictor of that row
+    sign0 = np.sign(np.linalg.det(jac0)).reshape(k, n_f)
+    # every node at once from a second-order predictor along the profile (the curvature of
+    # q(h) by a difference of the first-order predictor over a short step eps)
     dq_dh = _predictor(family, jac0, sg, cg)
-    q = q0[:, None, :] + (h - h[j0])[None, :, None] * dq_dh[:, None, :]
+    eps = 0.05
+    jac1 = _residual_and_jacobian(
+        family, q0 + eps * dq_dh, row_flank, row_l - eps * sg, row_r + eps * cg
+    )[1]
+    d2q_dh2 = (_predictor(family, jac1, sg, cg) - dq_dh) / eps
+    q0, dq_dh, d2q_dh2 = (a.reshape(k, n_f, 1, 3) for a in (q0, dq_dh, d2q_dh2))
+    hh = h[None, None, :, None]
+    q = q0 + hh * dq_dh + 0.5 * hh**2 * d2q_dh2
     q, res, jac, converged, it = _newton(
-        family, q.reshape(-1, 3), big_l.ravel(), big_r.ravel(), tol=tol, max_iter=max_iter
+        family,
+        q.reshape(-1, 3),
+        flank.ravel(),
+        big_l.ravel(),
+        big_r.ravel(),
+        tol=tol,
+        max_iter=max_iter,
     )
     iterations = max(iterations, it)
-    q, res, jac = q.reshape(n_f, n_p, 3), res.reshape(n_f, n_p, 3), jac.reshape(n_f, n_p, 3, 3)
-    converged = converged.reshape(n_f, n_p)
-    # repair: a node that failed next to a good node (toward the pitch row) restarts from it
-    for _ in range(n_p):
-        good = converged & (np.sign(np.linalg.det(jac)) == sign0[:, None])
-        inner = np.zeros((n_f, n_p), int)
-        inner[:, j0 + 1 :] = -1
-        inner[:, :j0] = +1
-        neighbour = np.arange(n_p)[None, :] + inner
-        retry = ~converged & np.take_along_axis(good, neighbour, axis=1)
-        retry[:, j0] = False
-        if not retry.any():
-            break
-        fi, pj = np.nonzero(retry)
-        nj = neighbour[fi, pj]
-        guess = q[fi, nj] + (h[pj] - h[nj])[:, None] * _predictor(family, jac[fi, nj], sg, cg)
+    shape = (k, n_f, n_p)
+    q, res, jac = q.reshape(*shape, 3), res.reshape(*shape, 3), jac.reshape(*shape, 3, 3)
+    converged = converged.reshape(shape)
+    # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
+    # one pass recovers what the predictor missed (past the fold, a second finds nothing)
+    j0 = int(np.argmin(np.abs(h)))
+    good = converged & (np.sign(np.linalg.det(jac)) == sign0[..., None])
+    toward = np.where(np.arange(n_p) > j0, -1, np.where(np.arange(n_p) < j0, 1, 0))
+    neighbour = np.broadcast_to(np.arange(n_p) + toward, shape)
+    retry = ~converged & np.take_along_axis(good, neighbour, axis=2)
+    if retry.any():
+        fk, fi, pj = np.nonzero(retry)
+        nj = neighbour[fk, fi, pj]
+        dq = _predictor(family, jac[fk, fi, nj], sg, cg)
         qr, fr, jr, ok, it = _newton(
-            family, guess, big_l[fi, pj], big_r[fi, pj], tol=tol, max_iter=max_iter
+            family,
+            q[fk, fi, nj] + (h[pj] - h[nj])[:, None] * dq,
+            fk,
+            big_l[fk, fi, pj],
+            big_r[fk, fi, pj],
+            tol=tol,
+            max_iter=max_iter,
         )
         iterations = max(iterations, it)
-        if not ok.any():
-            break
-        q[fi[ok], pj[ok]], res[fi[ok], pj[ok]], jac[fi[ok], pj[ok]] = qr[ok], fr[ok], jr[ok]
-        converged[fi[ok], pj[ok]] = True
-    det = np.linalg.det(jac)
-    unfolded = np.sign(det) == sign0[:, None]
+        sel = (fk[ok], fi[ok], pj[ok])
+        q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
+    unfolded = np.sign(np.linalg.det(jac)) == sign0[..., None]
     good = converged & unfolded
-    # generated: connected to the pitch row through good nodes of the column
-    up = np.cumprod(good[:, j0:], axis=1).astype(bool)
-    down = np.flip(np.cumprod(np.flip(good[:, : j0 + 1], axis=1), axis=1), axis=1).astype(bool)
-    connected = np.concatenate([down[:, :j0], up], axis=1)
+    # on the sheet: connected to the pitch row through good nodes of the column
+    up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
+    down = np.flip(np.cumprod(np.flip(good[..., : j0 + 1], axis=-1), axis=-1), axis=-1)
+    connected = np.concatenate([down[..., :j0].astype(bool), up], axis=-1)
     # trim just above the first bad node below the pitch row, column by column
-    first_bad = np.where(~connected & (h < h[j0])[None, :], h[None, :], -np.inf).max(axis=1)
+    first_bad = np.where(~connected & (h < h[j0]), h, -np.inf).max(axis=-1)
     margin = np.where(np.isfinite(first_bad), fold_trim_mm, 0.0)
-    trimmed = h[None, :] >= (first_bad + margin)[:, None]
-    within = np.asarray(family.within_tool(q), bool)
+    trimmed = h >= (first_bad + margin)[..., None]
+    within = np.asarray(family.within_tool(q, flank), bool)
     return EnvelopeSolution(
         face_mm=s,
         profile_mm=h,
@@ -249,14 +299,31 @@ def solve_envelope(
         unfolded=unfolded,
         within_tool=within,
         mask=connected & trimmed & within,
+        sheet=connected,
         iterations=iterations,
     )
+
+
+def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
+    """Replace each column's values below its lowest ``mask`` node by the quadratic through
+    that node and the two above it, so that a spline through all nodes stays smooth at the edge
+    of the generated region (the envelope's values past the fold are a different sheet)."""
+    n_f, n_p = mask.shape
+    j = np.arange(n_p)
+    low = np.where(mask.any(axis=1), np.argmax(mask, axis=1), n_p - 3)
+    low = np.minimum(low, n_p - 3)[:, None]
+    rows = np.arange(n_f)[:, None]
+    p0, p1, p2 = values[rows, low], values[rows, low + 1], values[rows, low + 2]
+    t = (j[None, :] - low).astype(float)
+    quadratic = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
+    return np.where(j[None, :] < low, quadratic, values)
 
 
 def flank_map(
     family: GeneratingFamily,
     solution: EnvelopeSolution,
     *,
+    index: int = 0,
     member: str,
     flank: str,
     hand: str,
@@ -264,10 +331,21 @@ def flank_map(
     turn_rad: float = 0.0,
     notes: tuple[str, ...] = (),
 ) -> FlankMap:
-    """The right-hand FlankMap of a solution, turned by ``turn_rad``, mirrored if left-hand."""
-    geo = family.geometry(solution.q)
+    """FlankMap of flank ``index`` of a solution: right-hand as generated, turned by
+    ``turn_rad`` about the member axis, then mirrored if ``hand`` is left."""
+    q = solution.q[index]
+    mask, sheet = solution.mask[index], solution.sheet[index]
+    geo = family.geometry(q, np.full(q.shape[:-1], index))
     point, normal = geo["point"], geo["normal"]
-    polar = np.arctan2(point[..., 1], point[..., 0])
+    polar = np.unwrap(np.arctan2(point[..., 1], point[..., 0]), axis=0)
+    polar = _extend_below(polar, sheet)
+    # nodes off the generated flank: the extended surface (finite, smooth for the spline)
+    radius = np.hypot(point[..., 0], point[..., 1])
+    point = np.where(
+        mask[..., None],
+        point,
+        np.stack([radius * np.cos(polar), radius * np.sin(polar), point[..., 2]], axis=-1),
+    )
     result = FlankMap(
         member=member,
         flank=flank,
@@ -279,9 +357,9 @@ def flank_map(
         polar_angle_rad=polar,
         points_mm=point,
         normals=normal,
-        residual=np.abs(solution.residual[..., 2]),
-        mask=solution.mask,
-        parameters=solution.q,
+        residual=np.abs(solution.residual[index, ..., 2]),
+        mask=mask,
+        parameters=q,
         notes=notes,
     )
     if turn_rad:

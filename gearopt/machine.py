@@ -129,5 +129,20 @@ class BaseMachineModel(abc.ABC):
             rule="does not generate tooth flanks (no generate_flank implementation)",
         )
 
+    def generate_flanks(
+        self,
+        design: Design,
+        *,
+        member: str,
+        grid: Any = None,
+        flanks: tuple[str, ...] = ("convex", "concave"),
+    ) -> dict[str, Any]:
+        """``{flank: FlankMap}`` for the member's ``flanks`` of tooth 0.
+
+        The default calls :meth:`generate_flank` once per flank; override it when the model can
+        solve several flanks in one batch.
+        """
+        return {f: self.generate_flank(design, member=member, flank=f, grid=grid) for f in flanks}
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

@@ -46,7 +46,7 @@ from gearopt.validate import (
     read_number,
     read_table,
 )
-from gearopt_plugins.cyclo_palloid_generation import generate_flank, solve_additional_slope_angle
+from gearopt_plugins.cyclo_palloid_generation import generate_flanks, solve_additional_slope_angle
 
 __all__ = [
     "CycloPalloid",
@@ -373,8 +373,21 @@ class CycloPalloid(BaseMachineModel):
         the masks and the tooth numbering.
         """
         check_member_and_flank(member, flank)
+        return self.generate_flanks(design, member=member, grid=grid, flanks=(flank,))[flank]
+
+    def generate_flanks(
+        self,
+        design: Design,
+        *,
+        member: str,
+        grid: FlankGrid | None = None,
+        flanks: tuple[str, ...] = ("convex", "concave"),
+    ) -> dict[str, FlankMap]:
+        """Both flanks (or ``flanks``) of the member's tooth 0, solved in one batch."""
+        for flank in flanks:
+            check_member_and_flank(member, flank)
         settings = self.basic_settings(design).member(member)
-        return generate_flank(design, member, flank, settings, grid=grid or FlankGrid())
+        return generate_flanks(design, member, settings, grid=grid or FlankGrid(), flanks=flanks)
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine = design.machine

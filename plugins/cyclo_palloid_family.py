@@ -17,18 +17,20 @@ way); inner blades cut the convex flank, outer blades the concave flank.
 Machine settings outside seed 001's chain (machine centre to back dX_D, blank offset dE_m, sliding
 base dX_B) translate the work frame in S_m: along a_w, along y_m and along z_m.
 
-All functions accept complex arrays (complex-step derivatives).
+All functions accept complex arrays (complex-step derivatives), and blade systems stacked by
+:meth:`BladeSystem.stack` (every constant an array, one entry per blade system, indexed by
+:meth:`BladeSystem.take`) so that both flanks of a member are solved in one batch.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BladeSystem", "components", "family", "pitch_line_start"]
+__all__ = ["BladeSystem", "components", "edge", "family", "pitch_line_start"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -36,6 +38,7 @@ class BladeSystem:
     """Constants of one blade system of one member's machine (radians and mm).
 
     ``side`` is +1 for the inner blade (convex flank) and -1 for the outer blade (concave).
+    In a stacked system (:meth:`stack`) every field is an array with one entry per system.
     """
 
     side: int
@@ -53,6 +56,16 @@ class BladeSystem:
     gear_to_blade_roll: float  # m_gb (eq 37)
     work_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)  # (dX_D, dE_m, dX_B)
 
+    @classmethod
+    def stack(cls, systems) -> BladeSystem:
+        """The blade systems ``systems`` as one with array fields (leading axis: the system)."""
+        names = [f.name for f in fields(cls)]
+        return cls(**{n: np.array([getattr(b, n) for b in systems], dtype=float) for n in names})
+
+    def take(self, index) -> BladeSystem:
+        """The stacked systems' constants at ``index`` (an integer array: one per point)."""
+        return replace(self, **{f.name: getattr(self, f.name)[index] for f in fields(self)})
+
     @property
     def work_axis(self) -> NDArray:
         """Unit vector of the work axis in S_m (eq 22: the cone axis makes gamma_m with x_m)."""
@@ -66,60 +79,60 @@ class BladeSystem:
         return dxd * self.work_axis + np.array([0.0, dem, dxb])
 
 
-def _edge(b: BladeSystem, u):
-    """Cutting-edge point and tangent in the cutter frame S_c (eqs 2-4, 7-8)."""
-    sa, ca = math.sin(b.pressure_angle_rad), math.cos(b.pressure_angle_rad)
-    q = b.parabola_per_mm * (u - b.parabola_apex_mm) ** 2
-    dq = 2.0 * b.parabola_per_mm * (u - b.parabola_apex_mm)
-    xa = b.side * (-u * sa - q * ca)
-    ya = u * ca - q * sa
-    dxa = b.side * (-sa - dq * ca)
-    dya = ca - dq * sa
-    cr, sr = math.cos(b.rake_angle_rad), math.sin(b.rake_angle_rad)
-    cd, sd = math.cos(b.assembly_angle_rad), math.sin(b.assembly_angle_rad)
-    # S_a -> S_b (eq 4, z_a = 0) -> S_c (eq 8)
-    xb, zb = xa * cr, -xa * sr
-    dxb, dzb = dxa * cr, -dxa * sr
-    point = (xb * cd - zb * sd + b.cutter_radius_mm, ya, xb * sd + zb * cd)
-    tangent = (dxb * cd - dzb * sd, dya, dxb * sd + dzb * cd)
-    return point, tangent
-
-
-def _to_machine(b: BladeSystem, vec, ct, st, cp, sp, *, translate: bool):
-    """S_c -> S_ck' (eq 16, rot_y(-theta)) -> S_d (eq 19) -> S_m (eq 18, rot_z(psi_cr)).
-
-    Components in, components out (``ct, st, cp, sp``: cos/sin of theta and psi_cr).
-    """
-    x, y, z = vec
-    xp, zp = x * ct - z * st, x * st + z * ct
-    e = b.spiral_angle_rad - b.assembly_angle_rad
-    se, ce = math.sin(e), math.cos(e)
-    xd = xp * se + zp * ce
-    yd = -xp * ce + zp * se
-    if translate:
-        xd = xd + b.machine_distance_mm * math.cos(b.cradle_angle_rad)
-        yd = yd + b.machine_distance_mm * math.sin(b.cradle_angle_rad)
-    return xd * cp - yd * sp, xd * sp + yd * cp, -y
-
-
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
+def _sincos(x):
+    """``(sin x, cos x)``; for a complex-step argument ``a + i h`` (h tiny) from real trig,
+    sin = sin a + i h cos a and cos = cos a - i h sin a: exact to machine precision and three
+    times cheaper than complex trig."""
+    if not np.iscomplexobj(x):
+        return np.sin(x), np.cos(x)
+    a, h = x.real, x.imag
+    s, c = np.sin(a), np.cos(a)
+    return s + 1j * (h * c), c - 1j * (h * s)
+
+
+def edge(b: BladeSystem, u):
+    """Cutting edge in the blade frame S_a (eq 2): x_a, y_a and their u-derivatives."""
+    sa, ca = np.sin(b.pressure_angle_rad), np.cos(b.pressure_angle_rad)
+    w = u - b.parabola_apex_mm
+    q = b.parabola_per_mm * w * w
+    dq = 2.0 * b.parabola_per_mm * w
+    return b.side * (-u * sa - q * ca), u * ca - q * sa, b.side * (-sa - dq * ca), ca - dq * sa
+
+
 def components(b: BladeSystem, u, theta, psi) -> dict[str, tuple]:
-    """:func:`family` as ``(x, y, z)`` component tuples (the fast path of the envelope solver)."""
-    ct, st, cp, sp = np.cos(theta), np.sin(theta), np.cos(psi), np.sin(psi)
-    point_c, tangent_c = _edge(b, u)
-    px, py, pz = _to_machine(b, point_c, ct, st, cp, sp, translate=True)
-    r_u = _to_machine(b, tangent_c, ct, st, cp, sp, translate=False)
+    """:func:`family` as ``(x, y, z)`` component tuples (the fast path of the envelope solver).
+
+    The chain S_a -> S_b (eq 4) -> S_c (eq 8) -> S_ck' (eq 16) -> S_d (eq 19) -> S_m (eq 18)
+    collapses, for an edge point in the front plane z_a = 0, to rotations in the cradle plane:
+    with chi = psi_m - delta + theta + psi_cr,
+
+        x_m + i y_m = M_d e^{i (q_2 + psi_cr)} - i e^{i chi} (r_c + x_a e^{i (delta - alpha_r)}),
+
+    and z_m = -y_a: eq 4 (rake alpha_r) and eq 8 (assembly angle delta) turn x_a together by
+    delta - alpha_r about y_c, eq 16 (theta), eq 19 and eq 18 (psi_cr) about z_m.
+    """
+    xa, ya, dxa, dya = edge(b, u)
+    chi = b.spiral_angle_rad - b.assembly_angle_rad + theta + psi
+    tilt = b.assembly_angle_rad - b.rake_angle_rad
+    s1, c1 = _sincos(chi)
+    s2, c2 = _sincos(chi + tilt)
     # the cutter axis -y_c is +z_m (eq 19: z_d = -y_c; the cradle turns about z_m); its centre
     # O_c = M_d (cos q_2, sin q_2, 0) turns with the cradle
     md, q2 = b.machine_distance_mm, b.cradle_angle_rad
-    cq, sq = math.cos(q2), math.sin(q2)
-    cx, cy = md * (cq * cp - sq * sp), md * (sq * cp + cq * sp)
+    sq, cq = _sincos(q2 + psi)
+    cx, cy = md * cq, md * sq
+    rc = b.cutter_radius_mm
+    px, py, pz = cx + rc * s1 + xa * s2, cy - rc * c1 - xa * c2, -ya
+    r_u = (dxa * s2, -dxa * c2, -dya)
     g = b.machine_root_angle_rad
-    ca, sa = math.cos(g), math.sin(g)
-    ox, oy, oz = (float(v) for v in b.work_origin)
+    ca, sa = np.cos(g), np.sin(g)
+    offset = np.asarray(b.work_offset_mm)
+    dxd, dem, dxb = offset[..., 0], offset[..., 1], offset[..., 2]
+    ox, oy, oz = dxd * ca, dem, dxd * sa + dxb  # the work origin, as work_origin
     rx, ry, rz = px - ox, py - oy, pz - oz
     # a_w x rel: velocity of the work point per unit work rotation
     wx, wy, wz = -sa * ry, sa * rx - ca * rz, ca * ry

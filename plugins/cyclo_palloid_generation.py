@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -48,7 +49,7 @@ from gearopt.thickness import NormalSection
 from gearopt_plugins.cyclo_palloid_family import (
     BladeSystem,
     components,
-    family,
+    edge,
     pitch_line_start,
 )
 
@@ -56,7 +57,7 @@ __all__ = [
     "CycloPalloidFamily",
     "ThicknessSolution",
     "blade_systems",
-    "generate_flank",
+    "generate_flanks",
     "outer_phase_rad",
     "solve_additional_slope_angle",
     "tooth_turn_rad",
@@ -67,61 +68,66 @@ BLADE_OF_FLANK = {"convex": "inner", "concave": "outer"}
 
 @dataclass(frozen=True, kw_only=True)
 class CycloPalloidFamily:
-    """One blade system as a :class:`gearopt.envelope.GeneratingFamily`, q = (u, theta, psi_cr).
+    """Blade systems as a :class:`gearopt.envelope.GeneratingFamily`, q = (u, theta, psi_cr).
 
-    ``tip_depth_mm`` is the depth of the blade's tip below the cradle (pitch) plane, the
-    member's dedendum: the blade ends there, so it generates nothing lower.
+    One flank per blade system in ``blades`` (flank index = position in the tuple).
+    ``tip_depth_mm`` is the depth of the blades' tips below the cradle (pitch) plane, the
+    member's dedendum: a blade ends there, so it generates nothing lower.
     """
 
-    blade: BladeSystem
+    blades: tuple[BladeSystem, ...]
     scale_mm: float
     tip_depth_mm: float
     max_step: tuple[float, float, float] = (1.0, 0.05, 0.05)
 
-    def axial_radial_meshing(self, q):
-        fam = components(self.blade, q[..., 0], q[..., 1], q[..., 2])
+    @property
+    def n_flanks(self) -> int:
+        return len(self.blades)
+
+    @cached_property
+    def _stacked(self) -> BladeSystem:
+        return BladeSystem.stack(self.blades)
+
+    def axial_radial_meshing(self, q, flank):
+        fam = components(self._stacked.take(flank), q[..., 0], q[..., 1], q[..., 2])
         n = fam["normal"]
         norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
         return fam["axial_mm"], fam["radius_mm"], fam["meshing"] / (norm * self.scale_mm)
 
     def pitch_row(self, cone_distance_mm):
-        return np.stack(pitch_line_start(self.blade, cone_distance_mm), axis=-1)
+        return np.stack(
+            [np.stack(pitch_line_start(b, cone_distance_mm), axis=-1) for b in self.blades]
+        )
 
-    def work_rotation_rad(self, q):
-        """psi_g of eq 23."""
-        b = self.blade
-        return b.gear_to_cradle_roll * q[..., 2] - b.gear_to_blade_roll * q[..., 1]
-
-    def geometry(self, q) -> dict[str, NDArray]:
-        b = self.blade
-        fam = family(b, q[..., 0], q[..., 1], q[..., 2])
+    def geometry(self, q, flank) -> dict[str, NDArray]:
+        b = self._stacked.take(flank)
+        fam = components(b, q[..., 0], q[..., 1], q[..., 2])
         g = b.machine_root_angle_rad
-        sg, cg = math.sin(g), math.cos(g)
-        psi_g = self.work_rotation_rad(q)
+        sg, cg = np.sin(g), np.cos(g)
+        psi_g = b.gear_to_cradle_roll * q[..., 2] - b.gear_to_blade_roll * q[..., 1]  # eq 23
         cp, sp = np.cos(psi_g), np.sin(psi_g)
 
-        def to_work(v):
+        def to_work(x, y, z):
             # eq 22 (M_qm) then eq 21 (M_gq = rot_z(-psi_g))
-            xq = sg * v[..., 0] - cg * v[..., 2]
-            yq = v[..., 1]
-            zq = cg * v[..., 0] + sg * v[..., 2]
-            return np.stack([cp * xq + sp * yq, -sp * xq + cp * yq, zq], axis=-1)
+            xq, zq = sg * x - cg * z, cg * x + sg * z
+            return np.stack([cp * xq + sp * y, -sp * xq + cp * y, zq], axis=-1)
 
-        point = to_work(fam["point"] - b.work_origin)
-        normal = to_work(fam["normal"])
+        offset = np.asarray(b.work_offset_mm)
+        dxd, dem, dxb = offset[..., 0], offset[..., 1], offset[..., 2]
+        px, py, pz = fam["point"]
+        point = to_work(px - dxd * cg, py - dem, pz - dxd * sg - dxb)
+        normal = to_work(*fam["normal"])
         normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
         # the inner blade's body lies radially outside its edge, the outer blade's inside, and
         # r_u x r_theta points away from the inner cutter axis (tests check it on the tooth)
-        return {"point": point, "normal": b.side * normal}
+        return {"point": point, "normal": b.side[..., None] * normal}
 
-    def blade_height_mm(self, u):
-        """Height of the edge point above the cradle plane's tip side: y_c of eqs 2-8."""
-        b = self.blade
-        q = b.parabola_per_mm * (u - b.parabola_apex_mm) ** 2
-        return u * math.cos(b.pressure_angle_rad) - q * math.sin(b.pressure_angle_rad)
+    def blade_height_mm(self, u, flank):
+        """Height y_c of the edge point (eqs 2-8) above the cradle plane, toward the tip."""
+        return edge(self._stacked.take(flank), u)[1]
 
-    def within_tool(self, q):
-        return self.blade_height_mm(q[..., 0]) >= -self.tip_depth_mm - 1e-9
+    def within_tool(self, q, flank):
+        return self.blade_height_mm(q[..., 0], flank) >= -self.tip_depth_mm - 1e-9
 
 
 def blade_systems(design: Design, member: str, settings: Any) -> dict[str, BladeSystem]:
@@ -171,44 +177,56 @@ def tooth_turn_rad(design: Design, member: str, flank: str, systems: dict[str, B
     return 2.0 * math.pi / teeth - systems["outer"].gear_to_blade_roll * phase
 
 
-def _family(design: Design, member: str, blade: BladeSystem) -> CycloPalloidFamily:
+def _family(design: Design, member: str, blades) -> CycloPalloidFamily:
     blank = design.blank
     return CycloPalloidFamily(
-        blade=blade,
+        blades=tuple(blades),
         scale_mm=blank.mean_cone_distance_mm,
         tip_depth_mm=blank.mean_dedendum_mm[MEMBERS.index(member)],
     )
 
 
-def generate_flank(
-    design: Design, member: str, flank: str, settings: Any, *, grid: FlankGrid
-) -> FlankMap:
-    """FlankMap of ``member``'s ``flank`` on tooth 0 for the given basic settings."""
+def generate_flanks(
+    design: Design,
+    member: str,
+    settings: Any,
+    *,
+    grid: FlankGrid,
+    flanks: tuple[str, ...] = ("convex", "concave"),
+) -> dict[str, FlankMap]:
+    """FlankMaps of ``member``'s ``flanks`` on tooth 0 for the given basic settings, solved in
+    one batch."""
     index = MEMBERS.index(member)
     blank = design.blank
     systems = blade_systems(design, member, settings)
-    family_ = _family(design, member, systems[BLADE_OF_FLANK[flank]])
-    where = f"{member} {flank} flank"
+    family_ = _family(design, member, [systems[BLADE_OF_FLANK[f]] for f in flanks])
     solution = solve_envelope(
         family_,
         cone_distances_mm=(blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
         heights_mm=(-blank.mean_dedendum_mm[index], blank.mean_addendum_mm[index]),
         pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
         grid=grid,
-        where=where,
+        where=f"{member} flanks {', '.join(flanks)}",
     )
-    if solution.mask.sum() < 4:
-        raise SettingsError(where, rule="the settings generate (almost) nothing of this flank")
-    return flank_map(
-        family_,
-        solution,
-        member=member,
-        flank=flank,
-        hand=blank.hand[index],
-        teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
-        turn_rad=tooth_turn_rad(design, member, flank, systems),
-        notes=(f"{BLADE_OF_FLANK[flank]} blades (cyclo-palloid)",),
-    )
+    out = {}
+    for k, flank in enumerate(flanks):
+        if solution.mask[k].sum() < 4:
+            raise SettingsError(
+                f"{member} {flank} flank",
+                rule="the settings generate (almost) nothing of this flank",
+            )
+        out[flank] = flank_map(
+            family_,
+            solution,
+            index=k,
+            member=member,
+            flank=flank,
+            hand=blank.hand[index],
+            teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
+            turn_rad=tooth_turn_rad(design, member, flank, systems),
+            notes=(f"{BLADE_OF_FLANK[flank]} blades (cyclo-palloid)",),
+        )
+    return out
 
 
 def outer_phase_rad(
@@ -284,14 +302,14 @@ def solve_additional_slope_angle(
         settings, systems = state(x[6])
         out = []
         for k, flank in enumerate(("convex", "concave")):
-            fam = _family(design, member, systems[BLADE_OF_FLANK[flank]])
+            fam = _family(design, member, [systems[BLADE_OF_FLANK[flank]]])
             q = np.asarray(x[3 * k : 3 * k + 3])
-            g = fam.geometry(q)
+            g = fam.geometry(q, 0)
             turn = tooth_turn_rad(design, member, flank, systems)
             c, s = math.cos(turn), math.sin(turn)
             p = g["point"]
             p = np.array([c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]])
-            _, _, f = fam.axial_radial_meshing(q)
+            _, _, f = fam.axial_radial_meshing(q, 0)
             out.append((section.coordinates(p, x[7]), float(f)))
         return out
 

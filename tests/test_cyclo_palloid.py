@@ -194,17 +194,6 @@ def test_zero_compensation_is_no_compensation(table3_design):
     assert gearopt.basic_settings(zero) == gearopt.basic_settings(table3_design)
 
 
-def test_auto_slope_angle_is_parsed_then_refused_with_a_clear_error(table3_design):
-    design = gearopt.with_overrides(
-        table3_design, {"machine.gear.additional_slope_angle_deg": "auto"}
-    )
-    assert design.machine.gear.is_auto
-    with pytest.raises(gearopt.NotAvailableError) as info:
-        gearopt.basic_settings(design)
-    assert "machine.gear.additional_slope_angle_deg" in str(info.value)
-    assert "flank generator" in str(info.value)
-
-
 def test_member_keys_in_machine_table_are_defaults_for_both(table3_design):
     design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
     for member in MEMBERS:
