@@ -6,17 +6,22 @@ supplies the generating family (:class:`CycloPalloidFamily`), the blade systems 
 settings, and the relative angular position of the two flanks, which sets the tooth thickness.
 
 Phase of the outer blades (seed 001 does not state it). The inner and outer disks turn at the same
-rate; a blade group's outer blade sits half a blade-group pitch, pi / N_b, behind its inner blade,
-measured about the inner disk's axis a_i, which is the cutter head's axis (the outer disk is the
-eccentric one, displaced by e of eq 10). At the instant the inner blade's reference point P_i is at
-the pitch point M, the outer blade's reference point P_o is where the ray from O_ci at the polar
-angle of M minus pi / N_b meets the outer blade circle (radius r_co about O_co); it reaches M
-(theta_o = 0, the position P'_o of Fig. 3) after the outer disk turns by
-``outer_phase_rad`` (= pi / N_b exactly when r_co = r_ci), while the work turns by m_gb times
-that (eq 23). So the concave flank is the outer blade's envelope turned about the work axis by
-m_gb * outer_phase_rad relative to the convex one: with r_ci = r_co and dnu = 0 that is exactly
-half a pitch (pi / N), the additional slope angle changes it through m'_gb (eq 37), and unequal
-radii change it through the phase.
+rate. A tooth space is cut between the passages of one blade group's outer and inner blades
+through it, so its width at M is the work's rotation between them: m_gb times the outer disk's
+lead over the inner one (eq 23). The outer blade leads by half a blade-group pitch, pi / N_b,
+measured about the outer disk's axis a_o: when the outer reference point P_o is at the pitch point
+M (theta_o = 0, P'_o of Fig. 3), the group's inner reference point lies pi / N_b behind it as
+seen from O_co, on its own circle (radius r_ci about O_ci); :func:`outer_phase_rad` turns that into
+the inner disk's rotation until P_i reaches M. With r_ci = r_co and dnu = 0 the tooth space is
+exactly half a pitch (pi / N); the additional slope angle widens it through m'_gb (eq 37);
+unequal radii change it through the phase.
+
+Why the outer disk's axis: measured about the inner axis instead, r_co = 76.8 mm (section 5.2)
+thickens the pinion by 0.12 mm and the drive would interfere; measured as each disk's own
+rotation (the blades' x_b axes of Fig. 3), unequal radii would not change the thickness at all.
+Seed 001 says r_co = 76.8 mm provides backlash similar to Table 3's drive: about the outer axis
+it thins the pinion by 0.114 mm at the mean chordal addendum, against 0.147 mm for Table 3's two
+additional slope angles together (the tests measure both on the generated flanks).
 
 Indexing. With dnu = 0 the work turns by m_gb 2 pi / N_b = 2 pi / N per blade group, so the
 next group cuts the next tooth. With dnu != 0 the paper's kinematics (eq 37) does not index
@@ -235,11 +240,15 @@ def outer_phase_rad(
     inner: BladeSystem,
     outer: BladeSystem,
     mean_cone_distance_mm: float,
+    frame: str = "outer",
 ) -> float:
-    """Outer-disk rotation from the inner blade at M to its group's outer blade at M.
+    """How far (in its own rotation) a group's outer blade leads the inner blade through M.
 
-    Both reference points move in the cradle plane (z_m = 0); the half blade-group pitch is
-    measured about the inner disk's axis (see the module docstring).
+    Both reference points move in the cradle plane (z_m = 0) on circles about their disks'
+    centres O_ci, O_co (eq 19 at u = 0). The half blade-group pitch pi / N_b is measured about
+    the axis of the ``frame`` disk ("outer": when the outer blade is at M the inner blade lies
+    pi / N_b behind it as seen from O_co; "inner": when the inner blade is at M the outer blade
+    lies pi / N_b ahead as seen from O_ci). Equal radii give exactly pi / N_b either way.
     """
     m = np.array([mean_cone_distance_mm, 0.0])
 
@@ -248,15 +257,23 @@ def outer_phase_rad(
         radial = np.array([math.sin(e), -math.cos(e)])  # eq 19 at u = 0, theta = 0
         return m - b.cutter_radius_mm * radial, math.atan2(radial[1], radial[0])
 
+    def meet(centre, angle, other_centre, other_radius):
+        """Point where the ray from ``centre`` at ``angle`` meets the other blade circle."""
+        d = np.array([math.cos(angle), math.sin(angle)])
+        w = centre - other_centre
+        bq = float(d @ w)
+        return centre + (-bq + math.sqrt(bq * bq - float(w @ w) + other_radius**2)) * d
+
     o_i, a_i = centre_and_angle(inner)
     o_o, a_o = centre_and_angle(outer)
-    ray = a_i + math.pi / blade_groups  # ahead of the inner blade (theta turns it about +z_m)
-    d = np.array([math.cos(ray), math.sin(ray)])
-    w = o_i - o_o
-    bq = float(d @ w)
-    t = -bq + math.sqrt(bq * bq - float(w @ w) + outer.cutter_radius_mm**2)
-    p = o_i + t * d - o_o
-    return float((math.atan2(p[1], p[0]) - a_o) % (2.0 * math.pi))
+    half = math.pi / blade_groups
+    if frame == "inner":
+        p = meet(o_i, a_i + half, o_o, outer.cutter_radius_mm) - o_o
+        lead = math.atan2(p[1], p[0]) - a_o
+    else:
+        p = meet(o_o, a_o - half, o_i, inner.cutter_radius_mm) - o_i
+        lead = a_i - math.atan2(p[1], p[0])
+    return float(lead % (2.0 * math.pi))
 
 
 @dataclass(frozen=True, kw_only=True)
