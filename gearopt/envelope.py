@@ -22,16 +22,23 @@ failed node of its column, and the model says the tool reaches it (the blade's t
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.interpolate import RegularGridInterpolator
 
-from gearopt.errors import SettingsError
+from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import FlankGrid, FlankMap
 
-__all__ = ["GeneratingFamily", "EnvelopeSolution", "solve_envelope", "flank_map"]
+__all__ = [
+    "GeneratingFamily",
+    "EnvelopeSolution",
+    "EnvelopeSurface",
+    "solve_envelope",
+    "flank_map",
+]
 
 _H = 1e-30  # complex step
 
@@ -304,6 +311,87 @@ def solve_envelope(
     )
 
 
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EnvelopeSurface:
+    """The generated flank itself, beyond its grid: exact points and the tool that cut it.
+
+    A FlankMap keeps one (``FlankMap.surface``) so that checks and refinements can go back to
+    the envelope: :meth:`points_at` solves the envelope at any (face, profile) point, starting
+    from the grid's parameters; :meth:`tool_points` samples the tool's cutting edges over the
+    positions that generated the flank. Both in the FlankMap's frame: the generated right-hand
+    flank, then Theta -> ``sign`` Theta + ``offset`` (mirror and turns of the FlankMap).
+    """
+
+    family: GeneratingFamily
+    index: int
+    pitch_angle_rad: float
+    face_mm: NDArray
+    profile_mm: NDArray
+    q: NDArray = field(repr=False)
+    mask: NDArray = field(repr=False)
+    sign: float = 1.0
+    offset_rad: float = 0.0
+    tol: float = 1e-14
+
+    def transformed(self, *, sign: float = 1.0, offset_rad: float = 0.0) -> EnvelopeSurface:
+        """The surface after Theta -> sign Theta + offset_rad."""
+        return replace(self, sign=sign * self.sign, offset_rad=sign * self.offset_rad + offset_rad)
+
+    def _to_frame(self, point: NDArray) -> NDArray:
+        c, s = math.cos(self.offset_rad), math.sin(self.offset_rad)
+        x, y, z = point[..., 0], self.sign * point[..., 1], point[..., 2]
+        return np.stack([c * x - s * y, s * x + c * y, z], axis=-1)
+
+    def parameters_at(self, face_mm, profile_mm) -> NDArray:
+        """``(..., 3)`` generation parameters at grid coordinates, by Newton from the grid."""
+        s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
+        start = RegularGridInterpolator(
+            (self.face_mm, self.profile_mm),
+            self.q,
+            method="linear",
+            bounds_error=False,
+            fill_value=None,
+        )(np.stack([s.ravel(), h.ravel()], axis=-1))
+        cg, sg = math.cos(self.pitch_angle_rad), math.sin(self.pitch_angle_rad)
+        sf, hf = s.ravel(), h.ravel()
+        flank = np.full(len(sf), self.index)
+        q, _, _, ok, _ = _newton(
+            self.family,
+            start,
+            flank,
+            sf * cg - hf * sg,
+            sf * sg + hf * cg,
+            tol=self.tol,
+            max_iter=30,
+            give_up=(30, np.inf),
+        )
+        if not ok.all():
+            raise GearoptError(
+                "EnvelopeSurface.parameters_at",
+                rule="Newton did not converge at "
+                f"{int((~ok).sum())} of {len(ok)} points (outside the generated flank?)",
+            )
+        return q.reshape(*s.shape, 3)
+
+    def points_at(self, face_mm, profile_mm) -> NDArray:
+        """``(..., 3)`` exact flank points at grid coordinates, in the FlankMap's frame."""
+        q = self.parameters_at(face_mm, profile_mm)
+        return self._to_frame(self.family.geometry(q, np.full(q.shape[:-1], self.index))["point"])
+
+    def tool_points(self, count: int = 9) -> NDArray:
+        """Cutting-edge points near the flank ``(n, 3, count, 3)``: from the tool position and
+        edge point that generated each generated node, each parameter in turn moved over
+        ``count`` values within a quarter of the range it spans on the flank (other roll and
+        tool positions, other points of the edge). An envelope touches all of them from the
+        tooth space."""
+        q = self.q[self.mask]
+        span = 0.25 * (q.max(axis=0) - q.min(axis=0))
+        delta = np.linspace(-1.0, 1.0, count)[None, :, None] * (np.eye(3) * span)[:, None, :]
+        moved = q[:, None, None, :] + delta[None]
+        geo = self.family.geometry(moved, np.full(moved.shape[:-1], self.index))
+        return self._to_frame(geo["point"])
+
+
 def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
     """Replace each column's values below its lowest ``mask`` node by the quadratic through
     that node and the two above it, so that a spline through all nodes stays smooth at the edge
@@ -361,6 +449,15 @@ def flank_map(
         mask=mask,
         parameters=q,
         notes=notes,
+        surface=EnvelopeSurface(
+            family=family,
+            index=index,
+            pitch_angle_rad=solution.pitch_angle_rad,
+            face_mm=solution.face_mm,
+            profile_mm=solution.profile_mm,
+            q=q,
+            mask=mask,
+        ),
     )
     if turn_rad:
         result = result.rotated(turn_rad)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -89,6 +90,13 @@ class FlankMap:
         envelope's fold, within the tool). Values at other nodes are finite but meaningless.
     parameters
         ``(n_f, n_p, 3)`` the model's generation parameters at each node (model-specific).
+    notes
+        What generated the flank (free text).
+    surface
+        The generated surface beyond the grid (:class:`gearopt.envelope.EnvelopeSurface` or
+        anything with the same ``points_at``, ``tool_points`` and ``transformed``), or None:
+        exact points at any grid coordinates and the tool that cut the flank, for checks and
+        refinements. It follows the map's turns and mirror.
     """
 
     member: str
@@ -106,6 +114,7 @@ class FlankMap:
     mask: NDArray
     parameters: NDArray = field(repr=False)
     notes: tuple[str, ...] = ()
+    surface: Any = field(default=None, repr=False)
 
     def __post_init__(self):
         n_f, n_p = len(self.face_mm), len(self.profile_mm)
@@ -188,6 +197,40 @@ class FlankMap:
         theta = self.polar_angle_at(s, h)
         return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
 
+    def polar_angle_exact(self, face_mm, profile_mm) -> NDArray:
+        """Theta at grid coordinates from the generated surface itself (not the spline);
+        needs ``surface``."""
+        if self.surface is None:
+            raise GearoptError("FlankMap.surface", rule="this FlankMap carries no surface")
+        p = self.surface.points_at(face_mm, profile_mm)
+        near = self.polar_angle_at(face_mm, profile_mm)
+        turn = np.arctan2(p[..., 1], p[..., 0]) - near
+        return near + (turn + math.pi) % (2.0 * math.pi) - math.pi
+
+    def tool_penetration_mm(self, count: int = 9) -> float:
+        """Deepest penetration (mm, along the normal) of the tool into the tooth material at
+        sampled tool positions near the flank (``surface.tool_points(count)``) whose points fall
+        on the generated flank; zero or less when the tool only touches the flank, as an
+        envelope must. Needs ``surface``."""
+        if self.surface is None:
+            raise GearoptError("FlankMap.surface", rule="this FlankMap carries no surface")
+        p = self.surface.tool_points(count).reshape(-1, 3)
+        radius = np.hypot(p[:, 0], p[:, 1])
+        s, h = self.to_grid(p[:, 2], radius)
+        on = self.inside(s, h)
+        if not on.any():
+            return 0.0
+        p, radius, s, h = p[on], radius[on], s[on], h[on]
+        theta = np.arctan2(p[:, 1], p[:, 0])
+        flank = self.polar_angle_exact(s, h)
+        gap = (theta - flank + math.pi) % (2.0 * math.pi) - math.pi
+        # the normal's circumferential component at the nearest node says where the material is
+        i = np.clip(np.searchsorted(self.face_mm, s), 0, len(self.face_mm) - 1)
+        j = np.clip(np.searchsorted(self.profile_mm, h), 0, len(self.profile_mm) - 1)
+        n = self.normals[i, j]
+        around = -np.sin(flank) * n[:, 0] + np.cos(flank) * n[:, 1]
+        return float(np.max(-radius * gap * around))
+
     def inside(self, face_mm, profile_mm) -> NDArray:
         """True where ``(s, h)`` lies within a cell whose four corners are generated nodes."""
         s, h = np.asarray(face_mm, float), np.asarray(profile_mm, float)
@@ -211,6 +254,9 @@ class FlankMap:
             polar_angle_rad=self.polar_angle_rad + angle_rad,
             points_mm=self.points_mm @ rot.T,
             normals=self.normals @ rot.T,
+            surface=None
+            if self.surface is None
+            else self.surface.transformed(offset_rad=angle_rad),
         )
 
     def tooth_turned(self, k: int) -> FlankMap:
@@ -226,6 +272,7 @@ class FlankMap:
             polar_angle_rad=-self.polar_angle_rad,
             points_mm=self.points_mm * flip,
             normals=self.normals * flip,
+            surface=self.surface and self.surface.transformed(sign=-1.0),
         )
 
     def summary(self) -> dict:

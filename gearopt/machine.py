@@ -119,8 +119,29 @@ class BaseMachineModel(abc.ABC):
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         """The design keys a study may tune, with bounds inside which every design is valid."""
 
-    def generate_flank(self, design: Design, *, member: str, flank: str, grid: Any = None) -> Any:
-        """Generate ``member``'s ``flank`` ("concave" or "convex") as a FlankMap.
+    def generate_flank(
+        self, design: Design, *, member: str, flank: str, grid: Any = None, tool_pass: int = 0
+    ) -> Any:
+        """Generate ``member``'s ``flank`` ("concave" or "convex") as a :class:`FlankMap`.
+
+        Parameters
+        ----------
+        design
+            A design that selects this model.
+        member, flank
+            ``"pinion"``/``"gear"`` and ``"convex"``/``"concave"``.
+        grid
+            A :class:`gearopt.flank.FlankGrid` (default: the default grid).
+        tool_pass
+            0 for tooth 0; k for the flank cut by the tool's k-th pass (the k-th blade group
+            of a face-hobbing cutter, the k-th indexing of single indexing), which is tooth k
+            turned by k pitches when the machine indexes exactly. The flank contract checks it.
+
+        Returns
+        -------
+        FlankMap
+            Right- or left-hand as the pair says, its normals out of the tooth material, with
+            a ``surface`` for exact points and the tool's positions when the model can.
 
         Models without a generator raise :class:`~gearopt.errors.NotAvailableError`.
         """
@@ -136,13 +157,17 @@ class BaseMachineModel(abc.ABC):
         member: str,
         grid: Any = None,
         flanks: tuple[str, ...] = ("convex", "concave"),
+        tool_pass: int = 0,
     ) -> dict[str, Any]:
-        """``{flank: FlankMap}`` for the member's ``flanks`` of tooth 0.
+        """``{flank: FlankMap}`` for the member's ``flanks`` (arguments as :meth:`generate_flank`).
 
         The default calls :meth:`generate_flank` once per flank; override it when the model can
         solve several flanks in one batch.
         """
-        return {f: self.generate_flank(design, member=member, flank=f, grid=grid) for f in flanks}
+        return {
+            f: self.generate_flank(design, member=member, flank=f, grid=grid, tool_pass=tool_pass)
+            for f in flanks
+        }
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

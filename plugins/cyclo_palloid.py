@@ -365,7 +365,13 @@ class CycloPalloid(BaseMachineModel):
         return MachineSettings(model=self.name, notes=tuple(notes), **settings)
 
     def generate_flank(
-        self, design: Design, *, member: str, flank: str, grid: FlankGrid | None = None
+        self,
+        design: Design,
+        *,
+        member: str,
+        flank: str,
+        grid: FlankGrid | None = None,
+        tool_pass: int = 0,
     ) -> FlankMap:
         """The member's convex (inner blades) or concave (outer blades) flank, tooth 0.
 
@@ -373,7 +379,9 @@ class CycloPalloid(BaseMachineModel):
         the masks and the tooth numbering.
         """
         check_member_and_flank(member, flank)
-        return self.generate_flanks(design, member=member, grid=grid, flanks=(flank,))[flank]
+        return self.generate_flanks(
+            design, member=member, grid=grid, flanks=(flank,), tool_pass=tool_pass
+        )[flank]
 
     def generate_flanks(
         self,
@@ -382,12 +390,16 @@ class CycloPalloid(BaseMachineModel):
         member: str,
         grid: FlankGrid | None = None,
         flanks: tuple[str, ...] = ("convex", "concave"),
+        tool_pass: int = 0,
     ) -> dict[str, FlankMap]:
-        """Both flanks (or ``flanks``) of the member's tooth 0, solved in one batch."""
+        """Both flanks (or ``flanks``) of the member's tooth 0, solved in one batch; with
+        ``tool_pass`` k, those cut by the k-th blade group."""
         for flank in flanks:
             check_member_and_flank(member, flank)
         settings = self.basic_settings(design).member(member)
-        return generate_flanks(design, member, settings, grid=grid or FlankGrid(), flanks=flanks)
+        return generate_flanks(
+            design, member, settings, grid=grid or FlankGrid(), flanks=flanks, tool_pass=tool_pass
+        )
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine = design.machine

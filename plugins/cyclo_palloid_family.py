@@ -55,6 +55,9 @@ class BladeSystem:
     gear_to_cradle_roll: float  # m_gc (eq 25)
     gear_to_blade_roll: float  # m_gb (eq 37)
     work_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)  # (dX_D, dE_m, dX_B)
+    #: the blade's lag behind the paper's blade: it is where that blade is at theta - phase
+    #: (k 2 pi / N_b for the k-th blade group)
+    phase_rad: float = 0.0
 
     @classmethod
     def stack(cls, systems) -> BladeSystem:
@@ -116,7 +119,7 @@ def components(b: BladeSystem, u, theta, psi) -> dict[str, tuple]:
     delta - alpha_r about y_c, eq 16 (theta), eq 19 and eq 18 (psi_cr) about z_m.
     """
     xa, ya, dxa, dya = edge(b, u)
-    chi = b.spiral_angle_rad - b.assembly_angle_rad + theta + psi
+    chi = b.spiral_angle_rad - b.assembly_angle_rad + theta - b.phase_rad + psi
     tilt = b.assembly_angle_rad - b.rake_angle_rad
     s1, c1 = _sincos(chi)
     s2, c2 = _sincos(chi + tilt)
@@ -190,7 +193,7 @@ def pitch_line_start(b: BladeSystem, cone_distance_mm):
     md, q2, rc = b.machine_distance_mm, b.cradle_angle_rad, b.cutter_radius_mm
     e = b.spiral_angle_rad - b.assembly_angle_rad
     phi = q2 + np.arcsin((s**2 - md**2 - rc**2) / (2.0 * md * rc))
-    theta = phi - e
+    theta = phi - e + b.phase_rad
     xd = rc * np.sin(phi) + md * math.cos(q2)
     yd = -rc * np.cos(phi) + md * math.sin(q2)
     return np.zeros_like(s), theta, -np.arctan2(yd, xd)

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
@@ -135,9 +135,13 @@ class CycloPalloidFamily:
         return self.blade_height_mm(q[..., 0], flank) >= -self.tip_depth_mm - 1e-9
 
 
-def blade_systems(design: Design, member: str, settings: Any) -> dict[str, BladeSystem]:
-    """The inner and outer blade systems of ``member`` from its basic ``settings``."""
+def blade_systems(
+    design: Design, member: str, settings: Any, *, tool_pass: int = 0
+) -> dict[str, BladeSystem]:
+    """The inner and outer blade systems of ``member`` from its basic ``settings``; those of
+    blade group ``tool_pass`` (counted against the cutter's rotation) when it is not 0."""
     spec = design.machine.member(member)
+    phase = 2.0 * math.pi * tool_pass / design.machine.blade_groups
     out = {}
     for side, name in ((1, "inner"), (-1, "outer")):
         out[name] = BladeSystem(
@@ -159,6 +163,7 @@ def blade_systems(design: Design, member: str, settings: Any) -> dict[str, Blade
                 settings.blank_offset_mm,
                 settings.sliding_base_mm,
             ),
+            phase_rad=phase,
         )
     return out
 
@@ -198,12 +203,15 @@ def generate_flanks(
     *,
     grid: FlankGrid,
     flanks: tuple[str, ...] = ("convex", "concave"),
+    tool_pass: int = 0,
 ) -> dict[str, FlankMap]:
-    """FlankMaps of ``member``'s ``flanks`` on tooth 0 for the given basic settings, solved in
-    one batch."""
+    """FlankMaps of ``member``'s ``flanks`` for the given basic settings, solved in one batch:
+    those of tooth 0, or those cut by blade group ``tool_pass`` (tooth ``tool_pass`` of a
+    right-hand member, ``-tool_pass`` of a left-hand one, when the work indexes exactly:
+    dnu = 0 and m_b the mean normal module, so that m_gb = N_b / N)."""
     index = MEMBERS.index(member)
     blank = design.blank
-    systems = blade_systems(design, member, settings)
+    systems = blade_systems(design, member, settings, tool_pass=tool_pass)
     family_ = _family(design, member, [systems[BLADE_OF_FLANK[f]] for f in flanks])
     solution = solve_envelope(
         family_,
@@ -220,16 +228,19 @@ def generate_flanks(
                 f"{member} {flank} flank",
                 rule="the settings generate (almost) nothing of this flank",
             )
-        out[flank] = flank_map(
-            family_,
-            solution,
-            index=k,
-            member=member,
-            flank=flank,
-            hand=blank.hand[index],
-            teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
-            turn_rad=tooth_turn_rad(design, member, flank, systems),
-            notes=(f"{BLADE_OF_FLANK[flank]} blades (cyclo-palloid)",),
+        out[flank] = replace(
+            flank_map(
+                family_,
+                solution,
+                index=k,
+                member=member,
+                flank=flank,
+                hand=blank.hand[index],
+                teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
+                turn_rad=tooth_turn_rad(design, member, flank, systems),
+                notes=(f"{BLADE_OF_FLANK[flank]} blades (cyclo-palloid)",),
+            ),
+            tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
         )
     return out
 
