@@ -9,7 +9,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
-from gearopt.testing import MachineModelContract
+from gearopt.testing import FlankContract
 from gearopt_plugins.cyclo_palloid import CycloPalloid
 
 from .conftest import STUDIES
@@ -17,7 +17,7 @@ from .conftest import STUDIES
 MEMBERS = ("pinion", "gear")
 
 
-class TestCycloPalloidContract(MachineModelContract):
+class TestCycloPalloidContract(FlankContract):
     @pytest.fixture
     def machine_model(self):
         return CycloPalloid()
@@ -25,6 +25,14 @@ class TestCycloPalloidContract(MachineModelContract):
     @pytest.fixture(params=["seed001_table3.toml", "seed001_section5_3.toml"])
     def design_text(self, request):
         return (STUDIES / request.param).read_text()
+
+    @pytest.fixture
+    def exact_indexing_design_text(self, table3_text):
+        # m_b = m_mn and no additional slope angle: m_gb = N_b / N exactly
+        text = table3_text.replace("blade_module_mm = 3.3973", "")
+        return text.replace("additional_slope_angle_deg = 0.103669", "").replace(
+            "additional_slope_angle_deg = 0.078489", ""
+        )
 
 
 def test_table3_reproduced(table3_design, seed_cases):

@@ -15,7 +15,7 @@ import gearopt
 from gearopt import hookspecs
 from gearopt.errors import DesignError, PluginError
 from gearopt.plugins import get_plugin_manager, list_plugins
-from gearopt.testing import MachineModelContract
+from gearopt.testing import FlankContract
 from gearopt_plugins.cyclo_palloid import CycloPalloid
 
 TOY = Path(__file__).parent / "toy_plugin"
@@ -190,7 +190,7 @@ def test_third_party_plugin_through_the_cli(toy_site):
     assert json.loads(out.stdout)["model"] == "toy-planer"
 
 
-class TestToyModelPassesTheContract(MachineModelContract):
+class TestToyModelPassesTheContract(FlankContract):
     @pytest.fixture
     def machine_model(self, toy_on_path):
         from gearopt_toy import ToyPlaner

@@ -17,9 +17,16 @@ a plugin proves itself with a few lines::
         def design_text(self):
             return open("tests/my_design.toml").read()   # a valid design using the model
 
-The built-in machine models run the same suite in gearopt's own tests.
+A model that generates flanks subclasses :class:`FlankContract` instead: the same fixtures, the
+same checks, and those of its FlankMaps (residual, mask, normals, mirror, next tooth, tool
+penetration)::
+
+    class TestMyMachine(FlankContract): ...
+
+The built-in machine models run the same suites in gearopt's own tests.
 """
 
+from gearopt.testing.flanks import FlankContract
 from gearopt.testing.machine_models import MachineModelContract
 
-__all__ = ["MachineModelContract"]
+__all__ = ["FlankContract", "MachineModelContract"]
