@@ -37,7 +37,7 @@ from typing import Any
 from gearopt import hookimpl
 from gearopt.blank import pitch_angles_rad
 from gearopt.design import MEMBERS, Design, PairData
-from gearopt.errors import DesignError
+from gearopt.errors import DesignError, SettingsError
 from gearopt.flank import FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.validate import (
@@ -268,6 +268,13 @@ def member_settings(design: Design, member: str, additional_slope_angle_deg: flo
         inner_cutter_radius_mm=rci,
     )
     nu_prime = nu + math.radians(additional_slope_angle_deg)
+    if not 0.0 < nu_prime < math.pi / 2 or rco < rci * math.sin(nu_prime):
+        raise SettingsError(
+            f"machine.{member}.additional_slope_angle_deg",
+            additional_slope_angle_deg,
+            f"nu + dnu must lie in (0, 90) deg with r_co >= r_ci sin(nu + dnu) (eq 33); "
+            f"nu = {math.degrees(nu):.6f} deg",
+        )
     e, gamma = eccentricity(
         inner_cutter_radius_mm=rci, outer_cutter_radius_mm=rco, slope_angle_rad=nu_prime
     )

@@ -295,6 +295,7 @@ class ThicknessSolution:
     settings: Any
     thickness_mm: float
     residual_mm: float
+    top_land_mm: float  # normal chordal thickness at the tip (x_n = a_m)
 
 
 def solve_additional_slope_angle(
@@ -341,18 +342,46 @@ def solve_additional_slope_angle(
             out.append((section.coordinates(p, x[7]), float(f)))
         return out
 
-    def residual(x):
-        (p1, f1), (p2, f2) = points(x)
+    def residual(x, depth_mm, dnu_mrad=None):
+        # x = (q_i, q_o, phi, dnu) when dnu is free, else (q_i, q_o, phi, thickness)
+        free_dnu = dnu_mrad is None
+        dnu = x[7] if free_dnu else dnu_mrad
+        (p1, f1), (p2, f2) = points(np.array([*x[:6], dnu, x[6]]))
+        thickness = target if free_dnu else x[7]
         return [
             f1 * 1e3,
-            p1[0] - depth,
+            p1[0] - depth_mm,
             p1[2],
             f2 * 1e3,
-            p2[0] - depth,
+            p2[0] - depth_mm,
             p2[2],
             p1[1] + p2[1],
-            p2[1] - p1[1] - target,
+            p2[1] - p1[1] - thickness,
         ]
+
+    def solve(x0, depth_mm, dnu_mrad=None):
+        steps = np.array([1e-5, 1e-7, 1e-7, 1e-5, 1e-7, 1e-7, 1e-7, 1e-5])
+
+        def batch(x, idx):
+            return np.array([residual(row, depth_mm, dnu_mrad) for row in x])
+
+        def jacobian(x, idx):
+            # central differences: the settings (eqs 33-38) are plain-float code
+            out = np.empty((len(x), 8, 8))
+            for k in range(8):
+                dx = np.zeros(8)
+                dx[k] = steps[k]
+                out[:, :, k] = (batch(x + dx, idx) - batch(x - dx, idx)) / (2.0 * steps[k])
+            return out
+
+        return newton(
+            batch,
+            x0[None, :],
+            jac=jacobian,
+            tol=1e-11,
+            max_iter=30,
+            max_step=[1.0, 0.05, 0.05, 1.0, 0.05, 0.05, 0.05, 5.0],
+        )
 
     # start: the pitch-line points at M and the middle of the tooth at dnu = 0
     _, systems = state(0.0)
@@ -361,30 +390,9 @@ def solve_additional_slope_angle(
         b = systems[BLADE_OF_FLANK[flank]]
         x0.extend(np.ravel(np.stack(pitch_line_start(b, np.array([blank.mean_cone_distance_mm])))))
     teeth = pair.pinion_teeth if member == "pinion" else pair.gear_teeth
-    x0 = np.array([*x0, 0.0, 0.5 * math.pi / teeth])
+    x0 = np.array([*x0, 0.5 * math.pi / teeth, 0.0])
     x0[0] = x0[3] = depth / math.cos(math.radians(pair.pressure_angle_deg))
-    steps = np.array([1e-5, 1e-7, 1e-7, 1e-5, 1e-7, 1e-7, 1e-5, 1e-7])
-
-    def batch(x, idx):
-        return np.array([residual(row) for row in x])
-
-    def jacobian(x, idx):
-        # central differences: the settings (eqs 33-38) are plain-float code, no complex step
-        out = np.empty((len(x), 8, 8))
-        for k in range(8):
-            dx = np.zeros(8)
-            dx[k] = steps[k]
-            out[:, :, k] = (batch(x + dx, idx) - batch(x - dx, idx)) / (2.0 * steps[k])
-        return out
-
-    sol = newton(
-        batch,
-        x0[None, :],
-        jac=jacobian,
-        tol=1e-11,
-        max_iter=30,
-        max_step=[1.0, 0.05, 0.05, 1.0, 0.05, 0.05, 5.0, 0.05],
-    )
+    sol = solve(x0, depth)
     worst = float(np.max(np.abs(sol.residual)))
     if not sol.all_converged:
         raise SettingsError(
@@ -394,11 +402,27 @@ def solve_additional_slope_angle(
             f"(eqs 39-48 did not converge, residual {worst:.2e} after {sol.iterations} steps)",
         )
     x = sol.x[0]
-    settings, _ = state(x[6])
-    (p1, _), (p2, _) = points(x)
+    dnu_mrad = x[7]
+    # the same tooth at the tip: its top land must keep a positive width
+    addendum = blank.mean_addendum_mm[index]
+    start = np.array([*x[:7], target])
+    start[0] = start[3] = addendum / math.cos(math.radians(pair.pressure_angle_deg))
+    top = solve(start, addendum, dnu_mrad)
+    top_land = float(top.x[0][7]) if top.all_converged else -1.0
+    if top_land <= 0.0:
+        raise SettingsError(
+            where,
+            "auto",
+            f"the chordal thickness {target} mm needs dnu = "
+            f"{math.degrees(dnu_mrad * 1e-3):.4f} deg, which makes the tooth pointed (no top "
+            "land at the tip)",
+        )
+    settings, _ = state(dnu_mrad)
+    (p1, _), (p2, _) = points(np.array([*x[:6], dnu_mrad, x[6]]))
     return ThicknessSolution(
-        additional_slope_angle_deg=math.degrees(x[6] * 1e-3),
+        additional_slope_angle_deg=math.degrees(dnu_mrad * 1e-3),
         settings=settings,
         thickness_mm=float(p2[1] - p1[1]),
         residual_mm=worst,
+        top_land_mm=top_land,
     )

@@ -161,7 +161,13 @@ def test_additional_slope_angle_changes_only_the_cutter_kinematics(table3_design
 
 
 def test_compensation_eqs_49_to_59():
-    design = gearopt.load_design(STUDIES / "seed001_section5_4_compensated.toml")
+    design = gearopt.with_overrides(
+        gearopt.load_design(STUDIES / "seed001_section5_4_compensated.toml"),
+        {
+            "machine.pinion.additional_slope_angle_deg": 0.0,
+            "machine.gear.additional_slope_angle_deg": 0.0,
+        },
+    )
     settings = gearopt.basic_settings(design)
     p, g = settings.pinion, settings.gear
     # Hand-computed (30-digit arithmetic) for Sigma + dGamma = 89.938 deg, N2/N1 = 41/16:
