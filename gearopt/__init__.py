@@ -24,6 +24,7 @@ from gearopt.errors import (
     UnknownKeyError,
 )
 from gearopt.evaluation import BaseEvaluator, BaseObjective, Evaluation
+from gearopt.flank import FlankGrid, FlankMap
 from gearopt.hookspecs import hookimpl, hookspec
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.plugins import (
@@ -43,6 +44,15 @@ def basic_settings(design: Design, *, plugin_manager=None) -> MachineSettings:
     return get_machine_model(design.model, plugin_manager=plugin_manager).basic_settings(design)
 
 
+def generate_flanks(
+    design: Design, member: str, *, grid: FlankGrid | None = None, plugin_manager=None
+) -> dict[str, FlankMap]:
+    """``{"convex": FlankMap, "concave": FlankMap}`` of tooth 0 of ``member``, generated as
+    the design's machine cuts them."""
+    model = get_machine_model(design.model, plugin_manager=plugin_manager)
+    return model.generate_flanks(design, member=member, grid=grid or FlankGrid())
+
+
 __all__ = [
     "BaseEvaluator",
     "BaseMachineModel",
@@ -51,6 +61,8 @@ __all__ = [
     "Design",
     "DesignError",
     "Evaluation",
+    "FlankGrid",
+    "FlankMap",
     "GearoptError",
     "MachineSettings",
     "Meta",
@@ -65,6 +77,7 @@ __all__ = [
     "basic_settings",
     "compute_blank",
     "evaluators",
+    "generate_flanks",
     "get_machine_model",
     "get_plugin_manager",
     "hookimpl",

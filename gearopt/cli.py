@@ -2,6 +2,7 @@
 
 ``gearopt plugins`` lists every machine model, evaluator and objective with its distribution;
 ``gearopt settings DESIGN.toml`` prints the blank and the basic machine-tool settings;
+``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
 ``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
 ``gearopt change-gears MACHINE --ratio R`` the best change gears of its set. Errors in the input
 are printed as one line naming the parameter, its value and the rule (exit status 2).
@@ -103,6 +104,73 @@ def _cmd_settings(args: argparse.Namespace) -> int:
     print(_table(rows, ("basic machine-tool settings", "pinion", "gear")))
     for note in out["notes"]:
         print(f"\nnote: {note}")
+    return 0
+
+
+def _cmd_flanks(args: argparse.Namespace) -> int:
+    from gearopt.flank import FLANKS, MEMBERS, FlankGrid
+    from gearopt.thickness import design_chordal_thickness
+
+    design = load_design(args.design)
+    model = get_machine_model(design.model)
+    try:
+        n_face, n_profile = (int(part) for part in args.grid.split(","))
+    except ValueError:
+        raise DesignError("--grid", args.grid, "must be two integers n_face,n_profile") from None
+    grid = FlankGrid(n_face=n_face, n_profile=n_profile)
+    out: dict[str, Any] = {"design": design.name, "model": design.model, "grid": list(grid.shape)}
+    for member in MEMBERS:
+        maps = model.generate_flanks(design, member=member, grid=grid)
+        entry: dict[str, Any] = {}
+        for flank in FLANKS:
+            fm = maps[flank]
+            entry[flank] = {
+                **fm.summary(),
+                "tool_penetration_mm": fm.tool_penetration_mm() if fm.surface else None,
+            }
+        if design.pair.mean_normal_chordal_addendum_mm is not None:
+            measured = design_chordal_thickness(design, member, maps)
+            entry["mean_normal_chordal_thickness_mm"] = measured.thickness_mm
+            entry["chordal_addendum_mm"] = design.pair.mean_normal_chordal_addendum_mm[
+                MEMBERS.index(member)
+            ]
+        out[member] = entry
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    print(f"design {design.name!r}, machine model {design.model!r}, grid {grid.shape}")
+    rows = []
+    for member in MEMBERS:
+        for flank in FLANKS:
+            e = out[member][flank]
+            low = e["lowest_generated_height_mm"]
+            rows.append(
+                (
+                    f"{member} {flank}",
+                    e["hand"],
+                    f"{e['generated_nodes']}",
+                    f"{e['max_residual']:.1e}",
+                    f"{low['toe']:.3f}, {low['middle']:.3f}, {low['heel']:.3f}",
+                    f"{e['tool_penetration_mm']:.1e}",
+                )
+            )
+    print()
+    header = (
+        "flank",
+        "hand",
+        "generated nodes",
+        "max residual",
+        "lowest generated h toe, mid, heel (mm)",
+        "tool penetration (mm)",
+    )
+    print(_table(rows, header))
+    for member in MEMBERS:
+        if "mean_normal_chordal_thickness_mm" in out[member]:
+            print(
+                f"\n{member}: mean normal chordal thickness "
+                f"{out[member]['mean_normal_chordal_thickness_mm']:.5f} mm at chordal addendum "
+                f"{out[member]['chordal_addendum_mm']} mm (measured on the generated flanks)"
+            )
     return 0
 
 
@@ -276,6 +344,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("design", help="design TOML file")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_settings)
+    p = sub.add_parser("flanks", help="generate the flanks of a design and measure them")
+    p.add_argument("design", help="design TOML file")
+    p.add_argument("--grid", default="25,13", help="FlankMap grid n_face,n_profile")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_flanks)
     p = sub.add_parser("bench", help="time the kernels (medians over fresh one-thread processes)")
     p.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
     p.add_argument("--repeats", type=int, default=5, help="fresh processes per benchmark")

@@ -276,14 +276,22 @@ class FlankMap:
         )
 
     def summary(self) -> dict:
-        """JSON-ready summary: grid, generated share, residual, generated depth."""
-        generated = self.mask
+        """JSON-ready summary: grid, generated nodes, residual, how deep the flank is generated
+        (the lowest generated height h at the toe, middle and heel columns; the whole depth
+        below the top is ``profile_mm[-1] - h``)."""
+        depth = self.generated_depth_mm
         return {
             "member": self.member,
             "flank": self.flank,
             "hand": self.hand,
+            "tooth": self.tooth,
             "grid": list(self.shape),
-            "generated_nodes": int(generated.sum()),
-            "max_residual": float(self.residual[generated].max(initial=0.0)),
-            "lowest_generated_height_mm": float(self.generated_depth_mm.max()),
+            "generated_nodes": int(self.mask.sum()),
+            "max_residual": float(self.residual[self.mask].max(initial=0.0)),
+            "lowest_generated_height_mm": {
+                "toe": float(depth[0]),
+                "middle": float(depth[len(depth) // 2]),
+                "heel": float(depth[-1]),
+            },
+            "generated_depth_mm": float(self.profile_mm[-1] - depth.max()),
         }

@@ -25,7 +25,7 @@ from scipy.optimize import root
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import FlankMap
 
-__all__ = ["NormalSection", "ChordalThickness", "chordal_thickness"]
+__all__ = ["NormalSection", "ChordalThickness", "chordal_thickness", "design_chordal_thickness"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -151,4 +151,26 @@ def chordal_thickness(
         tooth_middle_deg=math.degrees(mid),
         convex_point_mm=(float(s1), float(h1)),
         concave_point_mm=(float(s2), float(h2)),
+    )
+
+
+def design_chordal_thickness(design, member: str, flanks: dict) -> ChordalThickness:
+    """:func:`chordal_thickness` of a design's ``member`` at the pair's chordal addendum.
+
+    ``flanks`` holds the member's ``"convex"`` and ``"concave"`` FlankMaps of one tooth.
+    Raises :class:`GearoptError` when the pair gives no chordal addendum.
+    """
+    index = ("pinion", "gear").index(member)
+    pair = design.pair
+    if pair.mean_normal_chordal_addendum_mm is None:
+        raise GearoptError(
+            "pair.mean_normal_chordal_addendum_mm", rule="is needed to measure the thickness"
+        )
+    return chordal_thickness(
+        flanks["convex"],
+        flanks["concave"],
+        mean_cone_distance_mm=design.blank.mean_cone_distance_mm,
+        spiral_angle_deg=pair.mean_spiral_angle_deg,
+        chordal_addendum_mm=pair.mean_normal_chordal_addendum_mm[index],
+        mean_addendum_mm=design.blank.mean_addendum_mm[index],
     )

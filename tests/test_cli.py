@@ -77,3 +77,44 @@ def test_bench_json_reports_medians(capsys):
     assert main(["bench", "--json", "--repeats", "1", "basic_settings_ms"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["threads"] == 1 and out["basic_settings_ms"] > 0.0
+
+
+def test_settings_reports_the_solved_slope_angles(capsys):
+    assert main(["settings", str(STUDIES / "seed001_section5_3.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for member in ("pinion", "gear"):
+        assert 0.0 < out[member]["additional_slope_angle_deg"] < 0.2
+    assert any("eqs 39-48" in note for note in out["notes"])
+
+
+def test_flanks_json_measures_the_generated_flanks(capsys):
+    assert main(["flanks", str(STUDIES / "seed001_table3.toml"), "--json", "--grid", "13,9"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["grid"] == [13, 9]
+    for member, thickness in (("pinion", 5.271), ("gear", 5.276)):
+        assert out[member]["mean_normal_chordal_thickness_mm"] == pytest.approx(thickness, abs=2e-3)
+        for flank in ("convex", "concave"):
+            entry = out[member][flank]
+            assert entry["max_residual"] < 1e-12
+            assert entry["tool_penetration_mm"] < 1e-6
+            assert 0.0 < entry["generated_depth_mm"] <= 3.397 + 4.076
+    # the pinion's envelope folds before its dedendum: it is generated less deep than the gear
+    assert (
+        out["pinion"]["concave"]["generated_depth_mm"]
+        < out["gear"]["concave"]["generated_depth_mm"]
+    )
+
+
+def test_flanks_bad_grid_is_one_line(capsys):
+    assert main(["flanks", str(STUDIES / "seed001_table3.toml"), "--grid", "3,x"]) == 2
+    err = capsys.readouterr().err
+    assert "--grid" in err and "n_face,n_profile" in err and len(err.strip().splitlines()) == 1
+
+
+def test_bench_json_reports_flank_timings_with_the_grid(capsys):
+    names = ["flank_generation_ms", "thickness_solve_ms"]
+    assert main(["bench", "--json", "--repeats", "1", *names]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for name in names:
+        assert out[name] > 0.0
+    assert out["flank_grid"] == [25, 13]

@@ -16,7 +16,7 @@ import gearopt
 from gearopt.errors import GearoptError
 from gearopt.flank import MEMBERS, FlankGrid
 from gearopt.plugins import get_machine_model
-from gearopt.thickness import chordal_thickness
+from gearopt.thickness import chordal_thickness, design_chordal_thickness
 
 from .conftest import STUDIES
 
@@ -29,16 +29,7 @@ def flanks(design, member, **kw):
 
 def thickness_mm(design, member, **kw):
     """Mean normal chordal thickness measured on the generated flanks of tooth 0."""
-    i = MEMBERS.index(member)
-    maps = flanks(design, member, **kw)
-    return chordal_thickness(
-        maps["convex"],
-        maps["concave"],
-        mean_cone_distance_mm=design.blank.mean_cone_distance_mm,
-        spiral_angle_deg=design.pair.mean_spiral_angle_deg,
-        chordal_addendum_mm=design.pair.mean_normal_chordal_addendum_mm[i],
-        mean_addendum_mm=design.blank.mean_addendum_mm[i],
-    ).thickness_mm
+    return design_chordal_thickness(design, member, flanks(design, member, **kw)).thickness_mm
 
 
 def with_slope_angles(design, pinion, gear, **more):
