@@ -117,7 +117,7 @@ def _residual(family, q, flank, big_l, big_r):
     return np.stack([(big_lq - big_l) / a, (big_rq - big_r) / a, g], axis=-1)
 
 
-def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6)):
+def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6), jac=None):
     """Batched Newton-Shamanskii iteration with per-unknown step clipping.
 
     Each iteration makes a Newton step with a fresh Jacobian, then a chord step with the same
@@ -127,11 +127,15 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6))
 
     ``give_up = (k, r)``: after k iterations a node whose scaled residual is still above r is
     not in Newton's quadratic range (it lies past the envelope's fold or needs a better start)
-    and stops iterating; it is reported as not converged.
+    and stops iterating; it is reported as not converged. ``jac``: predicted Jacobians at the
+    start, used for the first iteration instead of evaluating them.
     """
     limit = np.asarray(family.max_step, float)
     active = np.ones(len(q), bool)
-    f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
+    if jac is None:
+        f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
+    else:
+        f, jac = _residual(family, q, flank, big_l, big_r), jac.copy()
     iterations = 0
 
     def clipped(step):
@@ -249,6 +253,9 @@ def solve_envelope(
     q0, dq_dh, d2q_dh2 = (a.reshape(k, n_f, 1, 3) for a in (q0, dq_dh, d2q_dh2))
     hh = h[None, None, :, None]
     q = q0 + hh * dq_dh + 0.5 * hh**2 * d2q_dh2
+    # and the Jacobians, to first order in h, for the first Newton step
+    jac0, jac1 = (a.reshape(k, n_f, 1, 3, 3) for a in (jac0, jac1))
+    jac_h = jac0 + hh[..., None] * (jac1 - jac0) / eps
     q, res, jac, converged, it = _newton(
         family,
         q.reshape(-1, 3),
@@ -257,6 +264,7 @@ def solve_envelope(
         big_r.ravel(),
         tol=tol,
         max_iter=max_iter,
+        jac=jac_h.reshape(-1, 3, 3),
     )
     iterations = max(iterations, it)
     shape = (k, n_f, n_p)
@@ -280,7 +288,7 @@ def solve_envelope(
             big_l[fk, fi, pj],
             big_r[fk, fi, pj],
             tol=tol,
-            max_iter=max_iter,
+            max_iter=3,  # from a converged neighbour: quadratic at once, or past the fold
         )
         iterations = max(iterations, it)
         sel = (fk[ok], fi[ok], pj[ok])
