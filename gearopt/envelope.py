@@ -64,6 +64,9 @@ class GeneratingFamily(Protocol):
         """``(L, R, f / (|N| A_m))`` of the tool points ``q`` (complex-safe)."""
         ...
 
+    # optional: ``axial_radial_meshing_jacobian(q, flank) -> (L, R, g, J)`` with J ``(..., 3, 3)``
+    # the Jacobian of (L, R, g) in q, analytically; the solver uses it instead of complex step
+
     def pitch_row(self, cone_distance_mm: NDArray) -> NDArray:
         """``(n_flanks, n, 3)`` parameters of the flank points on the pitch line (h = 0),
         approximately."""
@@ -100,12 +103,18 @@ class EnvelopeSolution:
 
 
 def _residual_and_jacobian(family, q, flank, big_l, big_r):
-    """Scaled residuals ``(n, 3)`` and Jacobians ``(n, 3, 3)`` by one complex-step call."""
+    """Scaled residuals ``(n, 3)`` and Jacobians ``(n, 3, 3)``: the family's own when it has
+    ``axial_radial_meshing_jacobian``, else by one complex-step call."""
+    a = family.scale_mm
+    analytic = getattr(family, "axial_radial_meshing_jacobian", None)
+    if analytic is not None:
+        big_lq, big_rq, g, jac = analytic(q, flank)
+        jac = jac * np.array([1.0 / a, 1.0 / a, 1.0])[:, None]
+        return np.stack([(big_lq - big_l) / a, (big_rq - big_r) / a, g], axis=-1), jac
     qs = np.repeat(q[None].astype(complex), 3, axis=0)
     for k in range(3):
         qs[k, :, k] += 1j * _H
     lc, rc, gc = family.axial_radial_meshing(qs, flank)
-    a = family.scale_mm
     res = np.stack([(lc - big_l) / a, (rc - big_r) / a, gc], axis=-1)  # (3 var, n, 3 eq)
     return res[0].real, np.moveaxis(res.imag / _H, 0, -1)
 
@@ -117,7 +126,7 @@ def _residual(family, q, flank, big_l, big_r):
     return np.stack([(big_lq - big_l) / a, (big_rq - big_r) / a, g], axis=-1)
 
 
-def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6), jac=None):
+def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6)):
     """Batched Newton-Shamanskii iteration with per-unknown step clipping.
 
     Each iteration makes a Newton step with a fresh Jacobian, then a chord step with the same
@@ -127,15 +136,11 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6),
 
     ``give_up = (k, r)``: after k iterations a node whose scaled residual is still above r is
     not in Newton's quadratic range (it lies past the envelope's fold or needs a better start)
-    and stops iterating; it is reported as not converged. ``jac``: predicted Jacobians at the
-    start, used for the first iteration instead of evaluating them.
+    and stops iterating; it is reported as not converged.
     """
     limit = np.asarray(family.max_step, float)
     active = np.ones(len(q), bool)
-    if jac is None:
-        f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
-    else:
-        f, jac = _residual(family, q, flank, big_l, big_r), jac.copy()
+    f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
     iterations = 0
 
     def clipped(step):
@@ -253,9 +258,6 @@ def solve_envelope(
     q0, dq_dh, d2q_dh2 = (a.reshape(k, n_f, 1, 3) for a in (q0, dq_dh, d2q_dh2))
     hh = h[None, None, :, None]
     q = q0 + hh * dq_dh + 0.5 * hh**2 * d2q_dh2
-    # and the Jacobians, to first order in h, for the first Newton step
-    jac0, jac1 = (a.reshape(k, n_f, 1, 3, 3) for a in (jac0, jac1))
-    jac_h = jac0 + hh[..., None] * (jac1 - jac0) / eps
     q, res, jac, converged, it = _newton(
         family,
         q.reshape(-1, 3),
@@ -264,7 +266,6 @@ def solve_envelope(
         big_r.ravel(),
         tol=tol,
         max_iter=max_iter,
-        jac=jac_h.reshape(-1, 3, 3),
     )
     iterations = max(iterations, it)
     shape = (k, n_f, n_p)
@@ -288,7 +289,7 @@ def solve_envelope(
             big_l[fk, fi, pj],
             big_r[fk, fi, pj],
             tol=tol,
-            max_iter=3,  # from a converged neighbour: quadratic at once, or past the fold
+            max_iter=3,  # from a converged neighbour: converges at once, or lies past the fold
         )
         iterations = max(iterations, it)
         sel = (fk[ok], fi[ok], pj[ok])

@@ -30,7 +30,14 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BladeSystem", "components", "edge", "family", "pitch_line_start"]
+__all__ = [
+    "BladeSystem",
+    "components",
+    "edge",
+    "family",
+    "meshing_jacobian",
+    "pitch_line_start",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -155,7 +162,74 @@ def components(b: BladeSystem, u, theta, psi) -> dict[str, tuple]:
         "meshing": normal[0] * r_psi[0] + normal[1] * r_psi[1] + normal[2] * r_psi[2],
         "axial_mm": axial,
         "radius_mm": np.sqrt(rx * rx + ry * ry + rz * rz - axial * axial),
+        "relative": (rx, ry, rz),
+        "centre": (cx, cy),
+        "edge_direction": (s2, -c2),
+        "work_axis": (ca, sa),
     }
+
+
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _add(a, b, k=1.0):
+    return (a[0] + k * b[0], a[1] + k * b[1], a[2] + k * b[2])
+
+
+def meshing_jacobian(b: BladeSystem, u, theta, psi, scale_mm: float):
+    """``(L, R, g)`` with g = (N . r_psi) / (|N| A) (eq 31 normalised) and their Jacobian
+    ``(..., 3, 3)`` with respect to (u, theta, psi), analytically (real arithmetic).
+
+    The Jacobian of the dot products is taken in S_m, where they are plain functions of q. The
+    machine-frame velocities of the edge point are V_u = r_u, V_theta = z x (P - C) (the cutter
+    turns about its axis through C) and V_psi = z x P (the cradle), C turning with the cradle;
+    r_theta = V_theta + m_gb a x (P - O), r_psi = V_psi - m_gc a x (P - O), and
+    d/dq_k (a x (P - O)) = a x V_k, d/dq_k r_u = z x r_u for theta and psi.
+    """
+    f = components(b, u, theta, psi)
+    xa, ya, dxa, dya = edge(b, u)
+    d2xa = b.side * (-2.0 * b.parabola_per_mm * np.cos(b.pressure_angle_rad)) + 0.0 * u
+    d2ya = -2.0 * b.parabola_per_mm * np.sin(b.pressure_angle_rad) + 0.0 * u
+    ca, sa = f["work_axis"]
+    zero = 0.0 * u
+
+    def zx(v):  # z x v
+        return (-v[1], v[0], zero)
+
+    def ax(v):  # a x v, a = (cos g, 0, sin g)
+        return (-sa * v[1], sa * v[0] - ca * v[2], ca * v[1])
+
+    px, py, pz = f["point"]
+    cx, cy = f["centre"]
+    ex, ey = f["edge_direction"]
+    r_u, r_t, r_p, n = f["r_u"], f["r_theta"], f["r_psi"], f["normal"]
+    v_t = zx((px - cx, py - cy, pz))
+    v_p = zx((px, py, pz))
+    mgb, mgc = b.gear_to_blade_roll, b.gear_to_cradle_roll
+    d_ru = ((d2xa * ex, d2xa * ey, -d2ya), zx(r_u), zx(r_u))
+    d_rt = (
+        _add(zx(r_u), ax(r_u), mgb),
+        _add(zx(v_t), ax(v_t), mgb),
+        _add(zx(v_t), ax(v_p), mgb),
+    )
+    d_rp = tuple(_add(zx(v), ax(v), -mgc) for v in (r_u, v_t, v_p))
+    rel = f["relative"]
+    big_l, big_r = f["axial_mm"], f["radius_mm"]
+    radial = (rel[0] - big_l * ca, rel[1], rel[2] - big_l * sa)
+    norm2 = _dot(n, n)
+    norm = np.sqrt(norm2)
+    meshing = _dot(n, r_p)
+    g = meshing / (norm * scale_mm)
+    rows = [[], [], []]
+    for k, v in enumerate((r_u, r_t, r_p)):
+        rows[0].append(ca * v[0] + sa * v[2])
+        rows[1].append(_dot(radial, v) / big_r)
+        dn = _add(_cross(d_ru[k], r_t), _cross(r_u, d_rt[k]))
+        dm = _dot(dn, r_p) + _dot(n, d_rp[k])
+        rows[2].append((dm - meshing * _dot(n, dn) / norm2) / (norm * scale_mm))
+    jac = np.stack([np.stack(np.broadcast_arrays(*row), axis=-1) for row in rows], axis=-2)
+    return big_l, big_r, g, jac
 
 
 def family(b: BladeSystem, u, theta, psi):

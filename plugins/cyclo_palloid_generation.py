@@ -55,6 +55,7 @@ from gearopt_plugins.cyclo_palloid_family import (
     BladeSystem,
     components,
     edge,
+    meshing_jacobian,
     pitch_line_start,
 )
 
@@ -98,6 +99,11 @@ class CycloPalloidFamily:
         n = fam["normal"]
         norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
         return fam["axial_mm"], fam["radius_mm"], fam["meshing"] / (norm * self.scale_mm)
+
+    def axial_radial_meshing_jacobian(self, q, flank):
+        return meshing_jacobian(
+            self._stacked.take(flank), q[..., 0], q[..., 1], q[..., 2], self.scale_mm
+        )
 
     def pitch_row(self, cone_distance_mm):
         return np.stack(

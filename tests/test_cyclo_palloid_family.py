@@ -115,3 +115,26 @@ def test_pitch_line_start_lies_on_the_pitch_cone_and_meshes(member):
         scale = np.linalg.norm(got["normal"], axis=-1) * design.blank.mean_cone_distance_mm
         assert np.all(np.abs(got["meshing"]) / scale < 1e-14)
         assert_allclose(np.linalg.norm(got["r_psi"], axis=-1), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("member", ["pinion", "gear"])
+def test_analytic_jacobian_matches_complex_step(member):
+    from gearopt_plugins.cyclo_palloid_family import components, meshing_jacobian
+
+    rng = np.random.default_rng(5)
+    u, theta, psi = rng.uniform(-4, 3, 30), rng.uniform(-0.4, 0.4, 30), rng.uniform(-0.5, 0.5, 30)
+    for b in blade_systems(member, rake=3.0, offsets=(0.2, -0.3, 0.1)):
+
+        def values(u_, t_, p_):
+            f = components(b, u_, t_, p_)
+            n = f["normal"]
+            norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+            return np.stack([f["axial_mm"], f["radius_mm"], f["meshing"] / (norm * 91.265)], -1)
+
+        big_l, big_r, g, jac = meshing_jacobian(b, u, theta, psi, 91.265)
+        assert_allclose(np.stack([big_l, big_r, g], -1), values(u, theta, psi), atol=1e-12)
+        h = 1e-30
+        for k, args in enumerate(
+            ((u + 1j * h, theta, psi), (u, theta + 1j * h, psi), (u, theta, psi + 1j * h))
+        ):
+            assert_allclose(jac[..., k], values(*args).imag / h, atol=1e-12, err_msg=str(k))
