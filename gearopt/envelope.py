@@ -384,8 +384,14 @@ class EnvelopeSurface:
 
     def points_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` exact flank points at grid coordinates, in the FlankMap's frame."""
+        return self.geometry_at(face_mm, profile_mm)["point"]
+
+    def geometry_at(self, face_mm, profile_mm) -> dict[str, NDArray]:
+        """Exact ``point`` and unit ``normal`` ``(..., 3)`` at grid coordinates, in the
+        FlankMap's frame (the normal out of the tooth material)."""
         q = self.parameters_at(face_mm, profile_mm)
-        return self._to_frame(self.family.geometry(q, np.full(q.shape[:-1], self.index))["point"])
+        geo = self.family.geometry(q, np.full(q.shape[:-1], self.index))
+        return {key: self._to_frame(geo[key]) for key in ("point", "normal")}
 
     def tool_points(self, count: int = 9) -> NDArray:
         """Cutting-edge points near the flank ``(n, 3, count, 3)``: from the tool position and

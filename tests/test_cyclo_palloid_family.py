@@ -125,7 +125,7 @@ def test_analytic_jacobian_matches_complex_step(member):
     u, theta, psi = rng.uniform(-4, 3, 30), rng.uniform(-0.4, 0.4, 30), rng.uniform(-0.5, 0.5, 30)
     for b in blade_systems(member, rake=3.0, offsets=(0.2, -0.3, 0.1)):
 
-        def values(u_, t_, p_):
+        def values(u_, t_, p_, b=b):
             f = components(b, u_, t_, p_)
             n = f["normal"]
             norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
@@ -134,7 +134,7 @@ def test_analytic_jacobian_matches_complex_step(member):
         big_l, big_r, g, jac = meshing_jacobian(b, u, theta, psi, 91.265)
         assert_allclose(np.stack([big_l, big_r, g], -1), values(u, theta, psi), atol=1e-12)
         h = 1e-30
-        for k, args in enumerate(
+        for var, args in enumerate(
             ((u + 1j * h, theta, psi), (u, theta + 1j * h, psi), (u, theta, psi + 1j * h))
         ):
-            assert_allclose(jac[..., k], values(*args).imag / h, atol=1e-12, err_msg=str(k))
+            assert_allclose(jac[..., var], values(*args).imag / h, atol=1e-12, err_msg=str(var))

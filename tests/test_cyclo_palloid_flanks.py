@@ -270,3 +270,24 @@ def test_flanks_of_a_left_hand_member_mirror_the_right_hand_one(table3_design):
         assert thickness_mm(table3_design, member) == pytest.approx(
             thickness_mm(right, member), abs=1e-9
         )
+
+
+def test_conjugate_members_touch_at_the_pitch_point(conjugate):
+    # the complementary generation of pinion (left hand, mirrored machine) and gear: at the mean
+    # pitch point M, assembled at 90 deg, the pinion's convex flank and the gear's concave flank
+    # (drive) have opposite normals, and so do the pinion's concave and the gear's convex (coast)
+    am = conjugate.blank.mean_cone_distance_mm
+    # pinion frame -> housing: x_p (toward M) -> z_f, y_p -> -y_f, z_p (axis) -> x_f
+    to_housing = {"pinion": np.column_stack([[0, 0, 1], [0, -1, 0], [1, 0, 0]]), "gear": np.eye(3)}
+
+    def at_pitch_point(member, flank):
+        geo = flanks(conjugate, member)[flank].surface.geometry_at(am, 0.0)
+        theta = math.atan2(geo["point"][1], geo["point"][0])
+        c, s = math.cos(theta), math.sin(theta)
+        turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # M into the x-z plane
+        return {k: to_housing[member] @ turn @ v for k, v in geo.items()}
+
+    for pinion_flank, gear_flank in (("convex", "concave"), ("concave", "convex")):
+        p, g = at_pitch_point("pinion", pinion_flank), at_pitch_point("gear", gear_flank)
+        assert np.abs(p["point"] - g["point"]).max() < 1e-9
+        assert np.abs(p["normal"] + g["normal"]).max() < 1e-9
