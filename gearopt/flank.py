@@ -130,6 +130,12 @@ class FlankMap:
                 raise GearoptError(f"FlankMap.{name}", value.shape, f"must have shape {shape}")
             if value.dtype != bool and not np.all(np.isfinite(value)):
                 raise GearoptError(f"FlankMap.{name}", rule="must be finite at every node")
+        for name in ("face_mm", "profile_mm"):
+            step = np.diff(np.asarray(getattr(self, name), float))
+            if step.size < 1 or step.min() <= 0.0 or np.ptp(step) > 1e-9 * abs(step.mean()):
+                raise GearoptError(
+                    f"FlankMap.{name}", rule="must be increasing with a uniform step"
+                )
         if self.member not in MEMBERS or self.flank not in FLANKS or self.hand not in HANDS:
             raise GearoptError(
                 "FlankMap", (self.member, self.flank, self.hand), "unknown member/flank/hand"
@@ -187,6 +193,78 @@ class FlankMap:
         return self.polar_spline(
             np.asarray(face_mm), np.asarray(profile_mm), dx=dface, dy=dprofile, grid=False
         )
+
+    @cached_property
+    def _hermite_data(self) -> tuple[NDArray, NDArray, NDArray]:
+        """Node derivatives of Theta for the local interpolant: Theta_s and Theta_h from the
+        normals (n . r_s = n . r_h = 0, exact where the node is generated), Theta_sh by
+        central differences of those."""
+        g = math.radians(self.pitch_angle_deg)
+        sg, cg = math.sin(g), math.cos(g)
+        th = self.polar_angle_rad
+        n = self.normals
+        n_r = n[..., 0] * np.cos(th) + n[..., 1] * np.sin(th)
+        n_t = -n[..., 0] * np.sin(th) + n[..., 1] * np.cos(th)
+        n_t = np.where(np.abs(n_t) > 1e-12, n_t, 1e-12)
+        big_r = self.radius_mm
+        d_s = -(sg * n_r + cg * n[..., 2]) / (big_r * n_t)
+        d_h = -(cg * n_r - sg * n[..., 2]) / (big_r * n_t)
+        d_sh = 0.5 * (
+            _masked_gradient(d_h, self.mask, float(self.face_mm[1] - self.face_mm[0]), 0)
+            + _masked_gradient(d_s, self.mask, float(self.profile_mm[1] - self.profile_mm[0]), 1)
+        )
+        return d_s, d_h, d_sh
+
+    @cached_property
+    def _cells(self) -> tuple[NDArray, NDArray]:
+        """Bicubic Hermite coefficients of every cell, ``(n_f - 1, n_p - 1, 4, 4)`` in the
+        cell's unit coordinates, and the cells whose four corners are generated."""
+        d_s, d_h, d_sh = self._hermite_data
+        a = np.diff(self.face_mm)[:, None]
+        b = np.diff(self.profile_mm)[None, :]
+        th = self.polar_angle_rad
+        f = np.empty(th[:-1, :-1].shape + (4, 4))
+        for di in (0, 1):
+            for dj in (0, 1):
+                sl = (slice(di, th.shape[0] - 1 + di), slice(dj, th.shape[1] - 1 + dj))
+                f[..., di, dj] = th[sl]
+                f[..., di, 2 + dj] = d_h[sl] * b
+                f[..., 2 + di, dj] = d_s[sl] * a
+                f[..., 2 + di, 2 + dj] = d_sh[sl] * a * b
+        m = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [-3, 3, -2, -1], [2, -2, 1, 1]], float)
+        coef = np.einsum("ai,...ij,bj->...ab", m, f, m)
+        k = self.mask
+        ok = k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:]
+        return coef, ok
+
+    def _cell_of(self, s: NDArray, h: NDArray):
+        """Cell indices and unit coordinates of grid points (uniform grids by arithmetic)."""
+        fs, fp = self.face_mm, self.profile_mm
+        a = (fs[-1] - fs[0]) / (len(fs) - 1)
+        b = (fp[-1] - fp[0]) / (len(fp) - 1)
+        x = (s - fs[0]) / a
+        y = (h - fp[0]) / b
+        i = np.clip(np.floor(x).astype(np.intp), 0, len(fs) - 2)
+        j = np.clip(np.floor(y).astype(np.intp), 0, len(fp) - 2)
+        within = (x >= 0.0) & (x <= len(fs) - 1) & (y >= 0.0) & (y <= len(fp) - 1)
+        return i, j, x - i, y - j, within
+
+    def polar_angle_local(self, face_mm, profile_mm, *, with_inside: bool = False):
+        """Theta at grid coordinates ``(s, h)`` by the bicubic Hermite interpolant of the cell
+        around each point: values and first derivatives at its four corners (the derivatives
+        from the exact normals, the cross derivative by differences), so an error at one node
+        stays in its cells. More accurate than the global spline near the envelope's fold,
+        where Theta is not smooth. With ``with_inside``, also :meth:`inside` of the points."""
+        s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
+        coef, ok = self._cells
+        i, j, u, v, within = self._cell_of(s, h)
+        c = coef[i, j]
+        uu = np.stack([np.ones_like(u), u, u * u, u * u * u], axis=-1)
+        vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
+        out = np.einsum("...a,...ab,...b->...", uu, c, vv)
+        if with_inside:
+            return out, ok[i, j] & within
+        return out
 
     def point_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` points of the flank at grid coordinates ``(s, h)`` (spline)."""
@@ -295,3 +373,30 @@ class FlankMap:
             },
             "generated_depth_mm": float(self.profile_mm[-1] - depth.max()),
         }
+
+
+def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> NDArray:
+    """Derivative along ``axis`` of a uniformly spaced field: central differences where both
+    neighbours are in ``mask``, second-order one-sided differences into the mask where one is
+    not (values off the mask are not used when the mask allows)."""
+    v = np.moveaxis(values, axis, 0)
+    m = np.moveaxis(mask, axis, 0)
+    n = v.shape[0]
+    out = np.gradient(v, step, axis=0)
+    lo = np.zeros_like(m)
+    lo[1:] = m[:-1]
+    hi = np.zeros_like(m)
+    hi[:-1] = m[1:]
+    hi2 = np.zeros_like(m)
+    hi2[:-2] = m[2:]
+    lo2 = np.zeros_like(m)
+    lo2[2:] = m[:-2]
+    fwd = np.zeros_like(v)
+    fwd[:-2] = (-3.0 * v[:-2] + 4.0 * v[1:-1] - v[2:]) / (2.0 * step)
+    bwd = np.zeros_like(v)
+    bwd[2:] = (3.0 * v[2:] - 4.0 * v[1:-1] + v[:-2]) / (2.0 * step)
+    idx = np.arange(n).reshape((-1,) + (1,) * (v.ndim - 1))
+    use_fwd = m & ~lo & hi & hi2 & (idx < n - 2)
+    use_bwd = m & ~hi & lo & lo2 & (idx >= 2)
+    out = np.where(use_fwd, fwd, np.where(use_bwd, bwd, out))
+    return np.moveaxis(out, 0, axis)

@@ -1,0 +1,414 @@
+"""The contact engine: the clearance field between two FlankMaps in the housing frame.
+
+Machine-independent: it sees a pinion flank and a gear flank (FlankMaps, member frames as in
+:mod:`gearopt.flank`), the shaft angle and the misalignment, nothing else.
+
+Housing frame S_f (DESIGN.md): origin at the nominal crossing point of the axes, x_f along the
+pinion axis toward the pinion's back, the gear axis in the x_f-z_f plane at the shaft angle Sigma
+from x_f, y_f = z_f x x_f. The pinion frame maps x_p -> z_f, y_p -> -y_f, z_p -> x_f, so the
+pitch point of tooth 0 (polar angle 0) lies in the x_f-z_f plane on the side z_f > 0; the gear
+frame is S_f turned about y_f so that z_g = (cos Sigma, 0, sin Sigma). Misalignment: the pinion
+moves by (dA1, dE, 0), the gear along its own axis by dA2 and its axis turns about y_f to
+Sigma + dGamma.
+
+Kinematics. The pinion turns by phi about +z_p; a pitch point then moves along -y_f, and the gear
+follows by turning -(N1/N2) phi about +z_g. For a pinion node P turned by phi and expressed in the
+gear frame at (L2, R2, theta), the gear flank at the ideal gear angle has the polar angle
+Theta2(L2, R2) - (N1/N2) phi; the *angular clearance*
+
+    delta(P, phi) = sigma2 * (Theta2(L2, R2) - (N1/N2) phi - theta)        (rad of gear rotation)
+
+is how far the driven gear must lag behind its ideal position (sigma2 = -s is the sense of the
+gear's polar angle when the pinion turns with sense s) before its flank reaches P. The gear's
+actual position lags by the minimum over the flank and the tooth pairs, so the transmission error
+is TE = -min delta (negative when the gear lags, seed 003 eqs 5-6). Tooth pair k (pinion tooth k
+against gear tooth -k) at pinion angle phi is the base pair at phi + 2 pi k / N1, so one clearance
+function of the relative angle serves every pair.
+
+The node minimum is refined below the grid spacing by the quadratic through the 3 x 3 stencil
+(a pseudo-inverse on the positive curvatures, so the valley of line contact is handled), the
+step limited to one cell; on the flank's boundary the fit is one-sided and a minimum whose inward
+neighbour is higher is edge contact. Separations for the pattern: the angular clearance above
+the minimum times |n . (z_g x q)| (normal) or times R2 (circumferential at equal radius, seed 003
+section 5).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.design import Misalignment
+from gearopt.errors import GearoptError
+from gearopt.flank import FlankMap
+
+__all__ = [
+    "ContactError",
+    "Placement",
+    "ClearanceField",
+    "SEPARATIONS",
+]
+
+SEPARATIONS = ("normal", "circumferential")
+
+_PINION_TO_HOUSING = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+class ContactError(GearoptError):
+    """The flanks cannot be brought into contact as asked (no contact inside the flanks)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Placement:
+    """Where the pinion and the gear sit in the housing frame (module docstring).
+
+    Attributes
+    ----------
+    shaft_angle_deg
+        Nominal shaft angle Sigma.
+    misalignment
+        dE, dA1, dA2 and dGamma of the assembled pair.
+    """
+
+    shaft_angle_deg: float = 90.0
+    misalignment: Misalignment = field(default_factory=Misalignment)
+
+    @property
+    def gear_axes(self) -> NDArray:
+        """3 x 3 matrix whose columns are x_g, y_g, z_g in S_f."""
+        sigma = math.radians(self.shaft_angle_deg + self.misalignment.shaft_angle_deg)
+        c, s = math.cos(sigma), math.sin(sigma)
+        return np.array([[s, 0.0, c], [0.0, 1.0, 0.0], [-c, 0.0, s]])
+
+    @property
+    def pinion_to_gear(self) -> tuple[NDArray, NDArray]:
+        """``(B, c)`` with q = B p + c: a point p of the (unturned) pinion frame in the gear
+        frame."""
+        m = self.misalignment
+        axes = self.gear_axes
+        pinion_origin = np.array([m.pinion_axial_mm, m.offset_mm, 0.0])
+        gear_origin = m.gear_axial_mm * axes[:, 2]
+        return axes.T @ _PINION_TO_HOUSING, axes.T @ (pinion_origin - gear_origin)
+
+
+def _turned(points: NDArray, phi: NDArray) -> NDArray:
+    """Points ``(..., 3)`` turned about z by ``phi`` (broadcast against the leading axes)."""
+    c, s = np.cos(phi), np.sin(phi)
+    x, y, z = points[..., 0], points[..., 1], points[..., 2]
+    x, y, z, c, s = np.broadcast_arrays(x, y, z, c, s)
+    return np.stack([c * x - s * y, s * x + c * y, z], axis=-1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FieldSample:
+    """The clearance field at a set of relative pinion angles (one row per angle).
+
+    Attributes
+    ----------
+    phi_rad
+        ``(n,)`` relative pinion angles of the base pair (pinion angle + k pitches).
+    clearance_rad
+        ``(n, n_f, n_p)`` angular clearance delta; +inf where the node is not on both flanks.
+    normal_factor_mm, radius_mm
+        ``(n, n_f, n_p)`` |n . (z_g x q)| and R2: mm of normal / circumferential separation per
+        rad of gear rotation.
+    minimum_rad
+        ``(n,)`` refined minimum of the clearance (+inf when nothing is in contact).
+    contact_face_mm, contact_profile_mm
+        ``(n,)`` pinion grid coordinates (s, h) of the refined minimum.
+    edge
+        ``(n,)`` True where the minimum lies on the boundary of the flanks (edge contact).
+    """
+
+    phi_rad: NDArray
+    clearance_rad: NDArray
+    normal_factor_mm: NDArray
+    radius_mm: NDArray
+    minimum_rad: NDArray
+    contact_face_mm: NDArray
+    contact_profile_mm: NDArray
+    edge: NDArray
+
+
+class ClearanceField:
+    """Angular clearance between a driving pinion flank and a driven gear flank.
+
+    Parameters
+    ----------
+    pinion, gear
+        FlankMaps of tooth 0 (the pinion's driving flank, the gear's driven flank).
+    placement
+        Shaft angle and misalignment.
+    sense
+        +1 or -1: the sense in which the pinion turns (about +z_p). With ``sense=None`` it is
+        the sense in which the pinion flank pushes (its normal's circumferential component at the
+        middle node), i.e. the flank drives.
+    phase_rad
+        The gear's rotation about +z_g at pinion angle 0 (the assembly's phase). ``None``: the
+        angle that brings the two flanks together at the mean position (the drive side); the
+        other side of the same pair takes the drive side's phase, so that both flanks face the
+        same tooth space. The gear tooth that mates is picked by whole pitches.
+    edge_tolerance_um
+        A minimum on the boundary is edge contact only when the inward neighbour is this much
+        (normal separation) higher; flat valleys of line contact reaching an edge are not.
+    """
+
+    def __init__(
+        self,
+        pinion: FlankMap,
+        gear: FlankMap,
+        *,
+        placement: Placement,
+        sense: int | None = None,
+        phase_rad: float | None = None,
+        edge_tolerance_um: float = 0.05,
+    ) -> None:
+        if pinion.member != "pinion" or gear.member != "gear":
+            raise GearoptError(
+                "flanks", (pinion.member, gear.member), "must be a pinion and a gear FlankMap"
+            )
+        self.pinion, self.gear, self.placement = pinion, gear, placement
+        self.ratio = pinion.teeth / gear.teeth
+        self.b, self.c = placement.pinion_to_gear
+        if sense is None:
+            mid = tuple(np.array(pinion.shape) // 2)
+            p, n = pinion.points_mm[mid], pinion.normals[mid]
+            sense = 1 if (p[0] * n[1] - p[1] * n[0]) > 0.0 else -1
+        if sense not in (1, -1):
+            raise GearoptError("sense", sense, "must be +1 or -1")
+        self.sense = int(sense)
+        self.edge_tolerance_um = float(edge_tolerance_um)
+        m = pinion.mask
+        self._nodes = np.flatnonzero(m.ravel())
+        if self._nodes.size < 4:
+            raise ContactError("pinion flank", int(m.sum()), "needs at least 4 generated nodes")
+        self.phase_rad = 0.0
+        self._p = pinion.points_mm.reshape(-1, 3)[self._nodes]
+        self._n = pinion.normals.reshape(-1, 3)[self._nodes]
+        # the interpolant is poor in the lowest generated cells (the envelope's fold):
+        # refinements stay two cells above them
+        keep = m.copy()
+        for _ in range(2):
+            below = np.zeros_like(keep)
+            below[:, 1:] = keep[:, :-1]
+            keep &= below
+        self._refine_cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
+        self._ds = float(np.mean(np.diff(pinion.face_mm)))
+        self._dh = float(np.mean(np.diff(pinion.profile_mm)))
+        self._shift = 0.0
+        if phase_rad is None:
+            delta, _, _, valid = self._raw(np.zeros(1))
+            if not valid.any():
+                raise ContactError(
+                    "flanks",
+                    rule="the pinion flank does not face the gear flank at the mean position",
+                )
+            phase_rad = -self.gear_sense * float(np.median(delta[valid]))
+        self.phase_rad = float(phase_rad)
+        self._shift = self._tooth_shift()
+
+    @property
+    def gear_sense(self) -> int:
+        """Sense of the gear's polar angle while the pinion turns with ``sense``."""
+        return -self.sense
+
+    def _gap(self, p: NDArray, n: NDArray | None, phi: NDArray, gear_angle_rad=0.0):
+        """Angular clearance of pinion points ``p`` (normals ``n``) at pinion angles ``phi``
+        (broadcast): ``(delta, normal factor, R2, valid)``."""
+        q = _turned(p, phi) @ self.b.T + self.c
+        radius = np.hypot(q[..., 0], q[..., 1])
+        theta = np.arctan2(q[..., 1], q[..., 0])
+        s2, h2 = self.gear.to_grid(q[..., 2], radius)
+        flank, valid = self.gear.polar_angle_local(s2, h2, with_inside=True)
+        turn = -self.ratio * phi + gear_angle_rad + self.phase_rad
+        gap = flank + turn - theta - self._shift
+        delta = self.gear_sense * ((gap + math.pi) % (2.0 * math.pi) - math.pi)
+        if n is None:
+            return delta, None, radius, valid
+        n = _turned(n, phi) @ self.b.T
+        factor = np.abs(n[..., 1] * q[..., 0] - n[..., 0] * q[..., 1])
+        return delta, factor, radius, valid
+
+    def _raw(self, phi_rad: NDArray, gear_angle_rad=0.0):
+        """The clearance at the pinion's generated nodes, ``(n_phi, n_nodes)`` arrays."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))[:, None]
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape[:1])[:, None]
+        return self._gap(self._p, self._n, phi, angle)
+
+    def _at(self, s: NDArray, h: NDArray, phi: NDArray, gear_angle_rad) -> NDArray:
+        """Clearance at pinion grid coordinates (s, h) off the nodes (local Hermite
+        interpolant); +inf outside either flank or in the pinion's lowest generated cells,
+        where the envelope's fold spoils any interpolant."""
+        fm = self.pinion
+        g = math.radians(fm.pitch_angle_deg)
+        big_l = s * math.cos(g) - h * math.sin(g)
+        big_r = s * math.sin(g) + h * math.cos(g)
+        theta = fm.polar_angle_local(s, h)
+        p = np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
+        delta, _, _, valid = self._gap(p, None, phi, gear_angle_rad)
+        return np.where(self._refinable(s, h) & valid, delta, np.inf)
+
+    def _refinable(self, s: NDArray, h: NDArray) -> NDArray:
+        i, j, _, _, within = self.pinion._cell_of(s, h)
+        return self._refine_cells[i, j] & within
+
+    def _refine(self, phi, angle, s, h, f0, iterations: int = 3):
+        """Newton steps on the clearance between the node grid's lines: gradient and Hessian by
+        central differences (a quarter cell) on the splines, the Hessian's pseudo-inverse on its
+        positive curvatures (the valley of line contact), each step at most one cell.
+
+        Returns the refined ``(value, s, h)``; a step leaving the flanks is not taken."""
+        ds, dh = self._ds, self._dh
+        es, eh = 0.25 * ds, 0.25 * dh
+        offsets = np.array(
+            [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
+        )
+        best = f0.copy()
+        for _ in range(iterations):
+            ss = s[:, None] + offsets[:, 0] * es
+            hh = h[:, None] + offsets[:, 1] * eh
+            f = self._at(ss, hh, phi[:, None], angle[:, None])
+            ok = np.all(np.isfinite(f), axis=1)
+            if not ok.any():
+                break
+            f = np.where(ok[:, None], f, 0.0)
+            gs, gh = 0.5 * (f[:, 1] - f[:, 2]) / es, 0.5 * (f[:, 3] - f[:, 4]) / eh
+            hss = (f[:, 1] - 2.0 * f[:, 0] + f[:, 2]) / es**2
+            hhh = (f[:, 3] - 2.0 * f[:, 0] + f[:, 4]) / eh**2
+            hsh = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8]) / (es * eh)
+            # in cell units, so that both directions weigh alike
+            step = _pseudo_newton(gs * ds, gh * dh, hss * ds * ds, hsh * ds * dh, hhh * dh * dh)
+            s_new = s + np.where(ok, step[:, 0], 0.0) * ds
+            h_new = h + np.where(ok, step[:, 1], 0.0) * dh
+            f_new = self._at(s_new, h_new, phi, angle)
+            take = ok & np.isfinite(f_new) & (f_new <= best + 1e-12 * np.abs(best))
+            s, h = np.where(take, s_new, s), np.where(take, h_new, h)
+            best = np.where(take, f_new, best)
+            if not take.any():
+                break
+        return best, s, h
+
+    def _tooth_shift(self) -> float:
+        """Whole gear pitches between the gear tooth the maps hold and the mating tooth."""
+        delta, _, _, valid = self._raw(np.zeros(1))
+        if not valid.any():
+            raise ContactError(
+                "flanks", rule="the pinion flank does not face the gear flank at the mean position"
+            )
+        centre = np.median(self.gear_sense * delta[valid])
+        pitch = self.gear.pitch_rad
+        return pitch * round(centre / pitch)
+
+    def sample(
+        self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0, *, refine: bool = True
+    ) -> FieldSample:
+        """The clearance field at relative pinion angles ``phi_rad`` (vectorised), each with
+        the gear turned by ``gear_angle_rad`` (scalar or one per angle) from its ideal angle."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        delta, factor, radius, valid = self._raw(phi, angle)
+        shape = (len(phi),) + self.pinion.shape
+        full = np.full((len(phi), self.pinion.mask.size), np.inf)
+        full[:, self._nodes] = np.where(valid, delta, np.inf)
+        fac = np.zeros_like(full)
+        fac[:, self._nodes] = factor
+        rad = np.zeros_like(full)
+        rad[:, self._nodes] = radius
+        field_ = full.reshape(shape)
+        fac, rad = fac.reshape(shape), rad.reshape(shape)
+        i, j = _argmin_nodes(field_)
+        rows = np.arange(len(phi))
+        f0 = field_[rows, i, j]
+        s = self.pinion.face_mm[i]
+        h = self.pinion.profile_mm[j]
+        edge = np.zeros(len(phi), bool)
+        if refine:
+            f0, s, h, edge = self._refined(field_, fac, phi, angle, f0, s, h)
+        return FieldSample(
+            phi_rad=phi,
+            clearance_rad=field_,
+            normal_factor_mm=fac,
+            radius_mm=rad,
+            minimum_rad=f0,
+            contact_face_mm=s,
+            contact_profile_mm=h,
+            edge=edge,
+        )
+
+    def _refined(self, field_, fac, phi, angle, f0, s, h, candidates: int = 4):
+        """Refine the minimum from the ``candidates`` lowest interior nodes (all eight
+        neighbours on both flanks) and compare with the lowest boundary node: a boundary node
+        lower than every refined interior minimum by more than the edge tolerance is edge
+        contact (first order: the node's value)."""
+        n = len(phi)
+        pad = np.pad(field_, ((0, 0), (1, 1), (1, 1)), constant_values=np.inf)
+        nf, np_ = self.pinion.shape
+        interior = np.ones(field_.shape, bool)
+        for di in (0, 1, 2):
+            for dj in (0, 1, 2):
+                interior &= np.isfinite(pad[:, di : di + nf, dj : dj + np_])
+        inner = np.where(interior, field_, np.inf).reshape(n, -1)
+        k = min(candidates, inner.shape[1])
+        pick = np.argpartition(inner, k - 1, axis=1)[:, :k]
+        values = np.take_along_axis(inner, pick, 1)
+        ci, cj = np.unravel_index(pick, self.pinion.shape)
+        ok = np.isfinite(values)
+        best = np.full(n, np.inf)
+        s_best, h_best = s.copy(), h.copy()
+        if ok.any():
+            rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
+            v, s_r, h_r = self._refine(
+                phi[rows],
+                angle[rows],
+                self.pinion.face_mm[ci[ok]],
+                self.pinion.profile_mm[cj[ok]],
+                values[ok],
+            )
+            order = np.lexsort((v, rows))
+            rows, v, s_r, h_r = rows[order], v[order], s_r[order], h_r[order]
+            first = np.r_[True, rows[1:] != rows[:-1]]
+            best[rows[first]] = v[first]
+            s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
+        rows = np.arange(n)
+        i, j = _argmin_nodes(field_)
+        tol = self.edge_tolerance_um * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
+        with np.errstate(invalid="ignore"):
+            edge = np.isfinite(f0) & (best - f0 > tol)
+        value = np.where(edge | ~np.isfinite(best), f0, best)
+        s_out = np.where(edge | ~np.isfinite(best), s, s_best)
+        h_out = np.where(edge | ~np.isfinite(best), h, h_best)
+        return value, s_out, h_out, edge
+
+    def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
+        """Refined minimum clearance (rad) at relative pinion angles ``phi_rad``."""
+        return self.sample(phi_rad, gear_angle_rad).minimum_rad
+
+
+def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
+    n = field_.shape[0]
+    flat = field_.reshape(n, -1).argmin(axis=1)
+    return np.unravel_index(flat, field_.shape[1:])
+
+
+def _pseudo_newton(gs, gh, hss, hsh, hhh) -> NDArray:
+    """``(n, 2)`` Newton step -H^+ g of 2 x 2 symmetric systems, the pseudo-inverse on the
+    positive eigenvalues only (a valley keeps its direction free), clipped to one cell."""
+    mean = 0.5 * (hss + hhh)
+    root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
+    scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
+    diagonal = np.abs(hsh) <= 1e-12 * scale
+    lam1, lam2 = mean + root, mean - root
+    ex = np.where(diagonal, np.where(hss >= hhh, 1.0, 0.0), hsh)
+    ey = np.where(diagonal, np.where(hss >= hhh, 0.0, 1.0), lam1 - hss)
+    norm = np.hypot(ex, ey)
+    norm = np.where(norm > 0.0, norm, 1.0)
+    ex, ey = ex / norm, ey / norm
+    step = np.zeros((len(gs), 2))
+    for lam, vx, vy in ((lam1, ex, ey), (lam2, -ey, ex)):
+        use = lam > 1e-8 * scale
+        along = np.where(use, -(vx * gs + vy * gh) / np.where(use, lam, 1.0), 0.0)
+        step += along[:, None] * np.stack([vx, vy], axis=1)
+    return np.clip(step, -1.0, 1.0)

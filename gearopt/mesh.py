@@ -1,0 +1,626 @@
+"""Mesh-cycle analyses on the clearance field: TCA, contact pattern, backlash, ease-off.
+
+Everything here works on :class:`gearopt.contact.ClearanceField` objects and knows nothing of
+machines. Conventions (DESIGN.md): the drive side is the pinion's convex flank driving the
+gear's concave flank, the coast side the pinion's concave driving the gear's convex. TE is in
+arcsec of gear rotation, negative when the driven gear lags, shifted so its maximum over the mesh
+is 0. Pattern coordinates on the pinion flank projected to the axial plane: ``face`` from the toe
+(0) toward the heel, ``profile`` from the root (0) toward the top.
+
+Definitions used by the outputs:
+
+- positions: ``positions`` pinion angles over ``cycles`` angular pitches, centred on the mean
+  position, in the pinion's direction of motion (``phi1_deg``);
+- at each position the ``pairs`` tooth pairs nearest the mesh centre; the carrying pair is the
+  one on which the gear lags least;
+- hand-over: where the TE curves of two successive pairs intersect, solved (Illinois method)
+  on the clearance field, not read off the samples; peak-to-peak TE = the TE maximum (refined
+  by parabolas) minus the TE at the hand-over, or minus a lower sampled value if any;
+- instantaneous contact zone: the nodes within the marking compound of the mating flank; the
+  contact path is the zone's centroid (weights ``compound - separation``, so a paraboloid's
+  centroid is its vertex and a line contact's is its middle) along the carrying pair's cycle;
+- mean contact point M: the path point midway between the carrying pair's hand-overs; bias =
+  face coordinate of the path at the end of the pair's cycle minus at its start; width = extent
+  of the zone at M perpendicular to the path; ``center_offset_mm`` = M minus the flank centre C
+  (the mean cone distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
+- contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
+  at an edge), over the angular pitch.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import SEPARATIONS, ClearanceField, ContactError, FieldSample
+from gearopt.errors import GearoptError
+
+__all__ = [
+    "ToothFrame",
+    "ToothContact",
+    "Backlash",
+    "EaseOff",
+    "tooth_contact",
+    "backlash",
+    "ease_off",
+]
+
+ARCSEC = 180.0 * 3600.0 / math.pi
+
+
+@dataclass(frozen=True, kw_only=True)
+class ToothFrame:
+    """Pattern coordinates on the pinion flank: ``face = s - toe_mm``, ``profile = h - root_mm``
+    and the flank centre C in those coordinates."""
+
+    toe_mm: float
+    root_mm: float
+    centre_mm: tuple[float, float]
+    face_width_mm: float
+
+    @classmethod
+    def from_blank(cls, blank) -> ToothFrame:
+        a1, a2 = blank.mean_addendum_mm
+        root = -blank.mean_dedendum_mm[0]
+        return cls(
+            toe_mm=blank.mean_cone_distance_mm - 0.5 * blank.face_width_mm,
+            root_mm=root,
+            centre_mm=(0.5 * blank.face_width_mm, 0.5 * (a1 - a2) - root),
+            face_width_mm=blank.face_width_mm,
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class ToothContact:
+    """TCA of one side (see the module docstring for every definition).
+
+    Attributes
+    ----------
+    side
+        ``"drive"`` or ``"coast"``.
+    phi1_deg, te_arcsec
+        ``(n,)`` pinion positions (direction of motion) and the TE there.
+    pair_te_arcsec
+        ``(pairs, n)`` TE of each tooth pair (pair index from the earliest in its cycle).
+    carrying
+        ``(n,)`` index of the carrying pair.
+    handover_phi1_deg
+        Positions of the hand-overs within the analysed range.
+    te_peak_to_peak_arcsec
+        Maximum minus minimum TE with the hand-over solved.
+    path_face_mm, path_profile_mm
+        ``(n,)`` contact path (zone centroid of the carrying pair) in pattern coordinates.
+    contact_face_mm, contact_profile_mm
+        ``(n,)`` the clearance minimum of the carrying pair (the classical contact point).
+    edge
+        ``(n,)`` True where the carrying pair touches at an edge of a flank.
+    separation_um
+        ``(n, pairs, n_f, n_p)`` separation of every pinion node from the mating flank at the
+        contact gear angle (inf off the flanks).
+    pattern_um
+        ``(n_f, n_p)`` the pattern field: the least separation over positions and pairs.
+    width_mm, bias_mm, center_offset_mm, mean_point_mm
+        Pattern width at M, bias, M - C, and M, in pattern coordinates.
+    contact_ratio
+        Pinion rotation with interior contact over the angular pitch.
+    compound_um, separation
+        The marking compound and how separation is measured.
+    """
+
+    side: str
+    phi1_deg: NDArray
+    te_arcsec: NDArray
+    pair_te_arcsec: NDArray
+    carrying: NDArray
+    handover_phi1_deg: NDArray
+    te_peak_to_peak_arcsec: float
+    path_face_mm: NDArray
+    path_profile_mm: NDArray
+    contact_face_mm: NDArray
+    contact_profile_mm: NDArray
+    edge: NDArray
+    separation_um: NDArray
+    pattern_um: NDArray
+    face_mm: NDArray
+    profile_mm: NDArray
+    width_mm: float
+    bias_mm: float
+    center_offset_mm: tuple[float, float]
+    mean_point_mm: tuple[float, float]
+    contact_ratio: float
+    compound_um: float
+    separation: str
+
+    @property
+    def edge_contact(self) -> bool:
+        """True when the carrying pair touches at an edge at any position."""
+        return bool(self.edge.any())
+
+    def as_dict(self) -> dict:
+        """JSON-ready summary (the ``tca`` object of ``gearopt analyze --json``)."""
+        return {
+            "side": self.side,
+            "phi1_deg": _list(self.phi1_deg),
+            "te_arcsec": _list(self.te_arcsec),
+            "te_peak_to_peak_arcsec": float(self.te_peak_to_peak_arcsec),
+            "handover_phi1_deg": _list(self.handover_phi1_deg),
+            "contact_ratio": float(self.contact_ratio),
+            "path": {
+                "face_mm": _list(self.path_face_mm),
+                "profile_mm": _list(self.path_profile_mm),
+            },
+            "edge": [bool(e) for e in self.edge],
+            "pattern": {
+                "width_mm": float(self.width_mm),
+                "bias_mm": float(self.bias_mm),
+                "center_offset_mm": [float(v) for v in self.center_offset_mm],
+                "mean_point_mm": [float(v) for v in self.mean_point_mm],
+                "edge_contact": self.edge_contact,
+                "compound_um": float(self.compound_um),
+                "separation": self.separation,
+            },
+        }
+
+
+def _list(values) -> list[float]:
+    return [float(v) for v in np.asarray(values).ravel()]
+
+
+def _check_options(positions: int, pairs: int, cycles: float, compound_um: float, separation):
+    if isinstance(positions, bool) or not isinstance(positions, int) or not 3 <= positions <= 401:
+        raise GearoptError("positions", positions, "must be an integer from 3 to 401")
+    if isinstance(pairs, bool) or not isinstance(pairs, int) or not 1 <= pairs <= 7:
+        raise GearoptError("pairs", pairs, "must be an integer from 1 to 7")
+    if not (isinstance(cycles, int | float) and 0.5 <= cycles <= 5.0):
+        raise GearoptError("cycles", cycles, "must be a number from 0.5 to 5 mesh cycles")
+    if not (isinstance(compound_um, int | float) and 0.0 < compound_um <= 100.0):
+        raise GearoptError("compound_um", compound_um, "must be in (0, 100] um")
+    if separation not in SEPARATIONS:
+        raise GearoptError("separation", separation, f"must be one of {SEPARATIONS}")
+
+
+class _PairCurve:
+    """The base pair's lag G(u) at relative pinion rotations u (direction of motion)."""
+
+    def __init__(self, field: ClearanceField, gear_angle_rad=0.0):
+        self.field = field
+        self.gear_angle_rad = gear_angle_rad
+        self.pitch = field.pinion.pitch_rad
+
+    def sample(self, u: NDArray, gear_angle_rad=None) -> FieldSample:
+        angle = self.gear_angle_rad if gear_angle_rad is None else gear_angle_rad
+        return self.field.sample(self.field.sense * np.asarray(u, float), angle)
+
+    def __call__(self, u: NDArray) -> NDArray:
+        return self.sample(u).minimum_rad
+
+
+def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str) -> NDArray:
+    """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
+    (one per row)."""
+    factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
+    extra = sample.clearance_rad - reference_rad.reshape(-1, 1, 1)
+    return np.where(np.isfinite(extra), extra * factor, np.inf)
+
+
+def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
+    """Weighted centroids (weights compound - separation) of each row's zone; NaN-free: a row
+    without a zone reports its least-separated node."""
+    w = np.clip(compound_mm - sep_mm, 0.0, None)
+    w = np.where(np.isfinite(w), w, 0.0)
+    total = w.sum(axis=(1, 2))
+    s = np.broadcast_to(face_mm[:, None], sep_mm.shape[1:])
+    h = np.broadcast_to(profile_mm[None, :], sep_mm.shape[1:])
+    flat = sep_mm.reshape(len(sep_mm), -1).argmin(axis=1)
+    s0, h0 = s.ravel()[flat], h.ravel()[flat]
+    safe = np.where(total > 0.0, total, 1.0)
+    cs = np.where(total > 0.0, (w * s).sum(axis=(1, 2)) / safe, s0)
+    ch = np.where(total > 0.0, (w * h).sum(axis=(1, 2)) / safe, h0)
+    return cs, ch
+
+
+def _illinois(fun, lo: float, hi: float, f_lo: float, f_hi: float, tol: float, iterations=40):
+    """Root of a scalar function bracketed by [lo, hi] (regula falsi, Illinois variant)."""
+    side = 0
+    x = lo
+    for _ in range(iterations):
+        x = hi - f_hi * (hi - lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (lo + hi)
+        fx = fun(x)
+        if abs(hi - lo) < tol or fx == 0.0:
+            break
+        if fx * f_hi < 0.0:
+            lo, f_lo = hi, f_hi
+            side_new = -1
+        else:
+            side_new = 1
+            if side == 1:
+                f_lo *= 0.5
+        hi, f_hi = x, fx
+        side = side_new
+        if abs(hi - lo) < tol:
+            break
+    return x
+
+
+def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
+    """Extent of {separation < compound} along the line through ``point`` perpendicular to
+    ``direction``, by bilinear interpolation of the node field."""
+    perp = np.array([-direction[1], direction[0]])
+    reach = float(face_mm[-1] - face_mm[0] + profile_mm[-1] - profile_mm[0])
+    tau = np.linspace(-reach, reach, 2001)
+    s = point[0] + tau * perp[0]
+    h = point[1] + tau * perp[1]
+    inside = (s >= face_mm[0]) & (s <= face_mm[-1]) & (h >= profile_mm[0]) & (h <= profile_mm[-1])
+    i = np.clip(np.searchsorted(face_mm, s) - 1, 0, len(face_mm) - 2)
+    j = np.clip(np.searchsorted(profile_mm, h) - 1, 0, len(profile_mm) - 2)
+    u = np.clip((s - face_mm[i]) / (face_mm[i + 1] - face_mm[i]), 0.0, 1.0)
+    v = np.clip((h - profile_mm[j]) / (profile_mm[j + 1] - profile_mm[j]), 0.0, 1.0)
+    big = 10.0 * compound_mm
+    f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
+    val = (
+        (1 - u) * (1 - v) * f[i, j]
+        + u * (1 - v) * f[i + 1, j]
+        + (1 - u) * v * f[i, j + 1]
+        + u * v * f[i + 1, j + 1]
+    )
+    val = np.where(inside, val, big) - compound_mm
+    centre = len(tau) // 2
+    if val[centre] >= 0.0:
+        return 0.0
+    out = val >= 0.0
+    right = np.flatnonzero(out[centre:])
+    left = np.flatnonzero(out[:centre][::-1])
+
+    def crossing(k_in, k_out):
+        a, b = val[k_in], val[k_out]
+        return tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b)
+
+    t_hi = crossing(centre + right[0] - 1, centre + right[0]) if right.size else tau[-1]
+    t_lo = crossing(centre - left[0], centre - left[0] - 1) if left.size else tau[0]
+    return float(t_hi - t_lo)
+
+
+def tooth_contact(
+    field: ClearanceField,
+    *,
+    frame: ToothFrame,
+    side: str = "drive",
+    positions: int = 21,
+    pairs: int = 3,
+    cycles: float = 2.0,
+    compound_um: float = 6.5,
+    separation: str = "normal",
+) -> ToothContact:
+    """Unloaded TCA of one side on the clearance field (module docstring for definitions)."""
+    _check_options(positions, pairs, cycles, compound_um, separation)
+    curve = _PairCurve(field)
+    p1 = curve.pitch
+    t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
+    offsets = np.arange(pairs) - (pairs - 1) // 2
+    j0 = np.round(-t / p1)
+    u = t[:, None] + (j0[:, None] + offsets[None, :]) * p1  # (n, pairs), ascending in pairs
+    sample = curve.sample(u.ravel())
+    g = sample.minimum_rad.reshape(u.shape)
+    if not np.isfinite(g).any(axis=1).all():
+        raise ContactError("tca", rule="at some positions no tooth pair touches inside the flanks")
+    carrying = np.argmin(g, axis=1)
+    rows = np.arange(positions)
+    lag = g[rows, carrying]
+
+    # hand-over: F(v) = G(v) - G(v - p1) changes sign where the leaving pair (relative angle
+    # v) hands over to the next (v - p1); bracket from the samples, then solve
+    uc = u[rows, carrying]
+    switch = np.flatnonzero(np.diff(uc) < -0.5 * p1)
+    if switch.size:
+        k = switch[0]
+        lo_v, hi_v = uc[k], uc[k] + (t[k + 1] - t[k])
+        v_star = _solve_handover(curve, lo_v, hi_v, p1)
+    else:  # one pair carries throughout: the hand-over lies beyond the analysed range
+        v_star = _solve_handover(curve, uc[-1], uc[-1] + p1, p1, search=True)
+    g_hand = float(curve(np.array([v_star]))[0])
+    # the TE maximum: least lag of the active interval [v* - p1, v*], refined by parabolas
+    active = (u >= v_star - p1 - 1e-12) & (u <= v_star + 1e-12) & np.isfinite(g)
+    v0 = float(u[active][np.argmin(g[active])]) if active.any() else 0.5 * (v_star - p1)
+    g_min, v_peak = _parabolic_minimum(curve, v0, t[1] - t[0], v_star - p1, v_star)
+    g_min = min(g_min, float(np.min(g[active])) if active.any() else g_min)
+    g_min = min(g_min, float(lag.min()))
+    te = (g_min - lag) * ARCSEC
+    pair_te = ((g_min - g) * ARCSEC).T
+    peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
+
+    # separations at the contact gear angle of each position (same lag for every pair)
+    compound_mm = compound_um * 1e-3
+    sep = _separation_mm(sample, np.repeat(lag, pairs), separation)
+    sep = sep.reshape((positions, pairs) + field.pinion.shape)
+    pattern = sep.min(axis=(0, 1)) * 1e3
+    face = field.pinion.face_mm - frame.toe_mm
+    profile = field.pinion.profile_mm - frame.root_mm
+    carrying_sep = sep[rows, carrying]
+    path_s, path_h = _centroids(carrying_sep, compound_mm, face, profile)
+
+    # the mean point M, the path's direction there, and the path's ends (bias)
+    v_mid = v_star - 0.5 * p1
+    dv = 0.25 * (t[1] - t[0])
+    extra_v = np.array([v_mid, v_mid - dv, v_mid + dv, v_star - p1, v_star])
+    ex = curve.sample(extra_v)
+    ex_sep = _separation_mm(ex, ex.minimum_rad, separation)
+    cs, ch = _centroids(ex_sep, compound_mm, face, profile)
+    mean_point = (float(cs[0]), float(ch[0]))
+    direction = np.array([cs[2] - cs[1], ch[2] - ch[1]])
+    norm = float(np.hypot(*direction))
+    direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
+    width = _width(ex_sep[0], compound_mm, face, profile, mean_point, direction)
+    bias = float(cs[4] - cs[3])
+
+    contact_ratio = _contact_ratio(curve, u, sample.edge.reshape(u.shape), g, p1)
+    centre = frame.centre_mm
+    handovers = v_star + p1 * np.arange(-4, 5)
+    handovers = handovers[(handovers >= t[0]) & (handovers <= t[-1])]
+    return ToothContact(
+        side=side,
+        phi1_deg=np.degrees(t),
+        te_arcsec=te,
+        pair_te_arcsec=pair_te,
+        carrying=carrying,
+        handover_phi1_deg=np.degrees(handovers),
+        te_peak_to_peak_arcsec=float(peak_to_peak),
+        path_face_mm=path_s,
+        path_profile_mm=path_h,
+        contact_face_mm=sample.contact_face_mm.reshape(u.shape)[rows, carrying] - frame.toe_mm,
+        contact_profile_mm=sample.contact_profile_mm.reshape(u.shape)[rows, carrying]
+        - frame.root_mm,
+        edge=sample.edge.reshape(u.shape)[rows, carrying],
+        separation_um=sep * 1e3,
+        pattern_um=pattern,
+        face_mm=face,
+        profile_mm=profile,
+        width_mm=width,
+        bias_mm=bias,
+        center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),
+        mean_point_mm=mean_point,
+        contact_ratio=contact_ratio,
+        compound_um=float(compound_um),
+        separation=separation,
+    )
+
+
+def _solve_handover(curve: _PairCurve, lo: float, hi: float, p1: float, search=False) -> float:
+    """v* with G(v*) = G(v* - p1) in [lo, hi] (the leaving pair's relative angle)."""
+
+    def f(v):
+        gv = curve(np.array([v, v - p1]))
+        return float(gv[0] - gv[1]) if np.all(np.isfinite(gv)) else math.inf
+
+    f_lo, f_hi = f(lo), f(hi)
+    if search or not (f_lo <= 0.0 <= f_hi):
+        raise ContactError(
+            "tca", rule="no hand-over between tooth pairs was found (contact stays on one pair)"
+        )
+    return _illinois(f, lo, hi, f_lo, f_hi, tol=1e-10)
+
+
+def _parabolic_minimum(curve: _PairCurve, v0: float, step: float, lo: float, hi: float):
+    """Least G near v0 by two rounds of the parabola through three points."""
+    best_v, best_g = v0, float(curve(np.array([v0]))[0])
+    h = step
+    for _ in range(2):
+        vs = np.clip(np.array([best_v - h, best_v, best_v + h]), lo, hi)
+        gs = curve(vs)
+        if not np.all(np.isfinite(gs)) or vs[0] == vs[1] or vs[1] == vs[2]:
+            break
+        curv = gs[0] - 2.0 * gs[1] + gs[2]
+        if curv > 0.0:
+            v_new = float(np.clip(vs[1] + 0.5 * h * (gs[0] - gs[2]) / curv, lo, hi))
+            g_new = float(curve(np.array([v_new]))[0])
+            if g_new < best_g:
+                best_v, best_g = v_new, g_new
+        k = int(np.argmin(gs))
+        if gs[k] < best_g:
+            best_v, best_g = float(vs[k]), float(gs[k])
+        h *= 0.25
+    return best_g, best_v
+
+
+def _contact_ratio(curve: _PairCurve, u, edge, g, p1) -> float:
+    """Span of relative angles with interior contact, ends refined by bisection, over p1."""
+    v = u.ravel()
+    inner = (~edge.ravel()) & np.isfinite(g.ravel())
+    order = np.argsort(v)
+    v, inner = v[order], inner[order]
+    if not inner.any():
+        return 0.0
+    k = np.flatnonzero(inner)
+    lo_k, hi_k = k[0], k[-1]
+
+    def refine(a, b):  # a interior, b not
+        for _ in range(8):
+            m = 0.5 * (a + b)
+            s = curve.sample(np.array([m]))
+            if bool(s.edge[0]) or not np.isfinite(s.minimum_rad[0]):
+                b = m
+            else:
+                a = m
+        return 0.5 * (a + b)
+
+    start = refine(v[lo_k], v[lo_k - 1]) if lo_k > 0 else v[lo_k]
+    end = refine(v[hi_k], v[hi_k + 1]) if hi_k < len(v) - 1 else v[hi_k]
+    return float((end - start) / p1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Backlash:
+    """Circumferential backlash along the mesh (pinion held, gear turned to the other flank).
+
+    ``circumferential_um`` = rotational backlash times the gear's outer pitch radius; negative
+    values are interference (``interference`` True)."""
+
+    phi1_deg: NDArray
+    rotational_arcsec: NDArray
+    circumferential_um: NDArray
+    radius_mm: float
+
+    @property
+    def interference(self) -> bool:
+        return bool(np.any(self.circumferential_um < 0.0))
+
+    def as_dict(self) -> dict:
+        c = self.circumferential_um
+        return {
+            "phi1_deg": _list(self.phi1_deg),
+            "circumferential_um": _list(c),
+            "min_um": float(c.min()),
+            "mean_um": float(c.mean()),
+            "max_um": float(c.max()),
+            "interference": self.interference,
+            "radius_mm": float(self.radius_mm),
+        }
+
+
+def backlash(
+    drive: ClearanceField,
+    coast: ClearanceField,
+    *,
+    radius_mm: float,
+    positions: int = 21,
+    pairs: int = 3,
+    cycles: float = 2.0,
+) -> Backlash:
+    """Backlash at the drive side's positions: the gear at its drive contact angle, turned
+    forward until its other flanks touch the pinion's (``coast`` is the coast-side field with
+    the drive side's phase)."""
+    _check_options(positions, pairs, cycles, 6.5, "normal")
+    curve = _PairCurve(drive)
+    p1 = curve.pitch
+    t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
+    offsets = np.arange(pairs) - (pairs - 1) // 2
+    u = t[:, None] + (np.round(-t / p1)[:, None] + offsets[None, :]) * p1
+    g = curve(u.ravel()).reshape(u.shape)
+    lag = g.min(axis=1)
+    if not np.all(np.isfinite(lag)):
+        raise ContactError("backlash", rule="at some positions no pair touches on the drive side")
+    gear_angle = -drive.gear_sense * lag
+    phi = drive.sense * u
+    c = coast.sample(phi.ravel(), np.repeat(gear_angle, pairs)).minimum_rad.reshape(u.shape)
+    rotational = c.min(axis=1)
+    if not np.all(np.isfinite(rotational)):
+        raise ContactError(
+            "backlash", rule="at some positions the other flanks do not face each other"
+        )
+    return Backlash(
+        phi1_deg=np.degrees(t),
+        rotational_arcsec=rotational * ARCSEC,
+        circumferential_um=rotational * radius_mm * 1e3,
+        radius_mm=float(radius_mm),
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class EaseOff:
+    """Normal deviation of the pinion flank from the surface conjugate to the gear.
+
+    ``ease_off_um`` ``(n_f, n_p)`` is zero at its least node; ``mask`` marks the nodes where it
+    is defined (the conjugate contact inside both flanks); other nodes hold 0."""
+
+    face_mm: NDArray
+    profile_mm: NDArray
+    ease_off_um: NDArray
+    mask: NDArray
+    side: str
+
+    def as_dict(self) -> dict:
+        e = self.ease_off_um[self.mask]
+        return {
+            "side": self.side,
+            "max_um": float(e.max(initial=0.0)),
+            "face_mm": _list(self.face_mm),
+            "profile_mm": _list(self.profile_mm),
+            "ease_off_um": self.ease_off_um.tolist(),
+            "mask": self.mask.tolist(),
+        }
+
+
+def ease_off(
+    field: ClearanceField,
+    *,
+    frame: ToothFrame,
+    side: str = "drive",
+    samples: int = 121,
+    span_pitches: float = 4.0,
+) -> EaseOff:
+    """Ease-off: for each pinion node, the least normal clearance to the gear flank over the
+    ideal (conjugate) motion; a conjugate node touches at some angle (zero). Each node's
+    minimum over the angle samples is refined by the parabola through its neighbours."""
+    p1 = field.pinion.pitch_rad
+    v = np.linspace(-0.5 * span_pitches * p1, 0.5 * span_pitches * p1, samples)
+    s = field.sample(field.sense * v, refine=False)
+    d = s.clearance_rad.reshape(samples, -1)
+    fac = s.normal_factor_mm.reshape(samples, -1)
+    k = np.argmin(d, axis=0)
+    cols = np.arange(d.shape[1])
+    d0 = d[k, cols]
+    ok = np.isfinite(d0) & (k > 0) & (k < samples - 1)
+    km, kp = np.clip(k - 1, 0, samples - 1), np.clip(k + 1, 0, samples - 1)
+    dm, dp = d[km, cols], d[kp, cols]
+    ok &= np.isfinite(dm) & np.isfinite(dp)
+    with np.errstate(invalid="ignore"):
+        curv = np.where(ok, dm - 2.0 * d0 + dp, 1.0)
+        slope = np.where(ok, 0.5 * (dp - dm), 0.0)
+        step = np.where(curv > 0.0, np.clip(-slope / curv, -1.0, 1.0), 0.0)
+        value = np.where(ok, d0 + slope * step + 0.5 * curv * step**2, 0.0)
+    normal = value * fac[k, cols]
+    normal = np.where(ok, normal, np.inf)
+    mask = ok.reshape(field.pinion.shape)
+    if not mask.any():
+        raise ContactError("ease_off", rule="no pinion node meets the gear flank")
+    base = normal[ok].min()
+    e = np.where(ok, (normal - base) * 1e3, 0.0).reshape(field.pinion.shape)
+    return EaseOff(
+        face_mm=field.pinion.face_mm - frame.toe_mm,
+        profile_mm=field.pinion.profile_mm - frame.root_mm,
+        ease_off_um=e,
+        mask=mask,
+        side=side,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeshedPair:
+    """A design's generated flanks placed in the housing: the drive and coast clearance fields
+    (the coast field takes the drive field's phase, so both face the same tooth space)."""
+
+    drive: ClearanceField
+    coast: ClearanceField
+    frame: ToothFrame
+    backlash_radius_mm: float
+
+
+def mesh_pair(design, *, grid=None, misalignment=None, plugin_manager=None) -> MeshedPair:
+    """Generate a design's flanks and place them in the housing with ``misalignment`` (default:
+    the design's ``[misalignment]``)."""
+    import gearopt
+    from gearopt.contact import Placement
+
+    pinion = gearopt.generate_flanks(design, "pinion", grid=grid, plugin_manager=plugin_manager)
+    gear = gearopt.generate_flanks(design, "gear", grid=grid, plugin_manager=plugin_manager)
+    placement = Placement(
+        shaft_angle_deg=design.pair.shaft_angle_deg,
+        misalignment=design.misalignment if misalignment is None else misalignment,
+    )
+    drive = ClearanceField(pinion["convex"], gear["concave"], placement=placement)
+    coast = ClearanceField(
+        pinion["concave"],
+        gear["convex"],
+        placement=placement,
+        sense=-drive.sense,
+        phase_rad=drive.phase_rad,
+    )
+    blank = design.blank
+    return MeshedPair(
+        drive=drive,
+        coast=coast,
+        frame=ToothFrame.from_blank(blank),
+        backlash_radius_mm=blank.outer_pitch_radius_mm[1],
+    )
