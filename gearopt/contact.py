@@ -195,10 +195,13 @@ class ClearanceField:
             below = np.zeros_like(keep)
             below[:, 1:] = keep[:, :-1]
             keep &= below
+        self._refine_node_mask = keep
         self._refine_cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
         self._ds = float(np.mean(np.diff(pinion.face_mm)))
         self._dh = float(np.mean(np.diff(pinion.profile_mm)))
         self._shift = 0.0
+        mid = tuple(np.array(pinion.shape) // 2)
+        self._factor_scale = float(np.hypot(*pinion.points_mm[mid][:2]))
         if phase_rad is None:
             delta, _, _, valid = self._raw(np.zeros(1))
             if not valid.any():
@@ -238,10 +241,11 @@ class ClearanceField:
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape[:1])[:, None]
         return self._gap(self._p, self._n, phi, angle)
 
-    def _at(self, s: NDArray, h: NDArray, phi: NDArray, gear_angle_rad) -> NDArray:
-        """Clearance at pinion grid coordinates (s, h) off the nodes (local Hermite
-        interpolant); +inf outside either flank or in the pinion's lowest generated cells,
-        where the envelope's fold spoils any interpolant."""
+    def _at(self, s: NDArray, h: NDArray, phi: NDArray, gear_angle_rad):
+        """Clearance at pinion grid coordinates (s, h) off the nodes by the local Hermite
+        interpolants: ``(delta, valid)``. ``delta`` is the smooth extension beyond the flanks
+        (finite everywhere); ``valid`` is False outside either flank and in the pinion's lowest
+        generated cells, where the envelope's fold spoils any interpolant."""
         fm = self.pinion
         g = math.radians(fm.pitch_angle_deg)
         big_l = s * math.cos(g) - h * math.sin(g)
@@ -249,47 +253,70 @@ class ClearanceField:
         theta = fm.polar_angle_local(s, h)
         p = np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
         delta, _, _, valid = self._gap(p, None, phi, gear_angle_rad)
-        return np.where(self._refinable(s, h) & valid, delta, np.inf)
+        return delta, self._refinable(s, h) & valid
 
     def _refinable(self, s: NDArray, h: NDArray) -> NDArray:
         i, j, _, _, within = self.pinion._cell_of(s, h)
         return self._refine_cells[i, j] & within
 
-    def _refine(self, phi, angle, s, h, f0, iterations: int = 3):
-        """Newton steps on the clearance between the node grid's lines: gradient and Hessian by
-        central differences (a quarter cell) on the splines, the Hessian's pseudo-inverse on its
-        positive curvatures (the valley of line contact), each step at most one cell.
+    _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125])
+    _STENCIL = np.array(
+        [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
+    )
 
-        Returns the refined ``(value, s, h)``; a step leaving the flanks is not taken."""
+    def _refine(self, phi, angle, s, h, f0, iterations: int = 4):
+        """Constrained Newton steps on the clearance between the node grid's lines.
+
+        Gradient and Hessian by central differences (a quarter cell) of the interpolated
+        clearance, extended smoothly beyond the flanks; the step is Newton's on the positive
+        curvatures and a descent of up to two cells along the others (the valley of line
+        contact), at most two cells in all. A step leaving the flanks is cut back (halvings,
+        evaluated at once) to the last valid point: repeated, this slides the point along the
+        boundary to the least clearance on it, second order for straight edges.
+
+        Returns ``(value, s, h, edge)``: edge where the last step was cut by a boundary and the
+        model says the clearance would fall by more than the edge tolerance beyond it.
+        """
         ds, dh = self._ds, self._dh
         es, eh = 0.25 * ds, 0.25 * dh
-        offsets = np.array(
-            [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
-        )
+        st = self._STENCIL
+        fr = self._FRACTIONS
         best = f0.copy()
+        edge = np.zeros(len(s), bool)
+        tol = self.edge_tolerance_um * 1e-3 / max(self._factor_scale, 1e-9)
         for _ in range(iterations):
-            ss = s[:, None] + offsets[:, 0] * es
-            hh = h[:, None] + offsets[:, 1] * eh
-            f = self._at(ss, hh, phi[:, None], angle[:, None])
-            ok = np.all(np.isfinite(f), axis=1)
-            if not ok.any():
-                break
-            f = np.where(ok[:, None], f, 0.0)
+            f, _ = self._at(
+                s[:, None] + st[:, 0] * es, h[:, None] + st[:, 1] * eh, phi[:, None], angle[:, None]
+            )
             gs, gh = 0.5 * (f[:, 1] - f[:, 2]) / es, 0.5 * (f[:, 3] - f[:, 4]) / eh
             hss = (f[:, 1] - 2.0 * f[:, 0] + f[:, 2]) / es**2
             hhh = (f[:, 3] - 2.0 * f[:, 0] + f[:, 4]) / eh**2
             hsh = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8]) / (es * eh)
             # in cell units, so that both directions weigh alike
-            step = _pseudo_newton(gs * ds, gh * dh, hss * ds * ds, hsh * ds * dh, hhh * dh * dh)
-            s_new = s + np.where(ok, step[:, 0], 0.0) * ds
-            h_new = h + np.where(ok, step[:, 1], 0.0) * dh
-            f_new = self._at(s_new, h_new, phi, angle)
-            take = ok & np.isfinite(f_new) & (f_new <= best + 1e-12 * np.abs(best))
-            s, h = np.where(take, s_new, s), np.where(take, h_new, h)
-            best = np.where(take, f_new, best)
+            g2 = (gs * ds, gh * dh)
+            h2 = (hss * ds * ds, hsh * ds * dh, hhh * dh * dh)
+            step = _pseudo_newton(*g2, *h2)
+            model = (
+                g2[0] * step[:, 0]
+                + g2[1] * step[:, 1]
+                + 0.5 * (h2[0] * step[:, 0] ** 2 + 2 * h2[1] * step[:, 0] * step[:, 1])
+                + 0.5 * h2[2] * step[:, 1] ** 2
+            )
+            ts = s[:, None] + fr * (step[:, :1] * ds)
+            th = h[:, None] + fr * (step[:, 1:] * dh)
+            ft, ok = self._at(ts, th, phi[:, None], angle[:, None])
+            ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
+            k = np.argmax(ok, axis=1)
+            rows = np.arange(len(s))
+            take = ok[rows, k]
+            cut = take & (k > 0)
+            edge = np.where(take, cut & (ft[rows, k] - (f[:, 0] + model) > tol), edge)
+            s = np.where(take, ts[rows, k], s)
+            h = np.where(take, th[rows, k], h)
+            best = np.where(take, ft[rows, k], best)
             if not take.any():
                 break
-        return best, s, h
+        return best, s, h, edge
 
     def _tooth_shift(self) -> float:
         """Whole gear pitches between the gear tooth the maps hold and the mating tooth."""
@@ -303,10 +330,17 @@ class ClearanceField:
         return pitch * round(centre / pitch)
 
     def sample(
-        self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0, *, refine: bool = True
+        self,
+        phi_rad: NDArray,
+        gear_angle_rad: NDArray | float = 0.0,
+        *,
+        refine: bool | NDArray = True,
     ) -> FieldSample:
         """The clearance field at relative pinion angles ``phi_rad`` (vectorised), each with
-        the gear turned by ``gear_angle_rad`` (scalar or one per angle) from its ideal angle."""
+        the gear turned by ``gear_angle_rad`` (scalar or one per angle) from its ideal angle.
+
+        ``refine``: refine every row's minimum (True), none (False: node values, no edge
+        test) or the rows of a boolean mask."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
         delta, factor, radius, valid = self._raw(phi, angle)
@@ -325,8 +359,12 @@ class ClearanceField:
         s = self.pinion.face_mm[i]
         h = self.pinion.profile_mm[j]
         edge = np.zeros(len(phi), bool)
-        if refine:
-            f0, s, h, edge = self._refined(field_, fac, phi, angle, f0, s, h)
+        rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
+        if rows.size:
+            f0, s, h = f0.copy(), s.copy(), h.copy()
+            f0[rows], s[rows], h[rows], edge[rows] = self._refined(
+                field_[rows], fac[rows], phi[rows], angle[rows], f0[rows], s[rows], h[rows]
+            )
         return FieldSample(
             phi_rad=phi,
             clearance_rad=field_,
@@ -338,19 +376,14 @@ class ClearanceField:
             edge=edge,
         )
 
-    def _refined(self, field_, fac, phi, angle, f0, s, h, candidates: int = 4):
-        """Refine the minimum from the ``candidates`` lowest interior nodes (all eight
-        neighbours on both flanks) and compare with the lowest boundary node: a boundary node
-        lower than every refined interior minimum by more than the edge tolerance is edge
-        contact (first order: the node's value)."""
+    def _refined(self, field_, fac, phi, angle, f0, s, h, candidates: int = 3):
+        """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
+        Newton, :meth:`_refine`) and keep the least. A node minimum outside the refinable
+        region (the pinion's lowest cells) lower than that by more than the edge tolerance
+        stands as it is, flagged as edge contact."""
         n = len(phi)
-        pad = np.pad(field_, ((0, 0), (1, 1), (1, 1)), constant_values=np.inf)
-        nf, np_ = self.pinion.shape
-        interior = np.ones(field_.shape, bool)
-        for di in (0, 1, 2):
-            for dj in (0, 1, 2):
-                interior &= np.isfinite(pad[:, di : di + nf, dj : dj + np_])
-        inner = np.where(interior, field_, np.inf).reshape(n, -1)
+        node_ok = self._refine_node_mask.ravel()
+        inner = np.where(node_ok, field_.reshape(n, -1), np.inf)
         k = min(candidates, inner.shape[1])
         pick = np.argpartition(inner, k - 1, axis=1)[:, :k]
         values = np.take_along_axis(inner, pick, 1)
@@ -358,9 +391,10 @@ class ClearanceField:
         ok = np.isfinite(values)
         best = np.full(n, np.inf)
         s_best, h_best = s.copy(), h.copy()
+        e_best = np.zeros(n, bool)
         if ok.any():
             rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
-            v, s_r, h_r = self._refine(
+            v, s_r, h_r, e_r = self._refine(
                 phi[rows],
                 angle[rows],
                 self.pinion.face_mm[ci[ok]],
@@ -368,19 +402,18 @@ class ClearanceField:
                 values[ok],
             )
             order = np.lexsort((v, rows))
-            rows, v, s_r, h_r = rows[order], v[order], s_r[order], h_r[order]
+            rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
             first = np.r_[True, rows[1:] != rows[:-1]]
             best[rows[first]] = v[first]
             s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
+            e_best[rows[first]] = e_r[first]
         rows = np.arange(n)
         i, j = _argmin_nodes(field_)
         tol = self.edge_tolerance_um * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
         with np.errstate(invalid="ignore"):
-            edge = np.isfinite(f0) & (best - f0 > tol)
-        value = np.where(edge | ~np.isfinite(best), f0, best)
-        s_out = np.where(edge | ~np.isfinite(best), s, s_best)
-        h_out = np.where(edge | ~np.isfinite(best), h, h_best)
-        return value, s_out, h_out, edge
+            low = np.isfinite(f0) & ~(best - f0 <= tol)
+        value = np.where(low, f0, best)
+        return value, np.where(low, s, s_best), np.where(low, h, h_best), low | e_best
 
     def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
         """Refined minimum clearance (rad) at relative pinion angles ``phi_rad``."""
@@ -393,9 +426,10 @@ def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
     return np.unravel_index(flat, field_.shape[1:])
 
 
-def _pseudo_newton(gs, gh, hss, hsh, hhh) -> NDArray:
-    """``(n, 2)`` Newton step -H^+ g of 2 x 2 symmetric systems, the pseudo-inverse on the
-    positive eigenvalues only (a valley keeps its direction free), clipped to one cell."""
+def _pseudo_newton(gs, gh, hss, hsh, hhh, free: float = 2.0) -> NDArray:
+    """``(n, 2)`` step of 2 x 2 symmetric systems: Newton's -H^+ g on the positive
+    eigenvalues, a descent of at most ``free`` cells along the others (a valley or a ridge
+    keeps its slope), the whole step at most two cells per component."""
     mean = 0.5 * (hss + hhh)
     root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
     scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
@@ -406,9 +440,14 @@ def _pseudo_newton(gs, gh, hss, hsh, hhh) -> NDArray:
     norm = np.hypot(ex, ey)
     norm = np.where(norm > 0.0, norm, 1.0)
     ex, ey = ex / norm, ey / norm
+    gnorm = np.hypot(gs, gh)
     step = np.zeros((len(gs), 2))
     for lam, vx, vy in ((lam1, ex, ey), (lam2, -ey, ex)):
-        use = lam > 1e-8 * scale
-        along = np.where(use, -(vx * gs + vy * gh) / np.where(use, lam, 1.0), 0.0)
+        slope = vx * gs + vy * gh
+        use = lam > 1e-6 * scale
+        newton = -slope / np.where(use, lam, 1.0)
+        steep = np.abs(slope) > 1e-9 * np.maximum(gnorm, 1e-300)
+        descent = np.where(steep, -np.sign(slope) * free, 0.0)
+        along = np.where(use, np.clip(newton, -free, free), descent)
         step += along[:, None] * np.stack([vx, vy], axis=1)
-    return np.clip(step, -1.0, 1.0)
+    return np.clip(step, -2.0, 2.0)

@@ -222,29 +222,6 @@ def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
     return cs, ch
 
 
-def _illinois(fun, lo: float, hi: float, f_lo: float, f_hi: float, tol: float, iterations=40):
-    """Root of a scalar function bracketed by [lo, hi] (regula falsi, Illinois variant)."""
-    side = 0
-    x = lo
-    for _ in range(iterations):
-        x = hi - f_hi * (hi - lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (lo + hi)
-        fx = fun(x)
-        if abs(hi - lo) < tol or fx == 0.0:
-            break
-        if fx * f_hi < 0.0:
-            lo, f_lo = hi, f_hi
-            side_new = -1
-        else:
-            side_new = 1
-            if side == 1:
-                f_lo *= 0.5
-        hi, f_hi = x, fx
-        side = side_new
-        if abs(hi - lo) < tol:
-            break
-    return x
-
-
 def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
     """Extent of {separation < compound} along the line through ``point`` perpendicular to
     ``direction``, by bilinear interpolation of the node field."""
@@ -299,66 +276,85 @@ def tooth_contact(
     curve = _PairCurve(field)
     p1 = curve.pitch
     t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
+    step = t[1] - t[0]
     offsets = np.arange(pairs) - (pairs - 1) // 2
-    j0 = np.round(-t / p1)
-    u = t[:, None] + (j0[:, None] + offsets[None, :]) * p1  # (n, pairs), ascending in pairs
-    sample = curve.sample(u.ravel())
-    g = sample.minimum_rad.reshape(u.shape)
+    ids = np.round(-t / p1)[:, None] + offsets[None, :]
+    u = t[:, None] + ids * p1  # (n, pairs): relative angle of each pair's base-pair position
+    # pairs at different positions often sit at the same relative angle: sample each once
+    key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    sample = curve.sample(u.ravel()[first])
+    g = sample.minimum_rad[inv].reshape(u.shape)
+    edge_all = sample.edge[inv].reshape(u.shape)
     if not np.isfinite(g).any(axis=1).all():
         raise ContactError("tca", rule="at some positions no tooth pair touches inside the flanks")
-    carrying = np.argmin(g, axis=1)
     rows = np.arange(positions)
+    carrying = np.argmin(g, axis=1)
     lag = g[rows, carrying]
+    pair_id = ids[rows, carrying]
 
-    # hand-over: F(v) = G(v) - G(v - p1) changes sign where the leaving pair (relative angle
-    # v) hands over to the next (v - p1); bracket from the samples, then solve
-    uc = u[rows, carrying]
-    switch = np.flatnonzero(np.diff(uc) < -0.5 * p1)
-    if switch.size:
-        k = switch[0]
-        lo_v, hi_v = uc[k], uc[k] + (t[k + 1] - t[k])
-        v_star = _solve_handover(curve, lo_v, hi_v, p1)
-    else:  # one pair carries throughout: the hand-over lies beyond the analysed range
-        v_star = _solve_handover(curve, uc[-1], uc[-1] + p1, p1, search=True)
-    g_hand = float(curve(np.array([v_star]))[0])
-    # the TE maximum: least lag of the active interval [v* - p1, v*], refined by parabolas
-    active = (u >= v_star - p1 - 1e-12) & (u <= v_star + 1e-12) & np.isfinite(g)
-    v0 = float(u[active][np.argmin(g[active])]) if active.any() else 0.5 * (v_star - p1)
-    g_min, v_peak = _parabolic_minimum(curve, v0, t[1] - t[0], v_star - p1, v_star)
-    g_min = min(g_min, float(np.min(g[active])) if active.any() else g_min)
-    g_min = min(g_min, float(lag.min()))
+    # hand-over between the leaving pair L and the next I (relative angles v and v - p1):
+    # D(t) = G(t + L p1) - G(t + I p1) changes sign; bracket from the samples, then solve
+    start, end = _contact_interval(curve, u, edge_all, g)
+    contact_ratio = float((end - start) / p1)
+    v_star, g_hand = _find_handover(curve, t, ids, g, pair_id, p1, 0.5 * (start + end))
+    # the TE maximum: least lag of the active interval, by the parabola through the least
+    # sample of the carrying pair and its neighbours on the same pair
+    act = np.flatnonzero(pair_id == pair_id[np.argmin(lag)])
+    kk = act[np.argmin(lag[act])]
+    v_peak = t[kk] + pair_id[kk] * p1
+    if 0 < kk < positions - 1 and pair_id[kk - 1] == pair_id[kk] == pair_id[kk + 1]:
+        gm, g0, gp = lag[kk - 1], lag[kk], lag[kk + 1]
+        curv = gm - 2.0 * g0 + gp
+        if curv > 0.0:
+            v_peak += float(np.clip(0.5 * (gm - gp) / curv, -1.0, 1.0)) * step
+    v_mid = v_star - 0.5 * p1
+    dv = 0.25 * step
+    extra_v = np.array([v_star, v_star - p1, v_peak, v_mid, v_mid - dv, v_mid + dv])
+    ex = curve.sample(extra_v)
+    if g_hand is None:
+        g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
+    g_min = float(min(ex.minimum_rad[2], lag.min()))
     te = (g_min - lag) * ARCSEC
     pair_te = ((g_min - g) * ARCSEC).T
     peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
 
     # separations at the contact gear angle of each position (same lag for every pair)
     compound_mm = compound_um * 1e-3
-    sep = _separation_mm(sample, np.repeat(lag, pairs), separation)
-    sep = sep.reshape((positions, pairs) + field.pinion.shape)
+    sep = _separation_mm(
+        FieldSample(
+            phi_rad=sample.phi_rad,
+            clearance_rad=sample.clearance_rad[inv],
+            normal_factor_mm=sample.normal_factor_mm[inv],
+            radius_mm=sample.radius_mm[inv],
+            minimum_rad=g.ravel(),
+            contact_face_mm=sample.contact_face_mm[inv],
+            contact_profile_mm=sample.contact_profile_mm[inv],
+            edge=edge_all.ravel(),
+        ),
+        np.repeat(lag, pairs),
+        separation,
+    ).reshape((positions, pairs) + field.pinion.shape)
     pattern = sep.min(axis=(0, 1)) * 1e3
     face = field.pinion.face_mm - frame.toe_mm
     profile = field.pinion.profile_mm - frame.root_mm
-    carrying_sep = sep[rows, carrying]
-    path_s, path_h = _centroids(carrying_sep, compound_mm, face, profile)
+    path_s, path_h = _centroids(sep[rows, carrying], compound_mm, face, profile)
 
     # the mean point M, the path's direction there, and the path's ends (bias)
-    v_mid = v_star - 0.5 * p1
-    dv = 0.25 * (t[1] - t[0])
-    extra_v = np.array([v_mid, v_mid - dv, v_mid + dv, v_star - p1, v_star])
-    ex = curve.sample(extra_v)
     ex_sep = _separation_mm(ex, ex.minimum_rad, separation)
     cs, ch = _centroids(ex_sep, compound_mm, face, profile)
-    mean_point = (float(cs[0]), float(ch[0]))
-    direction = np.array([cs[2] - cs[1], ch[2] - ch[1]])
+    mean_point = (float(cs[3]), float(ch[3]))
+    direction = np.array([cs[5] - cs[4], ch[5] - ch[4]])
     norm = float(np.hypot(*direction))
     direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
-    width = _width(ex_sep[0], compound_mm, face, profile, mean_point, direction)
-    bias = float(cs[4] - cs[3])
+    width = _width(ex_sep[3], compound_mm, face, profile, mean_point, direction)
+    bias = float(cs[0] - cs[1])
 
-    contact_ratio = _contact_ratio(curve, u, sample.edge.reshape(u.shape), g, p1)
     centre = frame.centre_mm
-    handovers = v_star + p1 * np.arange(-4, 5)
-    handovers = handovers[(handovers >= t[0]) & (handovers <= t[-1])]
+    handovers = v_star + p1 * np.arange(-12, 13)
+    handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
+    contact_s = sample.contact_face_mm[inv].reshape(u.shape)[rows, carrying]
+    contact_h = sample.contact_profile_mm[inv].reshape(u.shape)[rows, carrying]
     return ToothContact(
         side=side,
         phi1_deg=np.degrees(t),
@@ -369,10 +365,9 @@ def tooth_contact(
         te_peak_to_peak_arcsec=float(peak_to_peak),
         path_face_mm=path_s,
         path_profile_mm=path_h,
-        contact_face_mm=sample.contact_face_mm.reshape(u.shape)[rows, carrying] - frame.toe_mm,
-        contact_profile_mm=sample.contact_profile_mm.reshape(u.shape)[rows, carrying]
-        - frame.root_mm,
-        edge=sample.edge.reshape(u.shape)[rows, carrying],
+        contact_face_mm=contact_s - frame.toe_mm,
+        contact_profile_mm=contact_h - frame.root_mm,
+        edge=edge_all[rows, carrying],
         separation_um=sep * 1e3,
         pattern_um=pattern,
         face_mm=face,
@@ -387,51 +382,75 @@ def tooth_contact(
     )
 
 
-def _solve_handover(curve: _PairCurve, lo: float, hi: float, p1: float, search=False) -> float:
-    """v* with G(v*) = G(v* - p1) in [lo, hi] (the leaving pair's relative angle)."""
+def _find_handover(curve, t, ids, g, pair_id, p1, v_centre):
+    """The leaving pair's relative angle v* at a hand-over and, when the TE is flat (line
+    contact: the pairs' curves coincide within noise), the lag there.
 
-    def f(v):
-        gv = curve(np.array([v, v - p1]))
-        return float(gv[0] - gv[1]) if np.all(np.isfinite(gv)) else math.inf
-
-    f_lo, f_hi = f(lo), f(hi)
-    if search or not (f_lo <= 0.0 <= f_hi):
-        raise ContactError(
-            "tca", rule="no hand-over between tooth pairs was found (contact stays on one pair)"
-        )
-    return _illinois(f, lo, hi, f_lo, f_hi, tol=1e-10)
-
-
-def _parabolic_minimum(curve: _PairCurve, v0: float, step: float, lo: float, hi: float):
-    """Least G near v0 by two rounds of the parabola through three points."""
-    best_v, best_g = v0, float(curve(np.array([v0]))[0])
-    h = step
-    for _ in range(2):
-        vs = np.clip(np.array([best_v - h, best_v, best_v + h]), lo, hi)
-        gs = curve(vs)
-        if not np.all(np.isfinite(gs)) or vs[0] == vs[1] or vs[1] == vs[2]:
-            break
-        curv = gs[0] - 2.0 * gs[1] + gs[2]
-        if curv > 0.0:
-            v_new = float(np.clip(vs[1] + 0.5 * h * (gs[0] - gs[2]) / curv, lo, hi))
-            g_new = float(curve(np.array([v_new]))[0])
-            if g_new < best_g:
-                best_v, best_g = v_new, g_new
-        k = int(np.argmin(gs))
-        if gs[k] < best_g:
-            best_v, best_g = float(vs[k]), float(gs[k])
-        h *= 0.25
-    return best_g, best_v
+    Forward switches of the carrying pair (the next pair, one id lower, takes over) whose
+    difference of the two pairs' lags changes sign bracket the hand-over, which is then solved
+    on the field. Without such a switch the mesh cycle is centred on the pair's contact
+    interval (``v_centre``) and the hand-over lag is read from the samples (None)."""
+    n = len(t)
+    for k in np.flatnonzero(np.diff(pair_id) == -1):
+        leave = pair_id[k]
+        col_l = [np.flatnonzero(ids[k + d] == leave) for d in (0, 1)]
+        col_i = [np.flatnonzero(ids[k + d] == leave - 1) for d in (0, 1)]
+        if any(c.size == 0 for c in col_l + col_i) or k + 1 >= n:
+            continue
+        d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
+        d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
+        if d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
+            lo, hi = t[k] + leave * p1, t[k + 1] + leave * p1
+            return _handover(curve, lo, hi, p1), None
+    return v_centre + 0.5 * p1, float(np.max(g.min(axis=1)))
 
 
-def _contact_ratio(curve: _PairCurve, u, edge, g, p1) -> float:
-    """Span of relative angles with interior contact, ends refined by bisection, over p1."""
+def _handover(curve: _PairCurve, lo: float, hi: float, p1: float) -> float:
+    """v* in [lo, hi] with G(v*) = G(v* - p1): the leaving pair's relative angle at the
+    hand-over. Secant from the bracket, then the parabola through three values of the
+    difference (two evaluations, each of both pairs)."""
+
+    def diff(vs):
+        vs = np.atleast_1d(vs)
+        gv = curve(np.concatenate([vs, vs - p1]))
+        return gv[: len(vs)] - gv[len(vs) :]
+
+    d_lo, d_hi = diff(np.array([lo, hi]))
+    if not (np.isfinite(d_lo) and np.isfinite(d_hi)):
+        raise ContactError("tca", rule="a tooth pair loses contact at the hand-over")
+    if d_lo > 0.0 or d_hi < 0.0:  # flat TE (line contact): the curves coincide within noise
+        return float(lo if abs(d_lo) <= abs(d_hi) else hi)
+    x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo) if d_hi != d_lo else 0.5 * (lo + hi)
+    d0 = float(diff(x0)[0])
+    xs = np.array([lo, x0, hi])
+    ds = np.array([d_lo, d0, d_hi])
+    # the parabola through the three points, its root in the sub-bracket that changes sign
+    a, b, c = np.polyfit(xs - x0, ds, 2)
+    roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
+    roots = np.real(roots[np.isreal(roots)]) + x0
+    a_lo, a_hi = (lo, x0) if d0 > 0.0 else (x0, hi)
+    good = roots[(roots >= a_lo) & (roots <= a_hi)]
+    x1 = float(good[0]) if good.size else x0
+    d1 = float(diff(x1)[0])
+    # one last secant step between the two best points
+    if d1 != d0 and np.isfinite(d1):
+        x2 = x1 - d1 * (x1 - x0) / (d1 - d0)
+        if a_lo <= x2 <= a_hi:
+            return float(x2)
+    return x1
+
+
+def _contact_interval(curve: _PairCurve, u, edge, g) -> tuple[float, float]:
+    """The relative angles between which a pair's contact stays inside the flanks (not at an
+    edge), ends refined by bisection."""
     v = u.ravel()
     inner = (~edge.ravel()) & np.isfinite(g.ravel())
     order = np.argsort(v)
     v, inner = v[order], inner[order]
     if not inner.any():
-        return 0.0
+        raise ContactError(
+            "tca", rule="no tooth pair touches inside the flanks (edge contact only)"
+        )
     k = np.flatnonzero(inner)
     lo_k, hi_k = k[0], k[-1]
 
@@ -447,7 +466,7 @@ def _contact_ratio(curve: _PairCurve, u, edge, g, p1) -> float:
 
     start = refine(v[lo_k], v[lo_k - 1]) if lo_k > 0 else v[lo_k]
     end = refine(v[hi_k], v[hi_k + 1]) if hi_k < len(v) - 1 else v[hi_k]
-    return float((end - start) / p1)
+    return float(start), float(end)
 
 
 @dataclass(frozen=True, kw_only=True)
