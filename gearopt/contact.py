@@ -259,7 +259,7 @@ class ClearanceField:
         i, j, _, _, within = self.pinion._cell_of(s, h)
         return self._refine_cells[i, j] & within
 
-    _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125])
+    _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
     )
@@ -414,6 +414,20 @@ class ClearanceField:
             low = np.isfinite(f0) & ~(best - f0 <= tol)
         value = np.where(low, f0, best)
         return value, np.where(low, s, s_best), np.where(low, h, h_best), low | e_best
+
+    def minimum_near(self, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
+        """Refined minimum at pinion angles ``phi_rad`` started from known nearby contact points
+        (``face_mm``, ``profile_mm`` on the pinion grid): no node field, for the extra
+        evaluations of a mesh cycle (hand-overs, contact ends). Returns ``(value, s, h,
+        edge)``; value +inf where the start is off the flanks."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        s = np.broadcast_to(np.asarray(face_mm, float), phi.shape).copy()
+        h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
+        f0, ok = self._at(s, h, phi, angle)
+        f0 = np.where(ok, f0, np.inf)
+        value, s, h, edge = self._refine(phi, angle, s, h, f0)
+        return value, s, h, edge
 
     def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
         """Refined minimum clearance (rad) at relative pinion angles ``phi_rad``."""

@@ -197,6 +197,13 @@ class _PairCurve:
     def __call__(self, u: NDArray) -> NDArray:
         return self.sample(u).minimum_rad
 
+    def near(self, u: NDArray, face_mm, profile_mm):
+        """``(value, s, h, edge)`` refined from known nearby contact points."""
+        u = np.asarray(u, float)
+        return self.field.minimum_near(
+            self.field.sense * u, face_mm, profile_mm, self.gear_angle_rad
+        )
+
 
 def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str) -> NDArray:
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
@@ -295,7 +302,7 @@ def tooth_contact(
 
     # hand-over between the leaving pair L and the next I (relative angles v and v - p1):
     # D(t) = G(t + L p1) - G(t + I p1) changes sign; bracket from the samples, then solve
-    start, end = _contact_interval(curve, u, edge_all, g)
+    start, end = _contact_interval(curve, sample, sample.edge, sample.minimum_rad)
     contact_ratio = float((end - start) / p1)
     v_star, g_hand = _find_handover(curve, t, ids, g, pair_id, p1, 0.5 * (start + end))
     # the TE maximum: least lag of the active interval, by the parabola through the least
@@ -440,33 +447,33 @@ def _handover(curve: _PairCurve, lo: float, hi: float, p1: float) -> float:
     return x1
 
 
-def _contact_interval(curve: _PairCurve, u, edge, g) -> tuple[float, float]:
+def _contact_interval(curve: _PairCurve, sample: FieldSample, edge, g) -> tuple[float, float]:
     """The relative angles between which a pair's contact stays inside the flanks (not at an
-    edge), ends refined by bisection."""
-    v = u.ravel()
-    inner = (~edge.ravel()) & np.isfinite(g.ravel())
+    edge), both ends refined at once by bisection from the samples (warm-started Newton)."""
+    v = sample.phi_rad * curve.field.sense
+    inner = (~edge) & np.isfinite(g)
     order = np.argsort(v)
     v, inner = v[order], inner[order]
+    cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
     if not inner.any():
         raise ContactError(
             "tca", rule="no tooth pair touches inside the flanks (edge contact only)"
         )
     k = np.flatnonzero(inner)
     lo_k, hi_k = k[0], k[-1]
-
-    def refine(a, b):  # a interior, b not
-        for _ in range(8):
-            m = 0.5 * (a + b)
-            s = curve.sample(np.array([m]))
-            if bool(s.edge[0]) or not np.isfinite(s.minimum_rad[0]):
-                b = m
-            else:
-                a = m
-        return 0.5 * (a + b)
-
-    start = refine(v[lo_k], v[lo_k - 1]) if lo_k > 0 else v[lo_k]
-    end = refine(v[hi_k], v[hi_k + 1]) if hi_k < len(v) - 1 else v[hi_k]
-    return float(start), float(end)
+    a = np.array([v[lo_k], v[hi_k]])  # inside
+    b = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])  # outside (or the end)
+    open_ = np.array([lo_k > 0, hi_k < len(v) - 1])
+    s0, h0 = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
+    for _ in range(6):
+        m = 0.5 * (a + b)
+        value, s1, h1, e = curve.near(m, s0, h0)
+        inside = np.isfinite(value) & ~e
+        a = np.where(inside & open_, m, a)
+        b = np.where(~inside & open_, m, b)
+        s0, h0 = np.where(inside, s1, s0), np.where(inside, h1, h0)
+    ends = np.where(open_, 0.5 * (a + b), a)
+    return float(ends[0]), float(ends[1])
 
 
 @dataclass(frozen=True, kw_only=True)
