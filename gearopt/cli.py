@@ -3,6 +3,7 @@
 ``gearopt plugins`` lists every machine model, evaluator and objective with its distribution;
 ``gearopt settings DESIGN.toml`` prints the blank and the basic machine-tool settings;
 ``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
+``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
 ``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
 ``gearopt change-gears MACHINE --ratio R`` the best change gears of its set. Errors in the input
 are printed as one line naming the parameter, its value and the rule (exit status 2).
@@ -309,6 +310,90 @@ def _cmd_change_gears(args: argparse.Namespace) -> int:
     return 0
 
 
+def _parse_grid(text: str, option: str = "--grid"):
+    from gearopt.flank import FlankGrid
+
+    try:
+        n_face, n_profile = (int(part) for part in text.split(","))
+    except ValueError:
+        raise DesignError(option, text, "must be two integers n_face,n_profile") from None
+    return FlankGrid(n_face=n_face, n_profile=n_profile)
+
+
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    from gearopt.analysis import AnalysisOptions
+    from gearopt.plugins import evaluators
+
+    design = load_design(args.design)
+    conditions: dict[str, Any] = {
+        "separation": args.separation,
+        "compound_um": args.compound_um,
+        "positions": args.positions,
+        "grid": list(_parse_grid(args.grid).shape),
+    }
+    options = AnalysisOptions.from_conditions(conditions)
+    registry = evaluators()
+    out: dict[str, Any] = {"design": design.name, "model": design.model}
+    out["conditions"] = options.as_dict()
+    results = {}
+    for name in ("tca", "backlash", "ease-off"):
+        evaluation = registry[name].evaluate(design, conditions)
+        results[name] = evaluation
+        out.update(evaluation.report)
+    if args.plot:
+        from gearopt.plots import plot_analysis
+
+        out["plots"] = [str(p) for p in plot_analysis(design, results, args.plot)]
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    print(
+        f"design {design.name!r}, machine model {design.model!r}, grid {options.grid.shape}, "
+        f"{options.positions} positions, compound {options.compound_um:g} um "
+        f"({options.separation} separation)"
+    )
+    rows = []
+    for key in ("tca", "tca_coast"):
+        side = out[key]
+        pattern = side["pattern"]
+        rows.append(
+            (
+                side["side"],
+                f"{side['te_peak_to_peak_arcsec']:.4f}",
+                f"{side['contact_ratio']:.3f}",
+                f"{pattern['width_mm']:.2f}",
+                f"{pattern['bias_mm']:.2f}",
+                f"{pattern['center_offset_mm'][0]:.2f}, {pattern['center_offset_mm'][1]:.2f}",
+                "yes" if pattern["edge_contact"] else "no",
+            )
+        )
+    print()
+    header = (
+        "side",
+        "TE p-p (arcsec)",
+        "contact ratio",
+        "width (mm)",
+        "bias (mm)",
+        "M - C face, profile (mm)",
+        "edge contact",
+    )
+    print(_table(rows, header))
+    b = out["backlash"]
+    print(
+        f"\nbacklash (circumferential, at r = {b['radius_mm']:.3f} mm): min {b['min_um']:.2f}, "
+        f"mean {b['mean_um']:.2f}, max {b['max_um']:.2f} um"
+        + ("  INTERFERENCE" if b["interference"] else "")
+    )
+    e = out["ease_off"]
+    print(
+        f"ease-off (pinion, from the surface conjugate to the gear): drive max "
+        f"{e['drive']['max_um']:.2f} um, coast max {e['coast']['max_um']:.2f} um"
+    )
+    for path in out.get("plots", []):
+        print(f"wrote {path}")
+    return 0
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from gearopt.bench import run_benchmarks
 
@@ -349,6 +434,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--grid", default="25,13", help="FlankMap grid n_face,n_profile")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_flanks)
+    p = sub.add_parser("analyze", help="unloaded TCA, pattern, backlash and ease-off")
+    p.add_argument("design", help="design TOML file")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--plot", metavar="DIR", help="write PNG figures into DIR (needs matplotlib)")
+    p.add_argument(
+        "--separation",
+        choices=("normal", "circumferential"),
+        default="normal",
+        help="how the pattern's separation is measured (default normal; seed 003: circumferential)",
+    )
+    p.add_argument("--compound-um", type=float, default=6.5, help="marking-compound thickness (um)")
+    p.add_argument("--positions", type=int, default=21, help="contact positions (two cycles)")
+    p.add_argument("--grid", default="25,21", help="FlankMap grid n_face,n_profile")
+    p.set_defaults(func=_cmd_analyze)
+
     p = sub.add_parser("bench", help="time the kernels (medians over fresh one-thread processes)")
     p.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
     p.add_argument("--repeats", type=int, default=5, help="fresh processes per benchmark")

@@ -37,12 +37,16 @@ class Evaluation:
         Curves and fields (``phi1_deg``, ``te_arcsec``), small enough to store per trial.
     conditions
         The conditions that produced it (misalignment, grid, ...), so a number can be traced.
+    report
+        JSON-ready details for people (what ``gearopt analyze --json`` prints), keyed by
+        section (``{"tca": {...}}``); optional.
     """
 
     evaluator: str
     metrics: Mapping[str, float]
     arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
     conditions: Mapping[str, Any] = field(default_factory=dict)
+    report: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for key, value in self.metrics.items():

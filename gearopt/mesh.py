@@ -104,6 +104,9 @@ class ToothContact:
         ``(n_f, n_p)`` the pattern field: the least separation over positions and pairs.
     width_mm, bias_mm, center_offset_mm, mean_point_mm
         Pattern width at M, bias, M - C, and M, in pattern coordinates.
+    ellipse_major_axis_mm
+        Length of the instantaneous contact zone at M along its principal (long) axis: the
+        major axis of seed 003's contact ellipse, whatever its angle to the path.
     contact_ratio
         Pinion rotation with interior contact over the angular pitch.
     compound_um, separation
@@ -127,6 +130,7 @@ class ToothContact:
     face_mm: NDArray
     profile_mm: NDArray
     width_mm: float
+    ellipse_major_axis_mm: float
     bias_mm: float
     center_offset_mm: tuple[float, float]
     mean_point_mm: tuple[float, float]
@@ -155,6 +159,7 @@ class ToothContact:
             "edge": [bool(e) for e in self.edge],
             "pattern": {
                 "width_mm": float(self.width_mm),
+                "ellipse_major_axis_mm": float(self.ellipse_major_axis_mm),
                 "bias_mm": float(self.bias_mm),
                 "center_offset_mm": [float(v) for v in self.center_offset_mm],
                 "mean_point_mm": [float(v) for v in self.mean_point_mm],
@@ -227,6 +232,26 @@ def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
     cs = np.where(total > 0.0, (w * s).sum(axis=(1, 2)) / safe, s0)
     ch = np.where(total > 0.0, (w * h).sum(axis=(1, 2)) / safe, h0)
     return cs, ch
+
+
+def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
+    """Unit vector of the zone's minor axis (weighted second moments), in (face, profile)."""
+    w = np.clip(compound_mm - sep_mm, 0.0, None)
+    w = np.where(np.isfinite(w), w, 0.0)
+    if w.sum() <= 0.0:
+        return np.array([1.0, 0.0])
+    s = np.broadcast_to(face_mm[:, None], w.shape)
+    h = np.broadcast_to(profile_mm[None, :], w.shape)
+    ms, mh = (w * s).sum() / w.sum(), (w * h).sum() / w.sum()
+    cov = np.array(
+        [
+            [(w * (s - ms) ** 2).sum(), (w * (s - ms) * (h - mh)).sum()],
+            [(w * (s - ms) * (h - mh)).sum(), (w * (h - mh) ** 2).sum()],
+        ]
+    )
+    vals, vecs = np.linalg.eigh(cov)
+    minor = vecs[:, np.argmin(vals)]
+    return np.array([minor[0], minor[1]])
 
 
 def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
@@ -355,6 +380,14 @@ def tooth_contact(
     norm = float(np.hypot(*direction))
     direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
     width = _width(ex_sep[3], compound_mm, face, profile, mean_point, direction)
+    major = _width(
+        ex_sep[3],
+        compound_mm,
+        face,
+        profile,
+        mean_point,
+        _minor_axis(ex_sep[3], compound_mm, face, profile),
+    )
     bias = float(cs[0] - cs[1])
 
     centre = frame.centre_mm
@@ -380,6 +413,7 @@ def tooth_contact(
         face_mm=face,
         profile_mm=profile,
         width_mm=width,
+        ellipse_major_axis_mm=major,
         bias_mm=bias,
         center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),
         mean_point_mm=mean_point,
@@ -488,9 +522,13 @@ class Backlash:
     circumferential_um: NDArray
     radius_mm: float
 
+    #: circumferential backlash below this (um) is interference, above it numerical zero
+    INTERFERENCE_UM = -0.05
+
     @property
     def interference(self) -> bool:
-        return bool(np.any(self.circumferential_um < 0.0))
+        """True where the flanks overlap (backlash below ``INTERFERENCE_UM``)."""
+        return bool(np.any(self.circumferential_um < self.INTERFERENCE_UM))
 
     def as_dict(self) -> dict:
         c = self.circumferential_um

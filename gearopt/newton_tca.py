@@ -1,0 +1,329 @@
+"""Point-by-point tooth contact analysis by Newton's method (Litvin's continuous tangency).
+
+The textbook TCA, kept as an independent cross-check of the contact engine
+(:class:`gearopt.contact.ClearanceField`) and as its speed reference. At each relative pinion
+rotation u (direction of motion; pinion angle phi = sense * u) it solves five equations in five
+unknowns x = (s1, h1, s2, h2, lambda):
+
+    r1(s1, h1; phi) - r2(s2, h2; lambda) = 0          (3 equations, mm, gear frame)
+    n1 . r2_s2 = 0,   n1 . r2_h2 = 0                  (2 equations, cosines)
+
+with r1 the pinion flank point (pinion grid coordinates s1, h1) turned by phi about z_p and
+mapped into the gear frame (q = B p + c), r2 the gear flank point (gear grid coordinates s2, h2)
+at polar angle
+
+    T = Theta2(s2, h2) - ratio * phi + gear_angle + phase - shift - gear_sense * lambda,
+
+i.e. the gear lagging by lambda behind its ideal position (the engine's angular clearance at the
+contact, see :mod:`gearopt.contact`), n1 = r1_s1 x r1_h1 and the normal equations normalised by
+|n1| |r2_s2| and |n1| |r2_h2|. Theta1 and Theta2 are the flanks' local bicubic Hermite
+interpolants (:meth:`gearopt.flank.FlankMap.polar_angle_local`), differentiated here twice for
+an analytic Jacobian. The system is solved by MINPACK's hybrid method
+(``scipy.optimize.root(method="hybr")``) one position after another, each started from the
+previous converged solution.
+
+Newton needs a regular point contact: where the flanks are (nearly) conjugate the contact is a
+line and the Jacobian is singular; at edge contact the tangency lies outside a flank. Both are
+reported as not converged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import root
+
+from gearopt.contact import ClearanceField
+from gearopt.errors import GearoptError
+from gearopt.flank import FlankMap
+
+__all__ = ["NewtonTCA", "newton_tca", "tangency_equations"]
+
+ARCSEC = 180.0 * 3600.0 / math.pi
+
+RESIDUAL_LIMIT = 1e-8
+"""Largest residual (mm for the point equations, cosine for the normal ones) of a converged
+position."""
+
+_POWERS = np.arange(4.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class NewtonTCA:
+    """Solutions of the tangency equations, one per relative pinion rotation.
+
+    Attributes
+    ----------
+    u_rad
+        ``(n,)`` relative pinion rotations (direction of motion; pinion angle = sense * u).
+    lag_rad
+        ``(n,)`` lag lambda of the gear behind its ideal position at the contact (the engine's
+        ``minimum_rad``).
+    pinion_face_mm, pinion_profile_mm
+        ``(n,)`` contact point (s1, h1) on the pinion grid.
+    gear_face_mm, gear_profile_mm
+        ``(n,)`` contact point (s2, h2) on the gear grid.
+    converged
+        ``(n,)`` True where the solver succeeded, the residual is at most
+        :data:`RESIDUAL_LIMIT` and the point lies on both flanks. Elsewhere the other arrays hold
+        the solver's last iterate (for diagnosis only).
+    iterations
+        ``(n,)`` evaluations of the equations by the solver (MINPACK hybrid: Newton steps with
+        Broyden updates; the Jacobian is evaluated far less often).
+    residual
+        ``(n,)`` largest absolute residual of the five (scaled) equations at the solution.
+    """
+
+    u_rad: NDArray
+    lag_rad: NDArray
+    pinion_face_mm: NDArray
+    pinion_profile_mm: NDArray
+    gear_face_mm: NDArray
+    gear_profile_mm: NDArray
+    converged: NDArray
+    iterations: NDArray
+    residual: NDArray
+
+    @property
+    def te_arcsec(self) -> NDArray:
+        """``(n,)`` transmission error of this tooth pair in arcsec of gear rotation:
+        ``(min lag - lag)`` over the converged positions (maximum 0, negative when the gear lags
+        more); NaN where not converged."""
+        lag = np.where(self.converged, self.lag_rad, np.nan)
+        if not self.converged.any():
+            return lag
+        return (np.nanmin(lag) - lag) * ARCSEC
+
+    def unknowns(self, k: int) -> NDArray:
+        """``(5,)`` the unknowns x = (s1, h1, s2, h2, lambda) of position ``k``."""
+        return np.array(
+            [
+                self.pinion_face_mm[k],
+                self.pinion_profile_mm[k],
+                self.gear_face_mm[k],
+                self.gear_profile_mm[k],
+                self.lag_rad[k],
+            ]
+        )
+
+
+def _polar_jet(fm: FlankMap, s: float, h: float):
+    """Theta of the local Hermite interpolant at ``(s, h)`` with its first and second
+    derivatives: ``(theta, t_s, t_h, t_ss, t_sh, t_hh, inside)``. Beyond the grid the edge
+    cell's polynomial is extended (as in ``polar_angle_local``)."""
+    coef, ok = fm._cells
+    i, j, u, v, within = fm._cell_of(np.float64(s), np.float64(h))
+    c = coef[i, j]
+    ds = (fm.face_mm[-1] - fm.face_mm[0]) / (len(fm.face_mm) - 1)
+    dh = (fm.profile_mm[-1] - fm.profile_mm[0]) / (len(fm.profile_mm) - 1)
+    uu = np.array([1.0, u, u * u, u * u * u])
+    vv = np.array([1.0, v, v * v, v * v * v])
+    du = np.array([0.0, 1.0, 2.0 * u, 3.0 * u * u]) / ds
+    dv = np.array([0.0, 1.0, 2.0 * v, 3.0 * v * v]) / dh
+    d2u = np.array([0.0, 0.0, 2.0, 6.0 * u]) / (ds * ds)
+    d2v = np.array([0.0, 0.0, 2.0, 6.0 * v]) / (dh * dh)
+    cv, cdv, cd2v = c @ vv, c @ dv, c @ d2v
+    return (
+        float(uu @ cv),
+        float(du @ cv),
+        float(uu @ cdv),
+        float(d2u @ cv),
+        float(du @ cdv),
+        float(uu @ cd2v),
+        bool(ok[i, j] & within),
+    )
+
+
+def _surface_jet(fm: FlankMap, s: float, h: float, turn: float):
+    """Flank point at grid coordinates ``(s, h)`` with Theta + ``turn`` as polar angle, in the
+    member frame: ``(p, p_s, p_h, p_ss, p_sh, p_hh, radius, e_r, e_t, (t_s, t_h), inside)``."""
+    th, t_s, t_h, t_ss, t_sh, t_hh, inside = _polar_jet(fm, s, h)
+    g = math.radians(fm.pitch_angle_deg)
+    sg, cg = math.sin(g), math.cos(g)
+    big_r = s * sg + h * cg
+    big_l = s * cg - h * sg
+    angle = th + turn
+    ca, sa = math.cos(angle), math.sin(angle)
+    e_r = np.array([ca, sa, 0.0])
+    e_t = np.array([-sa, ca, 0.0])
+    e_z = np.array([0.0, 0.0, 1.0])
+    # P = R e_r + L e_z with R, L linear in (s, h): P_x = R_x e_r + R T_x e_t + L_x e_z,
+    # P_xy = (R_x T_y + R_y T_x + R T_xy) e_t - R T_x T_y e_r
+    p = big_r * e_r + big_l * e_z
+    p_s = sg * e_r + big_r * t_s * e_t + cg * e_z
+    p_h = cg * e_r + big_r * t_h * e_t - sg * e_z
+    p_ss = (2.0 * sg * t_s + big_r * t_ss) * e_t - big_r * t_s * t_s * e_r
+    p_sh = (sg * t_h + cg * t_s + big_r * t_sh) * e_t - big_r * t_s * t_h * e_r
+    p_hh = (2.0 * cg * t_h + big_r * t_hh) * e_t - big_r * t_h * t_h * e_r
+    return p, p_s, p_h, p_ss, p_sh, p_hh, big_r, e_r, e_t, (t_s, t_h), inside
+
+
+def _cosine(a: NDArray, b: NDArray):
+    """a.b / (|a| |b|) and its gradients with respect to a and b."""
+    na, nb = math.sqrt(a @ a), math.sqrt(b @ b)
+    ah, bh = a / na, b / nb
+    f = float(ah @ bh)
+    return f, (bh - f * ah) / na, (ah - f * bh) / nb
+
+
+def _equations(field: ClearanceField, phi: float, gear_turn: float, x: NDArray):
+    """``(F, J, inside_pinion, inside_gear)`` of the tangency equations at x (module
+    docstring); ``gear_turn`` is the gear's polar-angle offset before the lag."""
+    s1, h1, s2, h2, lag = (float(v) for v in x)
+    b = field.b
+    p, p_s, p_h, p_ss, p_sh, p_hh, _, _, _, _, in1 = _surface_jet(field.pinion, s1, h1, phi)
+    q = b @ p + field.c
+    a1, b1 = b @ p_s, b @ p_h
+    n1 = np.cross(a1, b1)
+    n1_s = np.cross(b @ p_ss, b1) + np.cross(a1, b @ p_sh)
+    n1_h = np.cross(b @ p_sh, b1) + np.cross(a1, b @ p_hh)
+    gs = field.gear_sense
+    r, r_s, r_h, r_ss, r_sh, r_hh, big_r2, e_r, e_t, (t_s, t_h), in2 = _surface_jet(
+        field.gear, s2, h2, gear_turn - gs * lag
+    )
+    g2 = math.radians(field.gear.pitch_angle_deg)
+    sg2, cg2 = math.sin(g2), math.cos(g2)
+    # the lag turns the polar angle by -gs lambda: e_r' = -gs e_t, e_t' = gs e_r
+    r_l = -gs * big_r2 * e_t
+    r_sl = gs * (big_r2 * t_s * e_r - sg2 * e_t)
+    r_hl = gs * (big_r2 * t_h * e_r - cg2 * e_t)
+    f_s, ga_s, gb_s = _cosine(n1, r_s)
+    f_h, ga_h, gb_h = _cosine(n1, r_h)
+    F = np.empty(5)
+    F[:3] = q - r
+    F[3], F[4] = f_s, f_h
+    J = np.empty((5, 5))
+    J[:3, 0], J[:3, 1] = a1, b1
+    J[:3, 2], J[:3, 3], J[:3, 4] = -r_s, -r_h, -r_l
+    J[3] = [ga_s @ n1_s, ga_s @ n1_h, gb_s @ r_ss, gb_s @ r_sh, gb_s @ r_sl]
+    J[4] = [ga_h @ n1_s, ga_h @ n1_h, gb_h @ r_sh, gb_h @ r_hh, gb_h @ r_hl]
+    return F, J, in1, in2
+
+
+def _angles(field: ClearanceField, u: float, gear_angle_rad: float) -> tuple[float, float]:
+    """Pinion angle phi and the gear's polar-angle offset (before the lag) at rotation u."""
+    phi = field.sense * u
+    turn = -field.ratio * phi + gear_angle_rad + field.phase_rad - field._shift
+    return phi, turn
+
+
+def tangency_equations(
+    field: ClearanceField, u_rad: float, x, *, gear_angle_rad: float = 0.0
+) -> tuple[NDArray, NDArray]:
+    """The five scaled tangency equations and their analytic Jacobian.
+
+    Parameters
+    ----------
+    field
+        The pair (pinion and gear flanks, placement, senses, phase).
+    u_rad
+        Relative pinion rotation in the direction of motion.
+    x
+        ``(5,)`` unknowns (s1, h1, s2, h2, lambda): mm, mm, mm, mm, rad.
+    gear_angle_rad
+        Extra turn of the gear about +z_g (as in :meth:`ClearanceField.sample`).
+
+    Returns
+    -------
+    F, J
+        ``(5,)`` residuals (three point differences in mm, two cosines) and ``(5, 5)``
+        dF/dx.
+    """
+    phi, turn = _angles(field, float(u_rad), float(gear_angle_rad))
+    F, J, _, _ = _equations(field, phi, turn, np.asarray(x, float))
+    return F, J
+
+
+def _mapped_start(field: ClearanceField, phi: float, s1: float, h1: float):
+    """The pinion point (s1, h1) at angle phi in the gear frame, as gear grid coordinates."""
+    p = _surface_jet(field.pinion, s1, h1, phi)[0]
+    q = field.b @ p + field.c
+    s2, h2 = field.gear.to_grid(q[2], math.hypot(q[0], q[1]))
+    return float(s2), float(h2), p
+
+
+def newton_tca(
+    field: ClearanceField,
+    u_rad,
+    *,
+    start: tuple[float, float] | None = None,
+    gear_angle_rad: float = 0.0,
+    tol: float = 1e-10,
+) -> NewtonTCA:
+    """Tooth contact analysis by Newton's method on the equations of continuous tangency.
+
+    Parameters
+    ----------
+    field
+        The pair, e.g. ``mesh_pair(design).drive``.
+    u_rad
+        ``(n,)`` relative pinion rotations in the direction of motion, solved in this order,
+        each from the previous converged solution.
+    start
+        ``(s1, h1)`` pinion grid coordinates (mm) of the first guess; the lag guess is the
+        engine's angular clearance there. Default: the engine's refined contact point and lag
+        at ``u_rad[0]``.
+    gear_angle_rad
+        Extra turn of the gear about +z_g from its ideal angle (as in
+        :meth:`ClearanceField.sample`).
+    tol
+        Relative step tolerance of the solver (``scipy.optimize.root(method="hybr")``).
+
+    Returns
+    -------
+    NewtonTCA
+        One solution per rotation; see ``converged``.
+    """
+    u = np.atleast_1d(np.asarray(u_rad, float))
+    if u.ndim != 1 or u.size == 0:
+        raise GearoptError("u_rad", u.shape, "must be a non-empty 1-d array of angles")
+    gear_angle_rad = float(gear_angle_rad)
+    phi0, _ = _angles(field, float(u[0]), gear_angle_rad)
+    if start is None:
+        from gearopt.mesh import _PairCurve
+
+        first = _PairCurve(field, gear_angle_rad).sample(u[:1])
+        s1, h1 = float(first.contact_face_mm[0]), float(first.contact_profile_mm[0])
+        lag = float(first.minimum_rad[0])
+        s2, h2, _ = _mapped_start(field, phi0, s1, h1)
+    else:
+        s1, h1 = (float(v) for v in start)
+        s2, h2, p = _mapped_start(field, phi0, s1, h1)
+        lag = float(field._gap(p, None, np.float64(phi0), gear_angle_rad)[0])
+    if not np.all(np.isfinite([s1, h1, s2, h2, lag])):
+        raise GearoptError("start", (s1, h1, lag), "must be a finite contact guess")
+    guess = np.array([s1, h1, s2, h2, lag])
+
+    out = np.full((len(u), 5), np.nan)
+    converged = np.zeros(len(u), bool)
+    iterations = np.zeros(len(u), int)
+    residual = np.full(len(u), np.inf)
+    for k, uk in enumerate(u):
+        phi, turn = _angles(field, float(uk), gear_angle_rad)
+
+        def fun(x, phi=phi, turn=turn):
+            F, J, _, _ = _equations(field, phi, turn, x)
+            return F, J
+
+        sol = root(fun, guess, jac=True, method="hybr", tol=tol)
+        F, _, in1, in2 = _equations(field, phi, turn, sol.x)
+        res = float(np.max(np.abs(F)))
+        ok = bool(sol.success) and np.all(np.isfinite(sol.x)) and res <= RESIDUAL_LIMIT
+        ok = ok and in1 and in2
+        out[k], converged[k], iterations[k], residual[k] = sol.x, ok, sol.nfev, res
+        if ok:
+            guess = sol.x.copy()
+    return NewtonTCA(
+        u_rad=u,
+        lag_rad=out[:, 4],
+        pinion_face_mm=out[:, 0],
+        pinion_profile_mm=out[:, 1],
+        gear_face_mm=out[:, 2],
+        gear_profile_mm=out[:, 3],
+        converged=converged,
+        iterations=iterations,
+        residual=residual,
+    )
