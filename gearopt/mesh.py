@@ -634,13 +634,13 @@ def ease_off(
         slope = np.where(ok, 0.5 * (dp - dm), 0.0)
         step = np.where(curv > 0.0, np.clip(-slope / curv, -1.0, 1.0), 0.0)
         value = np.where(ok, d0 + slope * step + 0.5 * curv * step**2, 0.0)
-    normal = value * fac[k, cols]
-    normal = np.where(ok, normal, np.inf)
     mask = ok.reshape(field.pinion.shape)
     if not mask.any():
         raise ContactError("ease_off", rule="no pinion node meets the gear flank")
-    base = normal[ok].min()
-    e = np.where(ok, (normal - base) * 1e3, 0.0).reshape(field.pinion.shape)
+    # the conjugate surface is defined up to a turn of the gear: take the turn that makes it
+    # touch the pinion, then convert each node's angular clearance along its normal
+    normal = (value - value[ok].min()) * fac[k, cols]
+    e = np.where(ok, normal * 1e3, 0.0).reshape(field.pinion.shape)
     return EaseOff(
         face_mm=field.pinion.face_mm - frame.toe_mm,
         profile_mm=field.pinion.profile_mm - frame.root_mm,
