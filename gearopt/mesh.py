@@ -215,7 +215,8 @@ def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str)
     (one per row)."""
     factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
     extra = sample.clearance_rad - reference_rad.reshape(-1, 1, 1)
-    return np.where(np.isfinite(extra), extra * factor, np.inf)
+    with np.errstate(invalid="ignore"):
+        return np.where(np.isfinite(extra), extra * factor, np.inf)
 
 
 def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):

@@ -69,7 +69,7 @@ def test_analytic_jacobian_matches_finite_differences(pair, solved, side):
     k = 7
     assert newton.converged[k]
     u = U_RAD[k]
-    # near the contact, off the solution (the normal equations' derivatives do not vanish there)
+    # near the contact but off the solution, so that every term of the Jacobian counts
     x = newton.unknowns(k)
     x[0] = _in_cell(x[0], field.pinion.face_mm, 0.37)
     x[1] = _in_cell(x[1], field.pinion.profile_mm, 0.61)
