@@ -196,6 +196,8 @@ class ClearanceField:
             below[:, 1:] = keep[:, :-1]
             keep &= below
         self._refine_node_mask = keep
+        g = math.radians(pinion.pitch_angle_deg)
+        self._cos_sin_pitch = (math.cos(g), math.sin(g))
         self._refine_cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
         self._ds = float(np.mean(np.diff(pinion.face_mm)))
         self._dh = float(np.mean(np.diff(pinion.profile_mm)))
@@ -221,18 +223,27 @@ class ClearanceField:
     def _gap(self, p: NDArray, n: NDArray | None, phi: NDArray, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p`` (normals ``n``) at pinion angles ``phi``
         (broadcast): ``(delta, normal factor, R2, valid)``."""
-        q = _turned(p, phi) @ self.b.T + self.c
-        radius = np.hypot(q[..., 0], q[..., 1])
-        theta = np.arctan2(q[..., 1], q[..., 0])
-        s2, h2 = self.gear.to_grid(q[..., 2], radius)
+        c, s = np.cos(phi), np.sin(phi)
+        b, off = self.b, self.c
+        x, y, z = p[..., 0], p[..., 1], p[..., 2]
+        xt, yt = c * x - s * y, s * x + c * y
+        qx = b[0, 0] * xt + b[0, 1] * yt + (b[0, 2] * z + off[0])
+        qy = b[1, 0] * xt + b[1, 1] * yt + (b[1, 2] * z + off[1])
+        qz = b[2, 0] * xt + b[2, 1] * yt + (b[2, 2] * z + off[2])
+        radius = np.hypot(qx, qy)
+        theta = np.arctan2(qy, qx)
+        s2, h2 = self.gear.to_grid(qz, radius)
         flank, valid = self.gear.polar_angle_local(s2, h2, with_inside=True)
-        turn = -self.ratio * phi + gear_angle_rad + self.phase_rad
-        gap = flank + turn - theta - self._shift
+        turn = -self.ratio * phi + (gear_angle_rad + self.phase_rad - self._shift)
+        gap = flank - theta + turn
         delta = self.gear_sense * ((gap + math.pi) % (2.0 * math.pi) - math.pi)
         if n is None:
             return delta, None, radius, valid
-        n = _turned(n, phi) @ self.b.T
-        factor = np.abs(n[..., 1] * q[..., 0] - n[..., 0] * q[..., 1])
+        nx, ny = n[..., 0], n[..., 1]
+        nxt, nyt = c * nx - s * ny, s * nx + c * ny
+        mx = b[0, 0] * nxt + b[0, 1] * nyt + b[0, 2] * n[..., 2]
+        my = b[1, 0] * nxt + b[1, 1] * nyt + b[1, 2] * n[..., 2]
+        factor = np.abs(my * qx - mx * qy)
         return delta, factor, radius, valid
 
     def _raw(self, phi_rad: NDArray, gear_angle_rad=0.0):
@@ -247,9 +258,9 @@ class ClearanceField:
         (finite everywhere); ``valid`` is False outside either flank and in the pinion's lowest
         generated cells, where the envelope's fold spoils any interpolant."""
         fm = self.pinion
-        g = math.radians(fm.pitch_angle_deg)
-        big_l = s * math.cos(g) - h * math.sin(g)
-        big_r = s * math.sin(g) + h * math.cos(g)
+        cg, sg = self._cos_sin_pitch
+        big_l = s * cg - h * sg
+        big_r = s * sg + h * cg
         theta = fm.polar_angle_local(s, h)
         p = np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
         delta, _, _, valid = self._gap(p, None, phi, gear_angle_rad)
@@ -311,10 +322,12 @@ class ClearanceField:
             take = ok[rows, k]
             cut = take & (k > 0)
             edge = np.where(take, cut & (ft[rows, k] - (f[:, 0] + model) > tol), edge)
+            moved = np.abs(ts[rows, k] - s) + np.abs(th[rows, k] - h)
             s = np.where(take, ts[rows, k], s)
             h = np.where(take, th[rows, k], h)
             best = np.where(take, ft[rows, k], best)
-            if not take.any():
+            # converged: no row moved more than a thousandth of a cell
+            if not np.any(take & (moved > 1e-3 * min(ds, dh))):
                 break
         return best, s, h, edge
 

@@ -237,17 +237,32 @@ class FlankMap:
         ok = k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:]
         return coef, ok
 
+    @cached_property
+    def _lookup(self):
+        """Scalars and tables of the local interpolant's fast path."""
+        coef, ok = self._cells
+        fs, fp = self.face_mm, self.profile_mm
+        return (
+            float(fs[0]),
+            (len(fs) - 1) / float(fs[-1] - fs[0]),
+            float(len(fs) - 2),
+            float(fp[0]),
+            (len(fp) - 1) / float(fp[-1] - fp[0]),
+            float(len(fp) - 2),
+            len(fp) - 1,
+            np.ascontiguousarray(coef.reshape(-1, 16).T),
+            ok.ravel(),
+        )
+
     def _cell_of(self, s: NDArray, h: NDArray):
         """Cell indices and unit coordinates of grid points (uniform grids by arithmetic)."""
-        fs, fp = self.face_mm, self.profile_mm
-        a = (fs[-1] - fs[0]) / (len(fs) - 1)
-        b = (fp[-1] - fp[0]) / (len(fp) - 1)
-        x = (s - fs[0]) / a
-        y = (h - fp[0]) / b
-        i = np.clip(np.floor(x).astype(np.intp), 0, len(fs) - 2)
-        j = np.clip(np.floor(y).astype(np.intp), 0, len(fp) - 2)
-        within = (x >= 0.0) & (x <= len(fs) - 1) & (y >= 0.0) & (y <= len(fp) - 1)
-        return i, j, x - i, y - j, within
+        s0, ia, imax, h0, ib, jmax, _, _, _ = self._lookup
+        x = (s - s0) * ia
+        y = (h - h0) * ib
+        fi = np.minimum(np.maximum(x, 0.0), imax).astype(np.intp)
+        fj = np.minimum(np.maximum(y, 0.0), jmax).astype(np.intp)
+        within = (x >= 0.0) & (x <= imax + 1.0) & (y >= 0.0) & (y <= jmax + 1.0)
+        return fi, fj, x - fi, y - fj, within
 
     def polar_angle_local(self, face_mm, profile_mm, *, with_inside: bool = False):
         """Theta at grid coordinates ``(s, h)`` by the bicubic Hermite interpolant of the cell
@@ -255,15 +270,21 @@ class FlankMap:
         from the exact normals, the cross derivative by differences), so an error at one node
         stays in its cells. More accurate than the global spline near the envelope's fold,
         where Theta is not smooth. With ``with_inside``, also :meth:`inside` of the points."""
-        s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
-        coef, ok = self._cells
+        s = np.asarray(face_mm, float)
+        h = np.asarray(profile_mm, float)
+        if s.shape != h.shape:
+            s, h = np.broadcast_arrays(s, h)
         i, j, u, v, within = self._cell_of(s, h)
-        c = coef[i, j]
-        uu = np.stack([np.ones_like(u), u, u * u, u * u * u], axis=-1)
-        vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
-        out = np.einsum("...a,...ab,...b->...", uu, c, vv)
+        n_cols, coef_t, ok = self._lookup[6:]
+        k = i * n_cols + j
+        c = coef_t[:, k]
+        w3 = ((c[15] * v + c[14]) * v + c[13]) * v + c[12]
+        w2 = ((c[11] * v + c[10]) * v + c[9]) * v + c[8]
+        w1 = ((c[7] * v + c[6]) * v + c[5]) * v + c[4]
+        w0 = ((c[3] * v + c[2]) * v + c[1]) * v + c[0]
+        out = ((w3 * u + w2) * u + w1) * u + w0
         if with_inside:
-            return out, ok[i, j] & within
+            return out, ok[k] & within
         return out
 
     def point_at(self, face_mm, profile_mm) -> NDArray:

@@ -330,7 +330,9 @@ def tooth_contact(
     # D(t) = G(t + L p1) - G(t + I p1) changes sign; bracket from the samples, then solve
     start, end = _contact_interval(curve, sample, sample.edge, sample.minimum_rad)
     contact_ratio = float((end - start) / p1)
-    v_star, g_hand = _find_handover(curve, t, ids, g, pair_id, p1, 0.5 * (start + end))
+    cs = sample.contact_face_mm[inv].reshape(u.shape)
+    ch = sample.contact_profile_mm[inv].reshape(u.shape)
+    v_star, g_hand = _find_handover(curve, t, ids, g, pair_id, p1, 0.5 * (start + end), cs, ch)
     # the TE maximum: least lag of the active interval, by the parabola through the least
     # sample of the carrying pair and its neighbours on the same pair
     act = np.flatnonzero(pair_id == pair_id[np.argmin(lag)])
@@ -424,14 +426,15 @@ def tooth_contact(
     )
 
 
-def _find_handover(curve, t, ids, g, pair_id, p1, v_centre):
+def _find_handover(curve, t, ids, g, pair_id, p1, v_centre, cs, ch):
     """The leaving pair's relative angle v* at a hand-over and, when the TE is flat (line
     contact: the pairs' curves coincide within noise), the lag there.
 
     Forward switches of the carrying pair (the next pair, one id lower, takes over) whose
     difference of the two pairs' lags changes sign bracket the hand-over, which is then solved
-    on the field. Without such a switch the mesh cycle is centred on the pair's contact
-    interval (``v_centre``) and the hand-over lag is read from the samples (None)."""
+    on the field (warm-started from the samples' contact points). Without such a switch the
+    mesh cycle is centred on the pair's contact interval (``v_centre``) and the hand-over lag
+    is read from the samples (None)."""
     n = len(t)
     for k in np.flatnonzero(np.diff(pair_id) == -1):
         leave = pair_id[k]
@@ -443,37 +446,37 @@ def _find_handover(curve, t, ids, g, pair_id, p1, v_centre):
         d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
         if d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
             lo, hi = t[k] + leave * p1, t[k + 1] + leave * p1
-            return _handover(curve, lo, hi, p1), None
+            starts = (
+                0.5 * (cs[k, col_l[0][0]] + cs[k + 1, col_l[1][0]]),
+                0.5 * (ch[k, col_l[0][0]] + ch[k + 1, col_l[1][0]]),
+                0.5 * (cs[k, col_i[0][0]] + cs[k + 1, col_i[1][0]]),
+                0.5 * (ch[k, col_i[0][0]] + ch[k + 1, col_i[1][0]]),
+            )
+            return _handover(curve, lo, hi, p1, d_lo, d_hi, starts), None
     return v_centre + 0.5 * p1, float(np.max(g.min(axis=1)))
 
 
-def _handover(curve: _PairCurve, lo: float, hi: float, p1: float) -> float:
+def _handover(curve: _PairCurve, lo, hi, p1, d_lo, d_hi, starts) -> float:
     """v* in [lo, hi] with G(v*) = G(v* - p1): the leaving pair's relative angle at the
-    hand-over. Secant from the bracket, then the parabola through three values of the
-    difference (two evaluations, each of both pairs)."""
+    hand-over, from the bracket's differences ``d_lo`` <= 0 <= ``d_hi``: a secant step, then
+    the parabola through the three differences (two evaluations of both pairs)."""
+    s_l, h_l, s_i, h_i = starts
 
-    def diff(vs):
-        vs = np.atleast_1d(vs)
-        gv = curve(np.concatenate([vs, vs - p1]))
-        return gv[: len(vs)] - gv[len(vs) :]
+    def diff(v):
+        value = curve.near(np.array([v, v - p1]), [s_l, s_i], [h_l, h_i])[0]
+        return float(value[0] - value[1])
 
-    d_lo, d_hi = diff(np.array([lo, hi]))
-    if not (np.isfinite(d_lo) and np.isfinite(d_hi)):
-        raise ContactError("tca", rule="a tooth pair loses contact at the hand-over")
-    if d_lo > 0.0 or d_hi < 0.0:  # flat TE (line contact): the curves coincide within noise
-        return float(lo if abs(d_lo) <= abs(d_hi) else hi)
-    x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo) if d_hi != d_lo else 0.5 * (lo + hi)
-    d0 = float(diff(x0)[0])
-    xs = np.array([lo, x0, hi])
-    ds = np.array([d_lo, d0, d_hi])
-    # the parabola through the three points, its root in the sub-bracket that changes sign
-    a, b, c = np.polyfit(xs - x0, ds, 2)
+    x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
+    d0 = diff(x0)
+    if not np.isfinite(d0):
+        return float(x0)
+    a, b, c = np.polyfit(np.array([lo, x0, hi]) - x0, np.array([d_lo, d0, d_hi]), 2)
     roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
     roots = np.real(roots[np.isreal(roots)]) + x0
     a_lo, a_hi = (lo, x0) if d0 > 0.0 else (x0, hi)
     good = roots[(roots >= a_lo) & (roots <= a_hi)]
     x1 = float(good[0]) if good.size else x0
-    d1 = float(diff(x1)[0])
+    d1 = diff(x1)
     # one last secant step between the two best points
     if d1 != d0 and np.isfinite(d1):
         x2 = x1 - d1 * (x1 - x0) / (d1 - d0)
@@ -500,7 +503,7 @@ def _contact_interval(curve: _PairCurve, sample: FieldSample, edge, g) -> tuple[
     b = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])  # outside (or the end)
     open_ = np.array([lo_k > 0, hi_k < len(v) - 1])
     s0, h0 = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-    for _ in range(6):
+    for _ in range(5):
         m = 0.5 * (a + b)
         value, s1, h1, e = curve.near(m, s0, h0)
         inside = np.isfinite(value) & ~e
