@@ -198,6 +198,7 @@ class ClearanceField:
         self._refine_node_mask = keep
         g = math.radians(pinion.pitch_angle_deg)
         self._cos_sin_pitch = (math.cos(g), math.sin(g))
+        self._refine_flat = (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel()
         self._refine_cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
         self._ds = float(np.mean(np.diff(pinion.face_mm)))
         self._dh = float(np.mean(np.diff(pinion.profile_mm)))
@@ -220,12 +221,13 @@ class ClearanceField:
         """Sense of the gear's polar angle while the pinion turns with ``sense``."""
         return -self.sense
 
-    def _gap(self, p: NDArray, n: NDArray | None, phi: NDArray, gear_angle_rad=0.0):
-        """Angular clearance of pinion points ``p`` (normals ``n``) at pinion angles ``phi``
-        (broadcast): ``(delta, normal factor, R2, valid)``."""
+    def _gap(self, p, n: NDArray | None, phi: NDArray, gear_angle_rad=0.0):
+        """Angular clearance of pinion points ``p`` (``(..., 3)`` or a tuple of components;
+        normals ``n``) at pinion angles ``phi`` (broadcast): ``(delta, normal factor, R2,
+        valid)``."""
         c, s = np.cos(phi), np.sin(phi)
         b, off = self.b, self.c
-        x, y, z = p[..., 0], p[..., 1], p[..., 2]
+        x, y, z = p if isinstance(p, tuple) else (p[..., 0], p[..., 1], p[..., 2])
         xt, yt = c * x - s * y, s * x + c * y
         qx = b[0, 0] * xt + b[0, 1] * yt + (b[0, 2] * z + off[0])
         qy = b[1, 0] * xt + b[1, 1] * yt + (b[1, 2] * z + off[1])
@@ -259,12 +261,11 @@ class ClearanceField:
         generated cells, where the envelope's fold spoils any interpolant."""
         fm = self.pinion
         cg, sg = self._cos_sin_pitch
-        big_l = s * cg - h * sg
         big_r = s * sg + h * cg
-        theta = fm.polar_angle_local(s, h)
-        p = np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
+        theta, inside = fm.polar_angle_local(s, h, with_inside=self._refine_flat)
+        p = (big_r * np.cos(theta), big_r * np.sin(theta), s * cg - h * sg)
         delta, _, _, valid = self._gap(p, None, phi, gear_angle_rad)
-        return delta, self._refinable(s, h) & valid
+        return delta, inside & valid
 
     def _refinable(self, s: NDArray, h: NDArray) -> NDArray:
         i, j, _, _, within = self.pinion._cell_of(s, h)
@@ -292,13 +293,21 @@ class ClearanceField:
         es, eh = 0.25 * ds, 0.25 * dh
         st = self._STENCIL
         fr = self._FRACTIONS
+        n = len(s)
+        rows = np.arange(n)
         best = f0.copy()
-        edge = np.zeros(len(s), bool)
+        edge = np.zeros(n, bool)
         tol = self.edge_tolerance_um * 1e-3 / max(self._factor_scale, 1e-9)
+        f = np.empty((n, len(st)))
+        need = np.ones(n, bool)
         for _ in range(iterations):
-            f, _ = self._at(
-                s[:, None] + st[:, 0] * es, h[:, None] + st[:, 1] * eh, phi[:, None], angle[:, None]
-            )
+            if need.any():  # stencils not already evaluated with the last step
+                f[need], _ = self._at(
+                    s[need, None] + st[:, 0] * es,
+                    h[need, None] + st[:, 1] * eh,
+                    phi[need, None],
+                    angle[need, None],
+                )
             gs, gh = 0.5 * (f[:, 1] - f[:, 2]) / es, 0.5 * (f[:, 3] - f[:, 4]) / eh
             hss = (f[:, 1] - 2.0 * f[:, 0] + f[:, 2]) / es**2
             hhh = (f[:, 3] - 2.0 * f[:, 0] + f[:, 4]) / eh**2
@@ -306,26 +315,41 @@ class ClearanceField:
             # in cell units, so that both directions weigh alike
             g2 = (gs * ds, gh * dh)
             h2 = (hss * ds * ds, hsh * ds * dh, hhh * dh * dh)
-            step = _pseudo_newton(*g2, *h2)
-            model = (
-                g2[0] * step[:, 0]
-                + g2[1] * step[:, 1]
-                + 0.5 * (h2[0] * step[:, 0] ** 2 + 2 * h2[1] * step[:, 0] * step[:, 1])
-                + 0.5 * h2[2] * step[:, 1] ** 2
+            step, curved = _pseudo_newton(*g2, *h2)
+            # the Newton part's predicted fall (a valley's slope along itself is not edge)
+            fall = -(
+                g2[0] * curved[:, 0]
+                + g2[1] * curved[:, 1]
+                + 0.5 * (h2[0] * curved[:, 0] ** 2 + 2 * h2[1] * curved[:, 0] * curved[:, 1])
+                + 0.5 * h2[2] * curved[:, 1] ** 2
             )
+            # the step cut back by halvings, the Newton part's end, and the stencil around the
+            # full step, at once
             ts = s[:, None] + fr * (step[:, :1] * ds)
             th = h[:, None] + fr * (step[:, 1:] * dh)
-            ft, ok = self._at(ts, th, phi[:, None], angle[:, None])
+            pts_s = np.concatenate(
+                [ts, s[:, None] + curved[:, :1] * ds, ts[:, :1] + st[1:, 0] * es], axis=1
+            )
+            pts_h = np.concatenate(
+                [th, h[:, None] + curved[:, 1:] * dh, th[:, :1] + st[1:, 1] * eh], axis=1
+            )
+            fa, oka = self._at(pts_s, pts_h, phi[:, None], angle[:, None])
+            nf = len(fr)
+            ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
             k = np.argmax(ok, axis=1)
-            rows = np.arange(len(s))
             take = ok[rows, k]
-            cut = take & (k > 0)
-            edge = np.where(take, cut & (ft[rows, k] - (f[:, 0] + model) > tol), edge)
+            # edge: the Newton part would take the point off the flanks, where the clearance
+            # falls on by more than the tolerance (the minimum is pressed against the boundary)
+            edge = ~oka[:, nf] & (fall > tol)
             moved = np.abs(ts[rows, k] - s) + np.abs(th[rows, k] - h)
             s = np.where(take, ts[rows, k], s)
             h = np.where(take, th[rows, k], h)
             best = np.where(take, ft[rows, k], best)
+            full = take & (k == 0)
+            f[full, 0] = fa[full, 0]
+            f[full, 1:] = fa[full, nf + 1 :]
+            need = ~full
             # converged: no row moved more than a thousandth of a cell
             if not np.any(take & (moved > 1e-3 * min(ds, dh))):
                 break
@@ -389,7 +413,7 @@ class ClearanceField:
             edge=edge,
         )
 
-    def _refined(self, field_, fac, phi, angle, f0, s, h, candidates: int = 3):
+    def _refined(self, field_, fac, phi, angle, f0, s, h, candidates: int = 2):
         """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
         Newton, :meth:`_refine`) and keep the least. A node minimum outside the refinable
         region (the pinion's lowest cells) lower than that by more than the edge tolerance
@@ -439,7 +463,7 @@ class ClearanceField:
         h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
         f0, ok = self._at(s, h, phi, angle)
         f0 = np.where(ok, f0, np.inf)
-        value, s, h, edge = self._refine(phi, angle, s, h, f0)
+        value, s, h, edge = self._refine(phi, angle, s, h, f0, iterations=3)
         return value, s, h, edge
 
     def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
@@ -454,9 +478,9 @@ def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def _pseudo_newton(gs, gh, hss, hsh, hhh, free: float = 2.0) -> NDArray:
-    """``(n, 2)`` step of 2 x 2 symmetric systems: Newton's -H^+ g on the positive
-    eigenvalues, a descent of at most ``free`` cells along the others (a valley or a ridge
-    keeps its slope), the whole step at most two cells per component."""
+    """``(n, 2)`` steps of 2 x 2 symmetric systems: Newton's -H^+ g on the positive
+    eigenvalues plus a descent of at most ``free`` cells along the others (a valley or a ridge
+    keeps its slope), at most two cells per component; and the Newton part alone."""
     mean = 0.5 * (hss + hhh)
     root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
     scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
@@ -469,6 +493,7 @@ def _pseudo_newton(gs, gh, hss, hsh, hhh, free: float = 2.0) -> NDArray:
     ex, ey = ex / norm, ey / norm
     gnorm = np.hypot(gs, gh)
     step = np.zeros((len(gs), 2))
+    curved = np.zeros((len(gs), 2))
     for lam, vx, vy in ((lam1, ex, ey), (lam2, -ey, ex)):
         slope = vx * gs + vy * gh
         use = lam > 1e-6 * scale
@@ -477,4 +502,5 @@ def _pseudo_newton(gs, gh, hss, hsh, hhh, free: float = 2.0) -> NDArray:
         descent = np.where(steep, -np.sign(slope) * free, 0.0)
         along = np.where(use, np.clip(newton, -free, free), descent)
         step += along[:, None] * np.stack([vx, vy], axis=1)
-    return np.clip(step, -2.0, 2.0)
+        curved += np.where(use, along, 0.0)[:, None] * np.stack([vx, vy], axis=1)
+    return np.clip(step, -2.0, 2.0), np.clip(curved, -2.0, 2.0)

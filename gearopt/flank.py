@@ -264,12 +264,13 @@ class FlankMap:
         within = (x >= 0.0) & (x <= imax + 1.0) & (y >= 0.0) & (y <= jmax + 1.0)
         return fi, fj, x - fi, y - fj, within
 
-    def polar_angle_local(self, face_mm, profile_mm, *, with_inside: bool = False):
+    def polar_angle_local(self, face_mm, profile_mm, *, with_inside=False):
         """Theta at grid coordinates ``(s, h)`` by the bicubic Hermite interpolant of the cell
         around each point: values and first derivatives at its four corners (the derivatives
         from the exact normals, the cross derivative by differences), so an error at one node
         stays in its cells. More accurate than the global spline near the envelope's fold,
-        where Theta is not smooth. With ``with_inside``, also :meth:`inside` of the points."""
+        where Theta is not smooth. With ``with_inside``, also :meth:`inside` of the points (or,
+        given a flat boolean array over the cells, whether each point's cell is one of them)."""
         s = np.asarray(face_mm, float)
         h = np.asarray(profile_mm, float)
         if s.shape != h.shape:
@@ -283,9 +284,10 @@ class FlankMap:
         w1 = ((c[7] * v + c[6]) * v + c[5]) * v + c[4]
         w0 = ((c[3] * v + c[2]) * v + c[1]) * v + c[0]
         out = ((w3 * u + w2) * u + w1) * u + w0
-        if with_inside:
-            return out, ok[k] & within
-        return out
+        if with_inside is False:
+            return out
+        cells = ok if with_inside is True else with_inside
+        return out, cells[k] & within
 
     def point_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` points of the flank at grid coordinates ``(s, h)`` (spline)."""

@@ -493,17 +493,17 @@ def _contact_interval(curve: _PairCurve, sample: FieldSample, edge, g) -> tuple[
     order = np.argsort(v)
     v, inner = v[order], inner[order]
     cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
-    if not inner.any():
-        raise ContactError(
-            "tca", rule="no tooth pair touches inside the flanks (edge contact only)"
-        )
+    if not inner.any():  # edge contact only: no interval, centred on the least lag
+        gs = np.where(np.isfinite(g), g, np.inf)[order]
+        best = float(v[np.argmin(gs)])
+        return best, best
     k = np.flatnonzero(inner)
     lo_k, hi_k = k[0], k[-1]
     a = np.array([v[lo_k], v[hi_k]])  # inside
     b = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])  # outside (or the end)
     open_ = np.array([lo_k > 0, hi_k < len(v) - 1])
     s0, h0 = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-    for _ in range(5):
+    for _ in range(4):
         m = 0.5 * (a + b)
         value, s1, h1, e = curve.near(m, s0, h0)
         inside = np.isfinite(value) & ~e
