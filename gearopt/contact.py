@@ -25,12 +25,12 @@ is TE = -min delta (negative when the gear lags, seed 003 eqs 5-6). Tooth pair k
 against gear tooth -k) at pinion angle phi is the base pair at phi + 2 pi k / N1, so one clearance
 function of the relative angle serves every pair.
 
-The node minimum is refined below the grid spacing by the quadratic through the 3 x 3 stencil
-(a pseudo-inverse on the positive curvatures, so the valley of line contact is handled), the
-step limited to one cell; on the flank's boundary the fit is one-sided and a minimum whose inward
-neighbour is higher is edge contact. Separations for the pattern: the angular clearance above
-the minimum times |n . (z_g x q)| (normal) or times R2 (circumferential at equal radius, seed 003
-section 5).
+The node minimum is refined below the grid spacing by constrained Newton steps on the local
+bicubic Hermite interpolants of both flanks (:meth:`gearopt.flank.FlankMap.polar_angle_local`):
+a pseudo-inverse on the positive curvatures, so the valley of line contact is handled, and steps
+cut back at the flanks' boundaries, so a minimum pressed against an edge slides along it (edge
+contact). Separations for the pattern: the angular clearance above the minimum times
+|n . (z_g x q)| (normal) or times R2 (circumferential at equal radius, seed 003 section 5).
 """
 
 from __future__ import annotations
@@ -49,6 +49,8 @@ __all__ = [
     "ContactError",
     "Placement",
     "ClearanceField",
+    "JointField",
+    "FieldSample",
     "SEPARATIONS",
 ]
 
@@ -139,7 +141,8 @@ class ClearanceField:
     Parameters
     ----------
     pinion, gear
-        FlankMaps of tooth 0 (the pinion's driving flank, the gear's driven flank).
+        FlankMaps of tooth 0 (the pinion's driving flank, the gear's driven flank), each on a
+        uniform grid; both flanks of a member share one grid when fields are joined.
     placement
         Shaft angle and misalignment.
     sense
@@ -152,8 +155,9 @@ class ClearanceField:
         other side of the same pair takes the drive side's phase, so that both flanks face the
         same tooth space. The gear tooth that mates is picked by whole pitches.
     edge_tolerance_um
-        A minimum on the boundary is edge contact only when the inward neighbour is this much
-        (normal separation) higher; flat valleys of line contact reaching an edge are not.
+        A minimum pressed against a boundary is edge contact only when the clearance would fall
+        on beyond it by more than this (normal separation); flat valleys of line contact
+        reaching an edge are not.
     """
 
     def __init__(
@@ -181,115 +185,335 @@ class ClearanceField:
             raise GearoptError("sense", sense, "must be +1 or -1")
         self.sense = int(sense)
         self.edge_tolerance_um = float(edge_tolerance_um)
-        m = pinion.mask
-        self._nodes = np.flatnonzero(m.ravel())
-        if self._nodes.size < 4:
-            raise ContactError("pinion flank", int(m.sum()), "needs at least 4 generated nodes")
-        self.phase_rad = 0.0
-        self._p = pinion.points_mm.reshape(-1, 3)[self._nodes]
-        self._n = pinion.normals.reshape(-1, 3)[self._nodes]
-        # the interpolant is poor in the lowest generated cells (the envelope's fold):
-        # refinements stay two cells above them
-        keep = m.copy()
-        for _ in range(2):
-            below = np.zeros_like(keep)
-            below[:, 1:] = keep[:, :-1]
-            keep &= below
-        self._refine_node_mask = keep
-        g = math.radians(pinion.pitch_angle_deg)
-        self._cos_sin_pitch = (math.cos(g), math.sin(g))
-        self._refine_flat = (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel()
-        self._refine_cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
-        self._ds = float(np.mean(np.diff(pinion.face_mm)))
-        self._dh = float(np.mean(np.diff(pinion.profile_mm)))
-        self._shift = 0.0
-        mid = tuple(np.array(pinion.shape) // 2)
-        self._factor_scale = float(np.hypot(*pinion.points_mm[mid][:2]))
+        if int(pinion.mask.sum()) < 4:
+            raise ContactError(
+                "pinion flank", int(pinion.mask.sum()), "needs at least 4 generated nodes"
+            )
+        self.phase_rad, self._shift = 0.0, 0.0
+        self._engine = _Engine([self])
         if phase_rad is None:
-            delta, _, _, valid = self._raw(np.zeros(1))
-            if not valid.any():
-                raise ContactError(
-                    "flanks",
-                    rule="the pinion flank does not face the gear flank at the mean position",
-                )
+            delta, valid = self._node_clearance()
             phase_rad = -self.gear_sense * float(np.median(delta[valid]))
         self.phase_rad = float(phase_rad)
-        self._shift = self._tooth_shift()
+        self._engine = _Engine([self])
+        delta, valid = self._node_clearance()
+        centre = float(np.median(self.gear_sense * delta[valid]))
+        pitch = self.gear.pitch_rad
+        self._shift = pitch * round(centre / pitch)
+        self._engine = _Engine([self])
+
+    def _node_clearance(self):
+        sample = self._engine.sample(np.zeros(1, np.intp), np.zeros(1), 0.0, refine=False)
+        valid = np.isfinite(sample.clearance_rad[0])
+        if not valid.any():
+            raise ContactError(
+                "flanks", rule="the pinion flank does not face the gear flank at the mean position"
+            )
+        return sample.clearance_rad[0], valid
 
     @property
     def gear_sense(self) -> int:
         """Sense of the gear's polar angle while the pinion turns with ``sense``."""
         return -self.sense
 
-    def _gap(self, p, n: NDArray | None, phi: NDArray, gear_angle_rad=0.0):
-        """Angular clearance of pinion points ``p`` (``(..., 3)`` or a tuple of components;
-        normals ``n``) at pinion angles ``phi`` (broadcast): ``(delta, normal factor, R2,
-        valid)``."""
-        c, s = np.cos(phi), np.sin(phi)
-        b, off = self.b, self.c
-        x, y, z = p if isinstance(p, tuple) else (p[..., 0], p[..., 1], p[..., 2])
-        xt, yt = c * x - s * y, s * x + c * y
-        qx = b[0, 0] * xt + b[0, 1] * yt + (b[0, 2] * z + off[0])
-        qy = b[1, 0] * xt + b[1, 1] * yt + (b[1, 2] * z + off[1])
-        qz = b[2, 0] * xt + b[2, 1] * yt + (b[2, 2] * z + off[2])
-        radius = np.hypot(qx, qy)
-        theta = np.arctan2(qy, qx)
-        s2, h2 = self.gear.to_grid(qz, radius)
-        flank, valid = self.gear.polar_angle_local(s2, h2, with_inside=True)
-        turn = -self.ratio * phi + (gear_angle_rad + self.phase_rad - self._shift)
-        gap = flank - theta + turn
-        delta = self.gear_sense * ((gap + math.pi) % (2.0 * math.pi) - math.pi)
-        if n is None:
-            return delta, None, radius, valid
-        nx, ny = n[..., 0], n[..., 1]
-        nxt, nyt = c * nx - s * ny, s * nx + c * ny
-        mx = b[0, 0] * nxt + b[0, 1] * nyt + b[0, 2] * n[..., 2]
-        my = b[1, 0] * nxt + b[1, 1] * nyt + b[1, 2] * n[..., 2]
-        factor = np.abs(my * qx - mx * qy)
-        return delta, factor, radius, valid
+    def _gap(self, p, n, phi, gear_angle_rad=0.0):
+        """Angular clearance of pinion points ``p`` (``(..., 3)``; normals ``n``) at pinion
+        angles ``phi`` (broadcast): ``(delta, normal factor, R2, valid)``."""
+        p = np.asarray(p, float)
+        comps = (p[..., 0], p[..., 1], p[..., 2])
+        normals = None if n is None else (n[..., 0], n[..., 1], n[..., 2])
+        side = np.zeros(np.broadcast(p[..., 0], phi).shape, np.intp)
+        return self._engine.gap(side, comps, normals, phi, gear_angle_rad)
 
-    def _raw(self, phi_rad: NDArray, gear_angle_rad=0.0):
-        """The clearance at the pinion's generated nodes, ``(n_phi, n_nodes)`` arrays."""
-        phi = np.atleast_1d(np.asarray(phi_rad, float))[:, None]
-        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape[:1])[:, None]
-        return self._gap(self._p, self._n, phi, angle)
+    def _at(self, s, h, phi, gear_angle_rad):
+        """``(delta, valid)`` at pinion grid coordinates off the nodes (see ``_Engine.at``)."""
+        side = np.zeros(np.broadcast(s, h, phi).shape, np.intp)
+        return self._engine.at(side, s, h, phi, gear_angle_rad)
 
-    def _at(self, s: NDArray, h: NDArray, phi: NDArray, gear_angle_rad):
-        """Clearance at pinion grid coordinates (s, h) off the nodes by the local Hermite
-        interpolants: ``(delta, valid)``. ``delta`` is the smooth extension beyond the flanks
-        (finite everywhere); ``valid`` is False outside either flank and in the pinion's lowest
-        generated cells, where the envelope's fold spoils any interpolant."""
-        fm = self.pinion
-        cg, sg = self._cos_sin_pitch
-        big_r = s * sg + h * cg
-        theta, inside = fm.polar_angle_local(s, h, with_inside=self._refine_flat)
-        p = (big_r * np.cos(theta), big_r * np.sin(theta), s * cg - h * sg)
-        delta, _, _, valid = self._gap(p, None, phi, gear_angle_rad)
-        return delta, inside & valid
+    def sample(
+        self,
+        phi_rad: NDArray,
+        gear_angle_rad: NDArray | float = 0.0,
+        *,
+        refine: bool | NDArray = True,
+    ) -> FieldSample:
+        """The clearance field at relative pinion angles ``phi_rad`` (vectorised), each with
+        the gear turned by ``gear_angle_rad`` (scalar or one per angle) from its ideal angle.
 
-    def _refinable(self, s: NDArray, h: NDArray) -> NDArray:
-        i, j, _, _, within = self.pinion._cell_of(s, h)
-        return self._refine_cells[i, j] & within
+        ``refine``: refine every row's minimum (True), none (False: node values, no edge
+        test) or the rows of a boolean mask."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        return self._engine.sample(np.zeros(len(phi), np.intp), phi, gear_angle_rad, refine)
+
+    def minimum_near(self, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
+        """Refined minimum at pinion angles ``phi_rad`` started from known nearby contact points
+        (``face_mm``, ``profile_mm`` on the pinion grid): no node field, for the extra
+        evaluations of a mesh cycle (hand-overs, contact ends). Returns ``(value, s, h,
+        edge)``; value +inf where the start is off the flanks."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        side = np.zeros(len(phi), np.intp)
+        return self._engine.near(side, phi, face_mm, profile_mm, gear_angle_rad)
+
+    def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
+        """Refined minimum clearance (rad) at relative pinion angles ``phi_rad``."""
+        return self.sample(phi_rad, gear_angle_rad).minimum_rad
+
+
+class JointField:
+    """Several clearance fields of one pair (the drive and coast sides) evaluated together:
+    the same computations as each field's, with one array operation for all sides, so that
+    numpy's per-call overhead is paid once. Rows name their field by index (``side``)."""
+
+    def __init__(self, fields) -> None:
+        self.fields = list(fields)
+        self._engine = _Engine(self.fields)
+
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True) -> FieldSample:
+        """As :meth:`ClearanceField.sample`, row k on field ``side[k]``."""
+        return self._engine.sample(np.asarray(side, np.intp), phi_rad, gear_angle_rad, refine)
+
+    def minimum_near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
+        """As :meth:`ClearanceField.minimum_near`, row k on field ``side[k]``."""
+        side = np.asarray(side, np.intp)
+        return self._engine.near(side, phi_rad, face_mm, profile_mm, gear_angle_rad)
+
+
+class _Engine:
+    """The clearance computations on stacked tables of K fields (sides).
+
+    Per side: the sense, the gear's polar-angle offset (phase minus whole pitches), the pinion
+    nodes, the local interpolants' cell tables (pinion and gear, concatenated with an offset of
+    one table per side) and the refinable cells. Shared: the placement, the ratio and the grids
+    (the fields must share them).
+    """
 
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
     )
 
-    def _refine(self, phi, angle, s, h, f0, iterations: int = 4):
+    def __init__(self, fields) -> None:
+        first = fields[0]
+        for f in fields[1:]:
+            same = (
+                np.array_equal(f.pinion.face_mm, first.pinion.face_mm)
+                and np.array_equal(f.pinion.profile_mm, first.pinion.profile_mm)
+                and np.array_equal(f.gear.face_mm, first.gear.face_mm)
+                and np.array_equal(f.gear.profile_mm, first.gear.profile_mm)
+                and np.allclose(f.b, first.b)
+                and np.allclose(f.c, first.c)
+                and f.ratio == first.ratio
+            )
+            if not same:
+                raise GearoptError("fields", rule="joined fields must share grids and placement")
+        self.b, self.c, self.ratio = first.b, first.c, first.ratio
+        self.pinion_grid, self.gear_grid = first.pinion, first.gear
+        self.shape = first.pinion.shape
+        self.sense = np.array([f.sense for f in fields], float)
+        self.gear_sense = -self.sense
+        self.turn0 = np.array([f.phase_rad - f._shift for f in fields])
+        g = math.radians(first.pinion.pitch_angle_deg)
+        self.cos_sin_pitch = (math.cos(g), math.sin(g))
+        self.ds = float(np.mean(np.diff(first.pinion.face_mm)))
+        self.dh = float(np.mean(np.diff(first.pinion.profile_mm)))
+        mid = tuple(np.array(self.shape) // 2)
+        scale = float(np.hypot(*first.pinion.points_mm[mid][:2]))
+        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 / scale for f in fields])
+        self.tol_um = np.array([f.edge_tolerance_um for f in fields])
+        # node tables (all grid nodes; off-mask nodes are +inf in the fields)
+        self.points = np.stack([f.pinion.points_mm.reshape(-1, 3) for f in fields])
+        self.normals = np.stack([f.pinion.normals.reshape(-1, 3) for f in fields])
+        self.node_mask = np.stack([f.pinion.mask.ravel() for f in fields])
+        # the interpolant is poor in the lowest generated cells (the envelope's fold):
+        # refinements stay two cells above them
+        keeps = []
+        for f in fields:
+            keep = f.pinion.mask.copy()
+            for _ in range(2):
+                below = np.zeros_like(keep)
+                below[:, 1:] = keep[:, :-1]
+                keep &= below
+            keeps.append(keep)
+        self.refine_nodes = np.stack([k.ravel() for k in keeps])
+        cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
+        self.refine_cells = np.concatenate([c.ravel() for c in cells])
+        self.pinion_cells = cells[0].size
+        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
+        self.gear_cells = first.gear._lookup[8].size
+        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
+        self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
+
+    # --- evaluation ---------------------------------------------------------------------
+
+    @staticmethod
+    def _hermite(fm: FlankMap, coef_t, s, h, offset):
+        """The local interpolant of ``fm``'s grid with the cell tables ``coef_t`` (one table
+        per side, ``offset`` cells into them): ``(Theta, cell index, within the grid)``."""
+        i, j, u, v, within = fm._cell_of(s, h)
+        k = i * fm._lookup[6] + j + offset
+        c = coef_t[:, k]
+        w3 = ((c[15] * v + c[14]) * v + c[13]) * v + c[12]
+        w2 = ((c[11] * v + c[10]) * v + c[9]) * v + c[8]
+        w1 = ((c[7] * v + c[6]) * v + c[5]) * v + c[4]
+        w0 = ((c[3] * v + c[2]) * v + c[1]) * v + c[0]
+        return ((w3 * u + w2) * u + w1) * u + w0, k, within
+
+    def gap(self, side, p, n, phi, gear_angle_rad=0.0):
+        """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles
+        ``phi`` on fields ``side`` (all broadcast): ``(delta, normal factor, R2, valid)``."""
+        c, s = np.cos(phi), np.sin(phi)
+        b, off = self.b, self.c
+        x, y, z = p
+        xt, yt = c * x - s * y, s * x + c * y
+        qx = b[0, 0] * xt + b[0, 1] * yt + (b[0, 2] * z + off[0])
+        qy = b[1, 0] * xt + b[1, 1] * yt + (b[1, 2] * z + off[1])
+        qz = b[2, 0] * xt + b[2, 1] * yt + (b[2, 2] * z + off[2])
+        radius = np.hypot(qx, qy)
+        theta = np.arctan2(qy, qx)
+        s2, h2 = self.gear_grid.to_grid(qz, radius)
+        flank, k, within = self._hermite(
+            self.gear_grid, self.gear_coef, s2, h2, side * self.gear_cells
+        )
+        valid = self.gear_ok[k] & within
+        turn = -self.ratio * phi + (gear_angle_rad + self.turn0[side])
+        gap = flank - theta + turn
+        delta = self.gear_sense[side] * ((gap + math.pi) % (2.0 * math.pi) - math.pi)
+        if n is None:
+            return delta, None, radius, valid
+        nx, ny, nz = n
+        nxt, nyt = c * nx - s * ny, s * nx + c * ny
+        mx = b[0, 0] * nxt + b[0, 1] * nyt + b[0, 2] * nz
+        my = b[1, 0] * nxt + b[1, 1] * nyt + b[1, 2] * nz
+        factor = np.abs(my * qx - mx * qy)
+        return delta, factor, radius, valid
+
+    def at(self, side, s, h, phi, gear_angle_rad):
+        """Clearance at pinion grid coordinates (s, h) off the nodes by the local Hermite
+        interpolants: ``(delta, valid)``. ``delta`` is the smooth extension beyond the flanks
+        (finite everywhere); ``valid`` is False outside either flank and in the pinion's lowest
+        generated cells, where the envelope's fold spoils any interpolant."""
+        cg, sg = self.cos_sin_pitch
+        big_r = s * sg + h * cg
+        theta, k, within = self._hermite(
+            self.pinion_grid, self.pinion_coef, s, h, side * self.pinion_cells
+        )
+        p = (big_r * np.cos(theta), big_r * np.sin(theta), s * cg - h * sg)
+        delta, _, _, valid = self.gap(side, p, None, phi, gear_angle_rad)
+        return delta, self.refine_cells[k] & within & valid
+
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True) -> FieldSample:
+        """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
+        on the rows ``refine`` selects."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        pts = self.points[side]  # (n, N, 3)
+        nrm = self.normals[side]
+        delta, factor, radius, valid = self.gap(
+            side[:, None],
+            (pts[..., 0], pts[..., 1], pts[..., 2]),
+            (nrm[..., 0], nrm[..., 1], nrm[..., 2]),
+            phi[:, None],
+            angle[:, None],
+        )
+        shape = (len(phi),) + self.shape
+        field_ = np.where(valid & self.node_mask[side], delta, np.inf).reshape(shape)
+        fac, rad = factor.reshape(shape), radius.reshape(shape)
+        i, j = _argmin_nodes(field_)
+        rows = np.arange(len(phi))
+        f0 = field_[rows, i, j]
+        s = self.pinion_grid.face_mm[i]
+        h = self.pinion_grid.profile_mm[j]
+        edge = np.zeros(len(phi), bool)
+        rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
+        if rows.size:
+            f0, s, h = f0.copy(), s.copy(), h.copy()
+            f0[rows], s[rows], h[rows], edge[rows] = self._refined(
+                side[rows],
+                field_[rows],
+                fac[rows],
+                phi[rows],
+                angle[rows],
+                f0[rows],
+                s[rows],
+                h[rows],
+            )
+        return FieldSample(
+            phi_rad=phi,
+            clearance_rad=field_,
+            normal_factor_mm=fac,
+            radius_mm=rad,
+            minimum_rad=f0,
+            contact_face_mm=s,
+            contact_profile_mm=h,
+            edge=edge,
+        )
+
+    def near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
+        """Refined minima started from known nearby contact points (no node field)."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        s = np.broadcast_to(np.asarray(face_mm, float), phi.shape).copy()
+        h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
+        f0, ok = self.at(side, s, h, phi, angle)
+        f0 = np.where(ok, f0, np.inf)
+        return self.refine(side, phi, angle, s, h, f0, iterations=3)
+
+    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2):
+        """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
+        Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
+        region (the pinion's lowest cells) lower than that by more than the edge tolerance
+        stands as it is, flagged as edge contact."""
+        n = len(phi)
+        inner = np.where(self.refine_nodes[side], field_.reshape(n, -1), np.inf)
+        k = min(candidates, inner.shape[1])
+        pick = np.argpartition(inner, k - 1, axis=1)[:, :k]
+        values = np.take_along_axis(inner, pick, 1)
+        ci, cj = np.unravel_index(pick, self.shape)
+        ok = np.isfinite(values)
+        best = np.full(n, np.inf)
+        s_best, h_best = s.copy(), h.copy()
+        e_best = np.zeros(n, bool)
+        if ok.any():
+            rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
+            v, s_r, h_r, e_r = self.refine(
+                side[rows],
+                phi[rows],
+                angle[rows],
+                self.pinion_grid.face_mm[ci[ok]],
+                self.pinion_grid.profile_mm[cj[ok]],
+                values[ok],
+            )
+            order = np.lexsort((v, rows))
+            rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
+            first = np.r_[True, rows[1:] != rows[:-1]]
+            best[rows[first]] = v[first]
+            s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
+            e_best[rows[first]] = e_r[first]
+        rows = np.arange(n)
+        i, j = _argmin_nodes(field_)
+        tol = self.tol_um[side] * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
+        with np.errstate(invalid="ignore"):
+            low = np.isfinite(f0) & ~(best - f0 <= tol)
+        value = np.where(low, f0, best)
+        return value, np.where(low, s, s_best), np.where(low, h, h_best), low | e_best
+
+    def refine(self, side, phi, angle, s, h, f0, iterations: int = 4):
         """Constrained Newton steps on the clearance between the node grid's lines.
 
         Gradient and Hessian by central differences (a quarter cell) of the interpolated
         clearance, extended smoothly beyond the flanks; the step is Newton's on the positive
         curvatures and a descent of up to two cells along the others (the valley of line
         contact), at most two cells in all. A step leaving the flanks is cut back (halvings,
-        evaluated at once) to the last valid point: repeated, this slides the point along the
-        boundary to the least clearance on it, second order for straight edges.
+        evaluated at once with the next stencil) to the last valid point: repeated, this slides
+        the point along the boundary to the least clearance on it, second order for straight
+        edges.
 
-        Returns ``(value, s, h, edge)``: edge where the last step was cut by a boundary and the
-        model says the clearance would fall by more than the edge tolerance beyond it.
+        Returns ``(value, s, h, edge)``: edge where the Newton part of the last step would take
+        the point off the flanks to a clearance lower by more than the edge tolerance.
         """
-        ds, dh = self._ds, self._dh
+        ds, dh = self.ds, self.dh
         es, eh = 0.25 * ds, 0.25 * dh
         st = self._STENCIL
         fr = self._FRACTIONS
@@ -297,12 +521,14 @@ class ClearanceField:
         rows = np.arange(n)
         best = f0.copy()
         edge = np.zeros(n, bool)
-        tol = self.edge_tolerance_um * 1e-3 / max(self._factor_scale, 1e-9)
+        tol = self.tol_rad[side]
         f = np.empty((n, len(st)))
         need = np.ones(n, bool)
+        sc = side[:, None]
         for _ in range(iterations):
             if need.any():  # stencils not already evaluated with the last step
-                f[need], _ = self._at(
+                f[need], _ = self.at(
+                    sc[need],
                     s[need, None] + st[:, 0] * es,
                     h[need, None] + st[:, 1] * eh,
                     phi[need, None],
@@ -333,7 +559,7 @@ class ClearanceField:
             pts_h = np.concatenate(
                 [th, h[:, None] + curved[:, 1:] * dh, th[:, :1] + st[1:, 1] * eh], axis=1
             )
-            fa, oka = self._at(pts_s, pts_h, phi[:, None], angle[:, None])
+            fa, oka = self.at(sc, pts_s, pts_h, phi[:, None], angle[:, None])
             nf = len(fr)
             ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
@@ -354,121 +580,6 @@ class ClearanceField:
             if not np.any(take & (moved > 1e-3 * min(ds, dh))):
                 break
         return best, s, h, edge
-
-    def _tooth_shift(self) -> float:
-        """Whole gear pitches between the gear tooth the maps hold and the mating tooth."""
-        delta, _, _, valid = self._raw(np.zeros(1))
-        if not valid.any():
-            raise ContactError(
-                "flanks", rule="the pinion flank does not face the gear flank at the mean position"
-            )
-        centre = np.median(self.gear_sense * delta[valid])
-        pitch = self.gear.pitch_rad
-        return pitch * round(centre / pitch)
-
-    def sample(
-        self,
-        phi_rad: NDArray,
-        gear_angle_rad: NDArray | float = 0.0,
-        *,
-        refine: bool | NDArray = True,
-    ) -> FieldSample:
-        """The clearance field at relative pinion angles ``phi_rad`` (vectorised), each with
-        the gear turned by ``gear_angle_rad`` (scalar or one per angle) from its ideal angle.
-
-        ``refine``: refine every row's minimum (True), none (False: node values, no edge
-        test) or the rows of a boolean mask."""
-        phi = np.atleast_1d(np.asarray(phi_rad, float))
-        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
-        delta, factor, radius, valid = self._raw(phi, angle)
-        shape = (len(phi),) + self.pinion.shape
-        full = np.full((len(phi), self.pinion.mask.size), np.inf)
-        full[:, self._nodes] = np.where(valid, delta, np.inf)
-        fac = np.zeros_like(full)
-        fac[:, self._nodes] = factor
-        rad = np.zeros_like(full)
-        rad[:, self._nodes] = radius
-        field_ = full.reshape(shape)
-        fac, rad = fac.reshape(shape), rad.reshape(shape)
-        i, j = _argmin_nodes(field_)
-        rows = np.arange(len(phi))
-        f0 = field_[rows, i, j]
-        s = self.pinion.face_mm[i]
-        h = self.pinion.profile_mm[j]
-        edge = np.zeros(len(phi), bool)
-        rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
-        if rows.size:
-            f0, s, h = f0.copy(), s.copy(), h.copy()
-            f0[rows], s[rows], h[rows], edge[rows] = self._refined(
-                field_[rows], fac[rows], phi[rows], angle[rows], f0[rows], s[rows], h[rows]
-            )
-        return FieldSample(
-            phi_rad=phi,
-            clearance_rad=field_,
-            normal_factor_mm=fac,
-            radius_mm=rad,
-            minimum_rad=f0,
-            contact_face_mm=s,
-            contact_profile_mm=h,
-            edge=edge,
-        )
-
-    def _refined(self, field_, fac, phi, angle, f0, s, h, candidates: int = 2):
-        """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
-        Newton, :meth:`_refine`) and keep the least. A node minimum outside the refinable
-        region (the pinion's lowest cells) lower than that by more than the edge tolerance
-        stands as it is, flagged as edge contact."""
-        n = len(phi)
-        node_ok = self._refine_node_mask.ravel()
-        inner = np.where(node_ok, field_.reshape(n, -1), np.inf)
-        k = min(candidates, inner.shape[1])
-        pick = np.argpartition(inner, k - 1, axis=1)[:, :k]
-        values = np.take_along_axis(inner, pick, 1)
-        ci, cj = np.unravel_index(pick, self.pinion.shape)
-        ok = np.isfinite(values)
-        best = np.full(n, np.inf)
-        s_best, h_best = s.copy(), h.copy()
-        e_best = np.zeros(n, bool)
-        if ok.any():
-            rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
-            v, s_r, h_r, e_r = self._refine(
-                phi[rows],
-                angle[rows],
-                self.pinion.face_mm[ci[ok]],
-                self.pinion.profile_mm[cj[ok]],
-                values[ok],
-            )
-            order = np.lexsort((v, rows))
-            rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
-            first = np.r_[True, rows[1:] != rows[:-1]]
-            best[rows[first]] = v[first]
-            s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
-            e_best[rows[first]] = e_r[first]
-        rows = np.arange(n)
-        i, j = _argmin_nodes(field_)
-        tol = self.edge_tolerance_um * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
-        with np.errstate(invalid="ignore"):
-            low = np.isfinite(f0) & ~(best - f0 <= tol)
-        value = np.where(low, f0, best)
-        return value, np.where(low, s, s_best), np.where(low, h, h_best), low | e_best
-
-    def minimum_near(self, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
-        """Refined minimum at pinion angles ``phi_rad`` started from known nearby contact points
-        (``face_mm``, ``profile_mm`` on the pinion grid): no node field, for the extra
-        evaluations of a mesh cycle (hand-overs, contact ends). Returns ``(value, s, h,
-        edge)``; value +inf where the start is off the flanks."""
-        phi = np.atleast_1d(np.asarray(phi_rad, float))
-        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
-        s = np.broadcast_to(np.asarray(face_mm, float), phi.shape).copy()
-        h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
-        f0, ok = self._at(s, h, phi, angle)
-        f0 = np.where(ok, f0, np.inf)
-        value, s, h, edge = self._refine(phi, angle, s, h, f0, iterations=3)
-        return value, s, h, edge
-
-    def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
-        """Refined minimum clearance (rad) at relative pinion angles ``phi_rad``."""
-        return self.sample(phi_rad, gear_angle_rad).minimum_rad
 
 
 def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
