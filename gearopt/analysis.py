@@ -23,7 +23,7 @@ from gearopt.mesh import (
     backlash,
     ease_off,
     mesh_pair,
-    tooth_contact,
+    tooth_contacts,
 )
 
 __all__ = ["AnalysisOptions", "TCA_GRID", "analyze", "meshed_pair"]
@@ -124,10 +124,8 @@ def contact_sides(pair: MeshedPair, options: AnalysisOptions) -> dict[str, Tooth
         compound_um=options.compound_um,
         separation=options.separation,
     )
-    return {
-        "drive": tooth_contact(pair.drive, side="drive", **common),
-        "coast": tooth_contact(pair.coast, side="coast", **common),
-    }
+    drive, coast = tooth_contacts([pair.drive, pair.coast], sides=("drive", "coast"), **common)
+    return {"drive": drive, "coast": coast}
 
 
 def pair_backlash(pair: MeshedPair, options: AnalysisOptions) -> Backlash:
