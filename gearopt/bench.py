@@ -26,6 +26,9 @@ BENCHMARKS: dict[str, str] = {
     "change_gears_ms": "gearopt_plugins.chain_error:bench_change_gears",
     "flank_generation_ms": "gearopt.bench:bench_flank_generation",
     "thickness_solve_ms": "gearopt.bench:bench_thickness_solve",
+    "tca_ms": "gearopt.bench:bench_tca",
+    "backlash_ms": "gearopt.bench:bench_backlash",
+    "tca_newton_ms": "gearopt.bench:bench_tca_newton",
 }
 
 ONE_THREAD = {
@@ -97,6 +100,77 @@ def bench_thickness_solve() -> tuple[float, dict]:
     return time_call_ms(lambda: model.basic_settings(design), number=3), {
         "thickness_member": "seed001_table3 pinion"
     }
+
+
+def _meshed_section53():
+    """The seed 001 section 5.3 pair (crowned: the textbook cross-check's case) generated on
+    the contact analyses' grid, with the default options."""
+    from gearopt.analysis import AnalysisOptions, meshed_pair
+    from gearopt.design import loads_design
+
+    design = loads_design(_study_text("seed001_section5_3.toml"))
+    options = AnalysisOptions()
+    return meshed_pair(design, options), options
+
+
+def _tca_info(options) -> dict:
+    return {
+        "tca_grid": list(options.grid.shape),
+        "tca_case": (
+            f"seed001_section5_3, {options.positions} positions x {options.pairs} pairs, "
+            "drive and coast, flanks generated beforehand"
+        ),
+    }
+
+
+def bench_tca() -> tuple[float, dict]:
+    """Unloaded TCA of both sides (TE with solved hand-overs, contact path, pattern, contact
+    ratio) of the section 5.3 pair, flanks generated beforehand; one warm-up run first."""
+    from gearopt.analysis import contact_sides
+
+    pair, options = _meshed_section53()
+    contact_sides(pair, options)
+    return time_call_ms(lambda: contact_sides(pair, options), number=10), _tca_info(options)
+
+
+def bench_backlash() -> tuple[float, dict]:
+    """Backlash at the 21 drive positions of the section 5.3 pair (drive contact, then the
+    other flanks), flanks generated beforehand."""
+    from gearopt.analysis import pair_backlash
+
+    pair, options = _meshed_section53()
+    pair_backlash(pair, options)
+    return time_call_ms(lambda: pair_backlash(pair, options), number=10), _tca_info(options)
+
+
+def bench_tca_newton() -> tuple[float, dict]:
+    """The textbook point-by-point TCA (5 equations per position, scipy.optimize.root with the
+    analytic Jacobian, continuation) on the same case as ``tca_ms``: every relative angle the
+    21 positions x 3 pairs visit (41 distinct ones) on both sides, nothing else (no hand-over,
+    no pattern)."""
+    import numpy as np
+
+    from gearopt.newton_tca import newton_tca
+
+    pair, options = _meshed_section53()
+    p1 = pair.drive.pinion.pitch_rad
+    t = np.linspace(-0.5 * options.cycles * p1, 0.5 * options.cycles * p1, options.positions)
+    offsets = np.arange(options.pairs) - (options.pairs - 1) // 2
+    u = t[:, None] + (np.round(-t / p1)[:, None] + offsets[None, :]) * p1
+    u = np.unique(np.round(u.ravel() / p1 * 1e9)) * p1 / 1e9
+    centre = int(np.argmin(np.abs(u)))
+    # continuation outward from the mean position, where the engine's guess is best
+    halves = (u[centre:], u[: centre + 1][::-1])
+
+    def run():
+        for field in (pair.drive, pair.coast):
+            for part in halves:
+                newton_tca(field, part)
+
+    run()
+    info = _tca_info(options)
+    info["tca_newton_positions"] = 2 * (len(u) + 1)
+    return time_call_ms(run, number=3), info
 
 
 def _study_text(name: str) -> str:
