@@ -321,9 +321,25 @@ class _Engine:
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 / scale for f in fields])
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
-        self.points = np.stack([f.pinion.points_mm.reshape(-1, 3) for f in fields])
-        self.normals = np.stack([f.pinion.normals.reshape(-1, 3) for f in fields])
-        self.node_mask = np.stack([f.pinion.mask.ravel() for f in fields])
+        # the generated pinion nodes of each side, padded to one count (padding: the first
+        # generated node again, its result dropped); components stored apart, contiguous
+        masks = [f.pinion.mask.ravel() for f in fields]
+        count = max(int(m.sum()) for m in masks)
+        index = np.zeros((len(fields), count), np.intp)
+        for k, m in enumerate(masks):
+            nodes = np.flatnonzero(m)
+            index[k, : nodes.size] = nodes
+            index[k, nodes.size :] = nodes[0]
+        self.node_index = index
+        self.node_real = np.arange(count)[None, :] < np.array([m.sum() for m in masks])[:, None]
+        pts = [f.pinion.points_mm.reshape(-1, 3)[index[k]] for k, f in enumerate(fields)]
+        nrm = [f.pinion.normals.reshape(-1, 3)[index[k]] for k, f in enumerate(fields)]
+        self.points = tuple(
+            np.ascontiguousarray(np.stack([p[:, a] for p in pts])) for a in range(3)
+        )
+        self.normals = tuple(
+            np.ascontiguousarray(np.stack([p[:, a] for p in nrm])) for a in range(3)
+        )
         # the interpolant is poor in the lowest generated cells (the envelope's fold):
         # refinements stay two cells above them
         keeps = []
@@ -407,18 +423,26 @@ class _Engine:
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
-        pts = self.points[side]  # (n, N, 3)
-        nrm = self.normals[side]
         delta, factor, radius, valid = self.gap(
             side[:, None],
-            (pts[..., 0], pts[..., 1], pts[..., 2]),
-            (nrm[..., 0], nrm[..., 1], nrm[..., 2]),
+            tuple(c[side] for c in self.points),
+            tuple(c[side] for c in self.normals),
             phi[:, None],
             angle[:, None],
         )
-        shape = (len(phi),) + self.shape
-        field_ = np.where(valid & self.node_mask[side], delta, np.inf).reshape(shape)
-        fac, rad = factor.reshape(shape), radius.reshape(shape)
+        # scatter back onto the grid (off-mask nodes +inf; padding dropped)
+        n, size = len(phi), self.shape[0] * self.shape[1]
+        real = self.node_real[side]
+        rows_idx = np.broadcast_to(np.arange(n)[:, None], real.shape)[real]
+        cols_idx = self.node_index[side][real]
+        full = np.full((n, size), np.inf)
+        fac = np.zeros((n, size))
+        rad = np.zeros((n, size))
+        full[rows_idx, cols_idx] = np.where(valid, delta, np.inf)[real]
+        fac[rows_idx, cols_idx] = factor[real]
+        rad[rows_idx, cols_idx] = radius[real]
+        shape = (n,) + self.shape
+        field_, fac, rad = full.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
         rows = np.arange(len(phi))
         f0 = field_[rows, i, j]
