@@ -354,9 +354,9 @@ class _Engine:
         cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
         self.refine_cells = np.concatenate([c.ravel() for c in cells])
         self.pinion_cells = cells[0].size
-        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
+        self.pinion_coef = np.concatenate([f.pinion._cells[0].reshape(-1, 4, 4) for f in fields])
         self.gear_cells = first.gear._lookup[8].size
-        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
+        self.gear_coef = np.concatenate([f.gear._cells[0].reshape(-1, 4, 4) for f in fields])
         self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
 
     # --- evaluation ---------------------------------------------------------------------
@@ -367,12 +367,10 @@ class _Engine:
         per side, ``offset`` cells into them): ``(Theta, cell index, within the grid)``."""
         i, j, u, v, within = fm._cell_of(s, h)
         k = i * fm._lookup[6] + j + offset
-        c = coef_t[:, k]
-        w3 = ((c[15] * v + c[14]) * v + c[13]) * v + c[12]
-        w2 = ((c[11] * v + c[10]) * v + c[9]) * v + c[8]
-        w1 = ((c[7] * v + c[6]) * v + c[5]) * v + c[4]
-        w0 = ((c[3] * v + c[2]) * v + c[1]) * v + c[0]
-        return ((w3 * u + w2) * u + w1) * u + w0, k, within
+        c = np.take(coef_t, k, axis=0)  # (..., 4, 4) coefficients of u^a v^b
+        vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
+        w = np.einsum("...ab,...b->...a", c, vv)
+        return ((w[..., 3] * u + w[..., 2]) * u + w[..., 1]) * u + w[..., 0], k, within
 
     def gap(self, side, p, n, phi, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles

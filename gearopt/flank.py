@@ -276,14 +276,12 @@ class FlankMap:
         if s.shape != h.shape:
             s, h = np.broadcast_arrays(s, h)
         i, j, u, v, within = self._cell_of(s, h)
-        n_cols, coef_t, ok = self._lookup[6:]
+        n_cols, _, ok = self._lookup[6:]
         k = i * n_cols + j
-        c = coef_t[:, k]
-        w3 = ((c[15] * v + c[14]) * v + c[13]) * v + c[12]
-        w2 = ((c[11] * v + c[10]) * v + c[9]) * v + c[8]
-        w1 = ((c[7] * v + c[6]) * v + c[5]) * v + c[4]
-        w0 = ((c[3] * v + c[2]) * v + c[1]) * v + c[0]
-        out = ((w3 * u + w2) * u + w1) * u + w0
+        c = np.take(self._cells[0].reshape(-1, 4, 4), k, axis=0)  # coefficients of u^a v^b
+        vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
+        w = np.einsum("...ab,...b->...a", c, vv)
+        out = ((w[..., 3] * u + w[..., 2]) * u + w[..., 1]) * u + w[..., 0]
         if with_inside is False:
             return out
         cells = ok if with_inside is True else with_inside
