@@ -118,3 +118,46 @@ def test_bench_json_reports_flank_timings_with_the_grid(capsys):
     for name in names:
         assert out[name] > 0.0
     assert out["flank_grid"] == [25, 13]
+
+
+def test_analyze_json_has_the_contract_keys(capsys):
+    # the contract: tca / tca_coast with side, phi1_deg, te_arcsec, the peak-to-peak,
+    # the pattern's width, bias, centre offset and edge flag; backlash with its statistics
+    assert main(["analyze", str(STUDIES / "seed001_section5_3.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for key, side in (("tca", "drive"), ("tca_coast", "coast")):
+        tca = out[key]
+        assert tca["side"] == side
+        assert len(tca["phi1_deg"]) == len(tca["te_arcsec"]) == 21
+        assert max(tca["te_arcsec"]) <= 1e-9  # shifted so that the maximum is 0
+        assert tca["te_peak_to_peak_arcsec"] >= -min(tca["te_arcsec"])
+        pattern = tca["pattern"]
+        assert {"width_mm", "bias_mm", "center_offset_mm", "edge_contact"} <= set(pattern)
+        assert len(pattern["center_offset_mm"]) == 2
+        assert isinstance(pattern["edge_contact"], bool)
+    backlash = out["backlash"]
+    assert len(backlash["circumferential_um"]) == 21
+    assert backlash["min_um"] <= backlash["mean_um"] <= backlash["max_um"]
+    assert backlash["interference"] is False
+    assert out["ease_off"]["drive"]["max_um"] > 0.0
+
+
+def test_analyze_circumferential_separation_and_plots(capsys, tmp_path):
+    pytest.importorskip("matplotlib")
+    args = ["analyze", str(STUDIES / "seed001_section5_3.toml"), "--json"]
+    args += ["--separation", "circumferential", "--compound-um", "10", "--plot", str(tmp_path)]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["tca"]["pattern"]["separation"] == "circumferential"
+    assert out["tca"]["pattern"]["compound_um"] == 10.0
+    for name in ("te.png", "pattern.png", "backlash.png", "ease_off.png"):
+        path = tmp_path / name
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert path.stat().st_size > 10_000
+
+
+def test_analyze_bad_option_is_one_line(capsys):
+    args = ["analyze", str(STUDIES / "seed001_section5_3.toml"), "--compound-um", "-3"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compound_um" in err[0]
