@@ -96,14 +96,6 @@ class Placement:
         return axes.T @ _PINION_TO_HOUSING, axes.T @ (pinion_origin - gear_origin)
 
 
-def _turned(points: NDArray, phi: NDArray) -> NDArray:
-    """Points ``(..., 3)`` turned about z by ``phi`` (broadcast against the leading axes)."""
-    c, s = np.cos(phi), np.sin(phi)
-    x, y, z = points[..., 0], points[..., 1], points[..., 2]
-    x, y, z, c, s = np.broadcast_arrays(x, y, z, c, s)
-    return np.stack([c * x - s * y, s * x + c * y, z], axis=-1)
-
-
 @dataclass(frozen=True, kw_only=True)
 class FieldSample:
     """The clearance field at a set of relative pinion angles (one row per angle).

@@ -202,13 +202,6 @@ class _PairCurve:
     def __call__(self, u: NDArray) -> NDArray:
         return self.sample(u).minimum_rad
 
-    def near(self, u: NDArray, face_mm, profile_mm):
-        """``(value, s, h, edge)`` refined from known nearby contact points."""
-        u = np.asarray(u, float)
-        return self.field.minimum_near(
-            self.field.sense * u, face_mm, profile_mm, self.gear_angle_rad
-        )
-
 
 def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str) -> NDArray:
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag

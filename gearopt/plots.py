@@ -54,7 +54,7 @@ def _te(plt, tca: Mapping, title: str, path: Path) -> None:
 
 
 def _pattern(plt, tca, title: str, path: Path) -> None:
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.6))
     face = np.asarray(tca.arrays["face_mm"])
     profile = np.asarray(tca.arrays["profile_mm"])
     for ax, (key, name) in zip(axes, (("", "drive"), ("coast_", "coast")), strict=True):
@@ -109,7 +109,7 @@ def _backlash(plt, report: Mapping, title: str, path: Path) -> None:
 
 
 def _ease_off(plt, report: Mapping, title: str, path: Path) -> None:
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.6))
     for ax, name in zip(axes, ("drive", "coast"), strict=True):
         e = report[name]
         face, profile = np.asarray(e["face_mm"]), np.asarray(e["profile_mm"])
