@@ -470,9 +470,7 @@ class _Engine:
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
         s = np.broadcast_to(np.asarray(face_mm, float), phi.shape).copy()
         h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
-        f0, ok = self.at(side, s, h, phi, angle)
-        f0 = np.where(ok, f0, np.inf)
-        return self.refine(side, phi, angle, s, h, f0, iterations=3)
+        return self.refine(side, phi, angle, s, h, None, iterations=3)
 
     def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2):
         """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
@@ -533,21 +531,23 @@ class _Engine:
         fr = self._FRACTIONS
         n = len(s)
         rows = np.arange(n)
-        best = f0.copy()
         edge = np.zeros(n, bool)
         tol = self.tol_rad[side]
         f = np.empty((n, len(st)))
         need = np.ones(n, bool)
         sc = side[:, None]
+        best = None if f0 is None else f0.copy()
         for _ in range(iterations):
             if need.any():  # stencils not already evaluated with the last step
-                f[need], _ = self.at(
+                f[need], ok0 = self.at(
                     sc[need],
                     s[need, None] + st[:, 0] * es,
                     h[need, None] + st[:, 1] * eh,
                     phi[need, None],
                     angle[need, None],
                 )
+                if best is None:  # the start's own value: the stencil's centre
+                    best = np.where(ok0[:, 0], f[:, 0], np.inf)
             gs, gh = 0.5 * (f[:, 1] - f[:, 2]) / es, 0.5 * (f[:, 3] - f[:, 4]) / eh
             hss = (f[:, 1] - 2.0 * f[:, 0] + f[:, 2]) / es**2
             hhh = (f[:, 3] - 2.0 * f[:, 0] + f[:, 4]) / eh**2

@@ -69,8 +69,12 @@ def gearopt_evaluators() -> list[BaseEvaluator]:
     -------
     list of gearopt.BaseEvaluator
         Instances; ``evaluate(design, conditions)`` returns a :class:`gearopt.Evaluation` with
-        finite scalar ``metrics`` named with units, optional ``arrays`` and the ``conditions``
-        that produced them. Evaluators run in worker processes and must not touch storage.
+        finite scalar ``metrics`` named with units, optional ``arrays``, the ``conditions``
+        that produced them and an optional ``report`` (JSON-ready details keyed by section,
+        which ``gearopt analyze --json`` prints for the built-in ``tca``, ``backlash`` and
+        ``ease-off``). Evaluators run in worker processes and must not touch storage. The
+        contact engine (:mod:`gearopt.contact`, :mod:`gearopt.mesh`) works on any machine
+        model's FlankMaps, so a contact evaluator needs no machine knowledge.
 
     Notes
     -----

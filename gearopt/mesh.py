@@ -388,7 +388,7 @@ def tooth_contacts(
     for st in states:
         _start_interval(st)
         _start_handover(st, t, p1)
-    for it in range(4):
+    for it in range(3):
         rows_side, rows_v, rows_s, rows_h, owners = [], [], [], [], []
         for st in states:
             for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
@@ -468,7 +468,7 @@ def _start_interval(st) -> None:
     st.ci_open = np.array([lo_k > 0, hi_k < len(v) - 1])
     cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
     st.ci_s, st.ci_h = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-    st.bisect = 4
+    st.bisect = 3
     st.interval = (float(st.ci_a[0]), float(st.ci_a[1]))
 
 
