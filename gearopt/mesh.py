@@ -24,7 +24,8 @@ Definitions used by the outputs:
   of the zone at M perpendicular to the path; ``center_offset_mm`` = M minus the flank centre C
   (the mean cone distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
 - contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
-  at an edge), over the angular pitch.
+  at an edge), over the angular pitch (sampled on beyond the analysed range when a pair is
+  still in contact at its ends, up to 1.5 pitches more).
 """
 
 from __future__ import annotations
@@ -300,6 +301,25 @@ def _slice(sample: FieldSample, rows) -> FieldSample:
     )
 
 
+def _concat(a: FieldSample, b: FieldSample) -> FieldSample:
+    """Two samples' rows together."""
+    return FieldSample(
+        **{
+            name: np.concatenate([getattr(a, name), getattr(b, name)])
+            for name in (
+                "phi_rad",
+                "clearance_rad",
+                "normal_factor_mm",
+                "radius_mm",
+                "minimum_rad",
+                "contact_face_mm",
+                "contact_profile_mm",
+                "edge",
+            )
+        }
+    )
+
+
 def tooth_contact(
     field: ClearanceField,
     *,
@@ -385,6 +405,24 @@ def tooth_contacts(
 
     # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
     # all sides batched into shared calls
+    # a pair whose contact is still inside the flanks at the ends of the sampled range: sample
+    # on beyond them (up to 1.5 pitches more) so that its contact interval is not cut short
+    ext_side, ext_v = [], []
+    for st in states:
+        v = st.sample.phi_rad * st.field.sense
+        inner = ~st.sample.edge & np.isfinite(st.sample.minimum_rad)
+        lo, hi = np.argmin(v), np.argmax(v)
+        for end, sign in ((lo, -1.0), (hi, 1.0)):
+            if inner[end]:
+                ext_side += [st.index] * 6
+                ext_v += list(v[end] + sign * step * np.array([1, 2, 3, 5, 10, 15]))
+    if ext_v:
+        ext_side = np.array(ext_side, np.intp)
+        more = joint.sample(ext_side, sense[ext_side] * np.array(ext_v))
+        for st in states:
+            rows = np.flatnonzero(ext_side == st.index)
+            if rows.size:
+                st.interval_sample = _concat(st.sample, _slice(more, rows))
     for st in states:
         _start_interval(st)
         _start_handover(st, t, p1)
@@ -450,7 +488,7 @@ def _peak_guess(st, t, p1, step) -> float:
 def _start_interval(st) -> None:
     """Bracket the relative angles between which a pair's contact stays inside the flanks
     (not at an edge) from the samples; bisection follows (warm-started Newton)."""
-    sample = st.sample
+    sample = getattr(st, "interval_sample", st.sample)
     v = sample.phi_rad * st.field.sense
     inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
     order = np.argsort(v)
