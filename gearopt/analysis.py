@@ -104,14 +104,28 @@ class AnalysisOptions:
         }
 
 
+#: the last few meshed pairs, so that evaluators of one design (``gearopt analyze`` runs tca,
+#: backlash and ease-off) generate its flanks once; keyed by the design object's identity
+_RECENT: list[tuple[Design, tuple, MeshedPair]] = []
+
+
 def meshed_pair(design: Design, options: AnalysisOptions, *, plugin_manager=None) -> MeshedPair:
-    """The design's flanks generated on the options' grid and placed in the housing."""
-    return mesh_pair(
+    """The design's flanks generated on the options' grid and placed in the housing (the last
+    few are kept: the same design object with the same grid and misalignment is meshed once)."""
+    key = (options.grid.shape, options.misalignment, plugin_manager is None)
+    for known, known_key, pair in _RECENT:
+        if known is design and known_key == key:
+            return pair
+    pair = mesh_pair(
         design,
         grid=options.grid,
         misalignment=options.misalignment,
         plugin_manager=plugin_manager,
     )
+    if plugin_manager is None:
+        _RECENT.insert(0, (design, key, pair))
+        del _RECENT[4:]
+    return pair
 
 
 def contact_sides(pair: MeshedPair, options: AnalysisOptions) -> dict[str, ToothContact]:

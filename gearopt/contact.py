@@ -190,6 +190,7 @@ class ClearanceField:
         self._engine = _Engine([self])
         delta, valid = self._node_clearance()
         centre = float(np.median(self.gear_sense * delta[valid]))
+        self._factor_mm = self._node_factor
         pitch = self.gear.pitch_rad
         self._shift = pitch * round(centre / pitch)
         self._engine = _Engine([self])
@@ -197,6 +198,8 @@ class ClearanceField:
     def _node_clearance(self):
         sample = self._engine.sample(np.zeros(1, np.intp), np.zeros(1), 0.0, refine=False)
         valid = np.isfinite(sample.clearance_rad[0])
+        if valid.any():
+            self._node_factor = float(np.median(sample.normal_factor_mm[0][valid]))
         if not valid.any():
             raise ContactError(
                 "flanks", rule="the pinion flank does not face the gear flank at the mean position"
@@ -308,9 +311,10 @@ class _Engine:
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
         self.ds = float(np.mean(np.diff(first.pinion.face_mm)))
         self.dh = float(np.mean(np.diff(first.pinion.profile_mm)))
-        mid = tuple(np.array(self.shape) // 2)
-        scale = float(np.hypot(*first.pinion.points_mm[mid][:2]))
-        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 / scale for f in fields])
+        # mm of normal separation per rad of gear rotation, typical of each side (a fixed
+        # tolerance in rad for the refinement's edge test)
+        scale = np.array([getattr(f, "_factor_mm", None) or 50.0 for f in fields])
+        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
         # the generated pinion nodes of each side, padded to one count (padding: the first

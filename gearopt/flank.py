@@ -259,6 +259,9 @@ class FlankMap:
         s0, ia, imax, h0, ib, jmax, _, _, _ = self._lookup
         x = (s - s0) * ia
         y = (h - h0) * ib
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):  # never index with NaN
+            x = np.where(np.isfinite(x), x, -1.0)
+            y = np.where(np.isfinite(y), y, -1.0)
         fi = np.minimum(np.maximum(x, 0.0), imax).astype(np.intp)
         fj = np.minimum(np.maximum(y, 0.0), jmax).astype(np.intp)
         within = (x >= 0.0) & (x <= imax + 1.0) & (y >= 0.0) & (y <= jmax + 1.0)

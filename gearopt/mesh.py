@@ -85,7 +85,9 @@ class ToothContact:
     phi1_deg, te_arcsec
         ``(n,)`` pinion positions (direction of motion) and the TE there.
     pair_te_arcsec
-        ``(pairs, n)`` TE of each tooth pair (pair index from the earliest in its cycle).
+        ``(pairs, n)`` TE of the pairs in the window of each position (row j: the j-th pair from
+        the earliest in its cycle; the window moves on by one pair at every half pitch, so a
+        row is not one physical pair throughout).
     carrying
         ``(n,)`` index of the carrying pair.
     handover_phi1_deg
@@ -104,7 +106,8 @@ class ToothContact:
     pattern_um
         ``(n_f, n_p)`` the pattern field: the least separation over positions and pairs.
     width_mm, bias_mm, center_offset_mm, mean_point_mm
-        Pattern width at M, bias, M - C, and M, in pattern coordinates.
+        Pattern width (the whole pattern's extent across the path at M), bias, M - C, and M,
+        in pattern coordinates.
     ellipse_major_axis_mm
         Length of the instantaneous contact zone at M along its principal (long) axis: the
         major axis of seed 003's contact ellipse, whatever its angle to the path.
@@ -175,14 +178,25 @@ def _list(values) -> list[float]:
     return [float(v) for v in np.asarray(values).ravel()]
 
 
+def _number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def _check_options(positions: int, pairs: int, cycles: float, compound_um: float, separation):
     if isinstance(positions, bool) or not isinstance(positions, int) or not 3 <= positions <= 401:
         raise GearoptError("positions", positions, "must be an integer from 3 to 401")
-    if isinstance(pairs, bool) or not isinstance(pairs, int) or not 1 <= pairs <= 7:
-        raise GearoptError("pairs", pairs, "must be an integer from 1 to 7")
-    if not (isinstance(cycles, int | float) and 0.5 <= cycles <= 5.0):
-        raise GearoptError("cycles", cycles, "must be a number from 0.5 to 5 mesh cycles")
-    if not (isinstance(compound_um, int | float) and 0.0 < compound_um <= 100.0):
+    if isinstance(pairs, bool) or not isinstance(pairs, int) or not 2 <= pairs <= 7:
+        raise GearoptError("pairs", pairs, "must be an integer from 2 to 7")
+    if not (_number(cycles) and 1.0 <= cycles <= 5.0):
+        raise GearoptError("cycles", cycles, "must be a number from 1 to 5 mesh cycles")
+    if positions < 2 * cycles + 1:
+        raise GearoptError(
+            "positions",
+            positions,
+            f"must be at least 2 cycles + 1 = {2 * cycles + 1:g} (a step "
+            "below half a pitch, so that hand-overs are bracketed)",
+        )
+    if not (_number(compound_um) and 0.0 < compound_um <= 100.0):
         raise GearoptError("compound_um", compound_um, "must be in (0, 100] um")
     if separation not in SEPARATIONS:
         raise GearoptError("separation", separation, f"must be one of {SEPARATIONS}")
@@ -208,8 +222,8 @@ def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str)
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
     (one per row)."""
     factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
-    extra = sample.clearance_rad - reference_rad.reshape(-1, 1, 1)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"):  # inf - inf: a row with nothing on the flanks
+        extra = sample.clearance_rad - reference_rad.reshape(-1, 1, 1)
         return np.where(np.isfinite(extra), extra * factor, np.inf)
 
 
@@ -301,6 +315,9 @@ def _slice(sample: FieldSample, rows) -> FieldSample:
     )
 
 
+EXTEND = np.array([1, 2, 3, 5, 10, 15])  # sample steps beyond the range (contact interval)
+
+
 def _concat(a: FieldSample, b: FieldSample) -> FieldSample:
     """Two samples' rows together."""
     return FieldSample(
@@ -389,40 +406,88 @@ def tooth_contacts(
     t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
     step = t[1] - t[0]
     offsets = np.arange(pairs) - (pairs - 1) // 2
-    ids = np.round(-t / p1)[:, None] + offsets[None, :]
-    u = t[:, None] + ids * p1  # (n, pairs): relative angle of each pair's base-pair position
-    # pairs at different positions often sit at the same relative angle: sample each once
-    key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
-    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
-    uu = u.ravel()[first]
-    m = len(uu)
-    side_rows = np.repeat(np.arange(n_sides), m)
-    main = joint.sample(side_rows, sense[side_rows] * np.tile(uu, n_sides))
-    states = [
-        _Side(k, fields[k], _slice(main, slice(k * m, (k + 1) * m)), u, ids, inv)
-        for k in range(n_sides)
-    ]
 
-    # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
-    # all sides batched into shared calls
-    # a pair whose contact is still inside the flanks at the ends of the sampled range: sample
-    # on beyond them (up to 1.5 pitches more) so that its contact interval is not cut short
-    ext_side, ext_v = [], []
-    for st in states:
-        v = st.sample.phi_rad * st.field.sense
-        inner = ~st.sample.edge & np.isfinite(st.sample.minimum_rad)
-        lo, hi = np.argmin(v), np.argmax(v)
-        for end, sign in ((lo, -1.0), (hi, 1.0)):
-            if inner[end]:
-                ext_side += [st.index] * 6
-                ext_v += list(v[end] + sign * step * np.array([1, 2, 3, 5, 10, 15]))
-    if ext_v:
-        ext_side = np.array(ext_side, np.intp)
-        more = joint.sample(ext_side, sense[ext_side] * np.array(ext_v))
+    def main_sample(centres):
+        """The pairs nearest each side's mesh centre (relative angle ``centres[k]``) at every
+        position, sampled once per distinct relative angle, all sides in one call."""
+        windows, rows_side, rows_u = [], [], []
+        for k in range(n_sides):
+            ids = np.round((centres[k] - t) / p1)[:, None] + offsets[None, :]
+            u = t[:, None] + ids * p1  # (n, pairs): each pair's base-pair relative angle
+            key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
+            _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+            windows.append((u, ids, inv, len(rows_u)))
+            rows_side += [k] * len(first)
+            rows_u += list(u.ravel()[first])
+        side_rows = np.array(rows_side, np.intp)
+        main = joint.sample(side_rows, sense[side_rows] * np.array(rows_u))
+        out = []
+        for k, (u, ids, inv, start) in enumerate(windows):
+            count = int(inv.max()) + 1
+            part = _slice(main, slice(start, start + count))
+            out.append(_Side(k, fields[k], part, u, ids, inv))
+        return out
+
+    def extra_requests(states):
+        """Rows beyond the sampled range: the pair beyond a window whose end pair carries (is
+        the window centred on the mesh?) and, where a contact is still inside the flanks at the
+        range's ends, up to 1.5 pitches on (so the contact interval is not cut short)."""
+        req = []
         for st in states:
+            v = st.sample.phi_rad * st.field.sense
+            inner = ~st.sample.edge & np.isfinite(st.sample.minimum_rad)
+            lo, hi = np.argmin(v), np.argmax(v)
+            for end, sign in ((lo, -1.0), (hi, 1.0)):
+                if inner[end]:
+                    req += [(st.index, "ext", x) for x in v[end] + sign * step * EXTEND]
+            for slot, sign in ((0, -1.0), (pairs - 1, 1.0)):
+                at_end = np.flatnonzero(st.carrying == slot)
+                beyond = st.u[at_end, slot] + sign * p1
+                known = np.isin(np.round(beyond / p1 * 1e9), np.round(v / p1 * 1e9))
+                req += [(st.index, "beyond", x) for x in beyond[~known]]
+        return req
+
+    def sampled(st, more, ext_side):
+        """Every relative angle sampled for a side and its lag."""
+        v = st.sample.phi_rad * st.field.sense
+        g = st.sample.minimum_rad
+        if more is not None:
+            rows = ext_side == st.index
+            v = np.concatenate([v, more.phi_rad[rows] * st.field.sense])
+            g = np.concatenate([g, more.minimum_rad[rows]])
+        return v, np.where(np.isfinite(g), g, np.inf)
+
+    states = main_sample(np.zeros(n_sides))
+    req = extra_requests(states)
+    more, ext_side = None, None
+    if req:
+        ext_side = np.array([r[0] for r in req], np.intp)
+        more = joint.sample(ext_side, sense[ext_side] * np.array([r[2] for r in req]))
+    # the mesh centre of each side: the relative angle of least lag over everything sampled;
+    # a window not centred on it (the contact moved by misalignment) is centred and resampled
+    centres = np.zeros(n_sides)
+    for st in states:
+        v, g = sampled(st, more, ext_side)
+        central = np.abs(v) <= 0.5 * p1 + 1e-9
+        best = int(np.argmin(g))
+        # (a flat TE, line contact, keeps the window: its least lag is noise)
+        if not central[best] and g[best] < np.min(g[central], initial=np.inf) - 0.1 / ARCSEC:
+            centres[st.index] = float(v[best])
+    if np.any(centres != 0.0):
+        states = main_sample(centres)
+        req = [r for r in extra_requests(states) if r[1] == "ext"]
+        more, ext_side = None, None
+        if req:
+            ext_side = np.array([r[0] for r in req], np.intp)
+            more = joint.sample(ext_side, sense[ext_side] * np.array([r[2] for r in req]))
+    for st in states:
+        if more is not None:
             rows = np.flatnonzero(ext_side == st.index)
             if rows.size:
                 st.interval_sample = _concat(st.sample, _slice(more, rows))
+
+    # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
+    # all sides batched into shared calls
     for st in states:
         _start_interval(st)
         _start_handover(st, t, p1)
@@ -499,8 +564,15 @@ def _start_interval(st) -> None:
         best = float(v[np.argmin(gs)])
         st.interval, st.bisect = (best, best), 0
         return
-    k = np.flatnonzero(inner)
-    lo_k, hi_k = k[0], k[-1]
+    # the unbroken run of interior samples around the least lag (the mesh centre), or the
+    # longest run when the least lag is itself at an edge
+    gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
+    runs = np.split(np.arange(len(v)), np.flatnonzero(np.diff(inner.astype(int))) + 1)
+    runs = [r for r in runs if inner[r[0]]]
+    centre = int(np.argmin(gs))
+    around = [r for r in runs if r[0] <= centre <= r[-1]]
+    run = around[0] if around else max(runs, key=len)
+    lo_k, hi_k = run[0], run[-1]
     st.ci_a = np.array([v[lo_k], v[hi_k]])  # inside
     st.ci_b = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])  # outside
     st.ci_open = np.array([lo_k > 0, hi_k < len(v) - 1])
@@ -549,9 +621,11 @@ def _start_handover(st, t, p1) -> None:
         col_i = [np.flatnonzero(ids[k + d] == leave - 1) for d in (0, 1)]
         if any(c.size == 0 for c in col_l + col_i) or k + 1 >= n:
             continue
-        d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
-        d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
-        if d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
+        with np.errstate(invalid="ignore"):  # inf - inf where a pair is off the flanks
+            d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
+            d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
+        finite = np.isfinite(d_lo) and np.isfinite(d_hi)
+        if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
             lo, hi = t[k] + leave * p1, t[k + 1] + leave * p1
             cs, ch = st.cs, st.ch
             starts = (
@@ -645,7 +719,8 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     direction = np.array([cs[5] - cs[4], ch[5] - ch[4]])
     norm = float(np.hypot(*direction))
     direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
-    width = _width(ex_sep[3], compound_mm, face, profile, mean_point, direction)
+    # the pattern's width: the extent of the whole pattern across the path at M
+    width = _width(pattern * 1e-3, compound_mm, face, profile, mean_point, direction)
     minor = _minor_axis(ex_sep[3], compound_mm, face, profile)
     major = _width(ex_sep[3], compound_mm, face, profile, mean_point, minor)
     bias = float(cs[0] - cs[1])
@@ -727,6 +802,7 @@ def backlash(
     forward until its other flanks touch the pinion's (``coast`` is the coast-side field with
     the drive side's phase)."""
     _check_options(positions, pairs, cycles, 6.5, "normal")
+    pairs += 2  # a pair more on each side: misalignment may move the mesh by a pitch
     curve = _PairCurve(drive)
     p1 = curve.pitch
     t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)

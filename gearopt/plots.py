@@ -1,7 +1,7 @@
 """Figures of a contact analysis (matplotlib, the ``plot`` extra): what a gear engineer reads.
 
-- ``te.png``: TE of both sides over two mesh cycles, each tooth pair's curve and the envelope
-  the gear follows, hand-overs marked;
+- ``te.png``: TE of both sides over two mesh cycles (the carrying pair at each position),
+  hand-overs marked;
 - ``pattern.png``: the contact pattern, path and mean point M on the projected pinion tooth
   (toe to heel, root to top) for the drive and the coast side;
 - ``backlash.png``: circumferential backlash along the mesh;
@@ -139,8 +139,12 @@ def plot_analysis(design, evaluations: Mapping, directory) -> list[Path]:
     title = design.name or "design"
     tca = evaluations["tca"]
     paths = [out / "te.png", out / "pattern.png", out / "backlash.png", out / "ease_off.png"]
-    _te(plt, tca, title, paths[0])
-    _pattern(plt, tca, title, paths[1])
-    _backlash(plt, evaluations["backlash"].report["backlash"], title, paths[2])
-    _ease_off(plt, evaluations["ease-off"].report["ease_off"], title, paths[3])
+    try:
+        _te(plt, tca, title, paths[0])
+        _pattern(plt, tca, title, paths[1])
+        _backlash(plt, evaluations["backlash"].report["backlash"], title, paths[2])
+        _ease_off(plt, evaluations["ease-off"].report["ease_off"], title, paths[3])
+    except OSError as exc:
+        plt.close("all")
+        raise GearoptError("--plot", str(directory), f"cannot write the figures: {exc}") from None
     return paths

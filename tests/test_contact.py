@@ -407,3 +407,42 @@ def test_bad_options_name_the_parameter(section53, conditions, parameter):
 
 def test_contact_error_is_a_gearopt_error():
     assert issubclass(ContactError, GearoptError)
+
+
+@pytest.mark.parametrize(
+    "misalignment", [Misalignment(shaft_angle_deg=-1.0), Misalignment(offset_mm=-0.3)]
+)
+def test_the_pairs_follow_the_mesh_centre_under_misalignment(section53, misalignment):
+    # a misalignment that moves the contact by about a pitch: the 3 pairs nearest the mesh
+    # centre give the TE and the backlash of a 7-pair window, and the TE repeats each pitch
+    three = run(section53, misalignment=misalignment)
+    seven = run(section53, misalignment=misalignment, pairs=7)
+    for side in ("drive", "coast"):
+        assert three[side].te_arcsec == pytest.approx(seven[side].te_arcsec, abs=1e-6)
+        te = three[side].te_arcsec
+        assert te[:10] == pytest.approx(te[10:20], abs=1e-6)  # 10 positions = one pitch
+    assert three["backlash"].circumferential_um == pytest.approx(
+        seven["backlash"].circumferential_um, abs=1e-6
+    )
+
+
+def test_a_contact_beyond_the_face_width_is_flagged_not_a_crash(section53):
+    # a narrow face and a large shaft-angle error: the pairs touch only at edges, the hand-overs
+    # cannot be bracketed between pairs on the flanks; the result is flagged and finite
+    narrow = gearopt.with_overrides(section53, {"pair.face_width_mm": 20.0})
+    r = run(narrow, misalignment=Misalignment(shaft_angle_deg=4.4))
+    for side in ("drive", "coast"):
+        assert r[side].edge_contact
+        assert np.all(np.isfinite(r[side].te_arcsec))
+        assert math.isfinite(r[side].te_peak_to_peak_arcsec)
+    assert r["backlash"].interference
+
+
+@pytest.mark.parametrize(
+    ("options", "parameter"),
+    [({"cycles": 0.5}, "cycles"), ({"pairs": 1}, "pairs"), ({"positions": 4}, "positions")],
+)
+def test_a_cycle_too_short_to_bracket_hand_overs_is_refused(section53, options, parameter):
+    with pytest.raises(GearoptError) as info:
+        run(section53, **options)
+    assert info.value.parameter == parameter
