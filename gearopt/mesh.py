@@ -808,7 +808,9 @@ def backlash(
     t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
     offsets = np.arange(pairs) - (pairs - 1) // 2
     u = t[:, None] + (np.round(-t / p1)[:, None] + offsets[None, :]) * p1
-    g = curve(u.ravel()).reshape(u.shape)
+    key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    g = curve(u.ravel()[first])[inv].reshape(u.shape)  # each relative angle once
     lag = g.min(axis=1)
     if not np.all(np.isfinite(lag)):
         raise ContactError("backlash", rule="at some positions no pair touches on the drive side")
