@@ -409,65 +409,59 @@ def tooth_contacts(
 
     def main_sample(centres):
         """The pairs nearest each side's mesh centre (relative angle ``centres[k]``) at every
-        position, sampled once per distinct relative angle, all sides in one call."""
+        position, sampled once per distinct relative angle, and 1.5 pitches on beyond both ends
+        of that range (a contact still inside the flanks there would cut the contact interval
+        short), all sides in one call."""
         windows, rows_side, rows_u = [], [], []
         for k in range(n_sides):
             ids = np.round((centres[k] - t) / p1)[:, None] + offsets[None, :]
             u = t[:, None] + ids * p1  # (n, pairs): each pair's base-pair relative angle
             key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
             _, first, inv = np.unique(key, return_index=True, return_inverse=True)
-            windows.append((u, ids, inv, len(rows_u)))
-            rows_side += [k] * len(first)
-            rows_u += list(u.ravel()[first])
+            uu = u.ravel()[first]
+            ext = np.concatenate([uu.min() - step * EXTEND, uu.max() + step * EXTEND])
+            windows.append((u, ids, inv, len(rows_u), len(first), len(ext)))
+            rows_side += [k] * (len(first) + len(ext))
+            rows_u += list(uu) + list(ext)
         side_rows = np.array(rows_side, np.intp)
         main = joint.sample(side_rows, sense[side_rows] * np.array(rows_u))
         out = []
-        for k, (u, ids, inv, start) in enumerate(windows):
-            count = int(inv.max()) + 1
-            part = _slice(main, slice(start, start + count))
-            out.append(_Side(k, fields[k], part, u, ids, inv))
+        for k, (u, ids, inv, start, count, n_ext) in enumerate(windows):
+            st = _Side(k, fields[k], _slice(main, slice(start, start + count)), u, ids, inv)
+            st.interval_sample = _slice(main, slice(start, start + count + n_ext))
+            out.append(st)
         return out
 
-    def extra_requests(states):
-        """Rows beyond the sampled range: the pair beyond a window whose end pair carries (is
-        the window centred on the mesh?) and, where a contact is still inside the flanks at the
-        range's ends, up to 1.5 pitches on (so the contact interval is not cut short)."""
+    def beyond_requests(states):
+        """The pair beyond a window whose end pair carries, where not sampled yet (is the
+        window centred on the mesh?)."""
         req = []
         for st in states:
-            v = st.sample.phi_rad * st.field.sense
-            inner = ~st.sample.edge & np.isfinite(st.sample.minimum_rad)
-            lo, hi = np.argmin(v), np.argmax(v)
-            for end, sign in ((lo, -1.0), (hi, 1.0)):
-                if inner[end]:
-                    req += [(st.index, "ext", x) for x in v[end] + sign * step * EXTEND]
+            v = st.interval_sample.phi_rad * st.field.sense
             for slot, sign in ((0, -1.0), (pairs - 1, 1.0)):
                 at_end = np.flatnonzero(st.carrying == slot)
                 beyond = st.u[at_end, slot] + sign * p1
                 known = np.isin(np.round(beyond / p1 * 1e9), np.round(v / p1 * 1e9))
-                req += [(st.index, "beyond", x) for x in beyond[~known]]
+                req += [(st.index, x) for x in beyond[~known]]
         return req
 
-    def sampled(st, more, ext_side):
-        """Every relative angle sampled for a side and its lag."""
-        v = st.sample.phi_rad * st.field.sense
-        g = st.sample.minimum_rad
-        if more is not None:
-            rows = ext_side == st.index
-            v = np.concatenate([v, more.phi_rad[rows] * st.field.sense])
-            g = np.concatenate([g, more.minimum_rad[rows]])
-        return v, np.where(np.isfinite(g), g, np.inf)
-
     states = main_sample(np.zeros(n_sides))
-    req = extra_requests(states)
-    more, ext_side = None, None
+    req = beyond_requests(states)
+    more = None
     if req:
         ext_side = np.array([r[0] for r in req], np.intp)
-        more = joint.sample(ext_side, sense[ext_side] * np.array([r[2] for r in req]))
+        more = joint.sample(ext_side, sense[ext_side] * np.array([r[1] for r in req]))
     # the mesh centre of each side: the relative angle of least lag over everything sampled;
     # a window not centred on it (the contact moved by misalignment) is centred and resampled
     centres = np.zeros(n_sides)
     for st in states:
-        v, g = sampled(st, more, ext_side)
+        v = st.interval_sample.phi_rad * st.field.sense
+        g = st.interval_sample.minimum_rad
+        if more is not None:
+            rows = ext_side == st.index
+            v = np.concatenate([v, more.phi_rad[rows] * st.field.sense])
+            g = np.concatenate([g, more.minimum_rad[rows]])
+        g = np.where(np.isfinite(g), g, np.inf)
         central = np.abs(v) <= 0.5 * p1 + 1e-9
         best = int(np.argmin(g))
         # (a flat TE, line contact, keeps the window: its least lag is noise)
@@ -475,16 +469,6 @@ def tooth_contacts(
             centres[st.index] = float(v[best])
     if np.any(centres != 0.0):
         states = main_sample(centres)
-        req = [r for r in extra_requests(states) if r[1] == "ext"]
-        more, ext_side = None, None
-        if req:
-            ext_side = np.array([r[0] for r in req], np.intp)
-            more = joint.sample(ext_side, sense[ext_side] * np.array([r[2] for r in req]))
-    for st in states:
-        if more is not None:
-            rows = np.flatnonzero(ext_side == st.index)
-            if rows.size:
-                st.interval_sample = _concat(st.sample, _slice(more, rows))
 
     # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
     # all sides batched into shared calls
