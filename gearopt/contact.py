@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from gearopt.design import Misalignment
 from gearopt.errors import GearoptError
-from gearopt.flank import FlankMap
+from gearopt.flank import FlankMap, hermite_cells
 
 __all__ = [
     "ContactError",
@@ -350,9 +350,9 @@ class _Engine:
         cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
         self.refine_cells = np.concatenate([c.ravel() for c in cells])
         self.pinion_cells = cells[0].size
-        self.pinion_coef = np.concatenate([f.pinion._cells[0].reshape(-1, 4, 4) for f in fields])
+        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields])
         self.gear_cells = first.gear._lookup[8].size
-        self.gear_coef = np.concatenate([f.gear._cells[0].reshape(-1, 4, 4) for f in fields])
+        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields])
         self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
 
     # --- evaluation ---------------------------------------------------------------------
@@ -363,10 +363,7 @@ class _Engine:
         per side, ``offset`` cells into them): ``(Theta, cell index, within the grid)``."""
         i, j, u, v, within = fm._cell_of(s, h)
         k = i * fm._lookup[6] + j + offset
-        c = np.take(coef_t, k, axis=0)  # (..., 4, 4) coefficients of u^a v^b
-        vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
-        w = np.einsum("...ab,...b->...a", c, vv)
-        return ((w[..., 3] * u + w[..., 2]) * u + w[..., 1]) * u + w[..., 0], k, within
+        return hermite_cells(coef_t, k, u, v), k, within
 
     def gap(self, side, p, n, phi, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles

@@ -250,7 +250,7 @@ class FlankMap:
             (len(fp) - 1) / float(fp[-1] - fp[0]),
             float(len(fp) - 2),
             len(fp) - 1,
-            np.ascontiguousarray(coef.reshape(-1, 16).T),
+            np.ascontiguousarray(coef.reshape(-1, 4, 4)),
             ok.ravel(),
         )
 
@@ -279,12 +279,9 @@ class FlankMap:
         if s.shape != h.shape:
             s, h = np.broadcast_arrays(s, h)
         i, j, u, v, within = self._cell_of(s, h)
-        n_cols, _, ok = self._lookup[6:]
+        n_cols, coef, ok = self._lookup[6:]
         k = i * n_cols + j
-        c = np.take(self._cells[0].reshape(-1, 4, 4), k, axis=0)  # coefficients of u^a v^b
-        vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
-        w = np.einsum("...ab,...b->...a", c, vv)
-        out = ((w[..., 3] * u + w[..., 2]) * u + w[..., 1]) * u + w[..., 0]
+        out = hermite_cells(coef, k, u, v)
         if with_inside is False:
             return out
         cells = ok if with_inside is True else with_inside
@@ -397,6 +394,16 @@ class FlankMap:
             },
             "generated_depth_mm": float(self.profile_mm[-1] - depth.max()),
         }
+
+
+def hermite_cells(coef: NDArray, k: NDArray, u: NDArray, v: NDArray) -> NDArray:
+    """Bicubic polynomials sum_ab coef[k, a, b] u^a v^b: cell ``k`` of the ``(n, 4, 4)``
+    coefficient tables at unit coordinates ``(u, v)`` (row gathers and one einsum: the fastest
+    numpy form measured)."""
+    c = np.take(coef, k, axis=0)
+    vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
+    w = np.einsum("...ab,...b->...a", c, vv)
+    return ((w[..., 3] * u + w[..., 2]) * u + w[..., 1]) * u + w[..., 0]
 
 
 def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> NDArray:
