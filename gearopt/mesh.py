@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 from numpy.typing import NDArray
@@ -302,39 +303,13 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
 
 
 def _slice(sample: FieldSample, rows) -> FieldSample:
-    """The rows ``rows`` of a sample."""
+    """The rows ``rows`` of a sample (a slice or an index array)."""
     return FieldSample(
-        phi_rad=sample.phi_rad[rows],
-        clearance_rad=sample.clearance_rad[rows],
-        normal_factor_mm=sample.normal_factor_mm[rows],
-        radius_mm=sample.radius_mm[rows],
-        minimum_rad=sample.minimum_rad[rows],
-        contact_face_mm=sample.contact_face_mm[rows],
-        contact_profile_mm=sample.contact_profile_mm[rows],
-        edge=sample.edge[rows],
+        **{f.name: getattr(sample, f.name)[rows] for f in dataclass_fields(FieldSample)}
     )
 
 
 EXTEND = np.array([1, 2, 3, 5, 10, 15])  # sample steps beyond the range (contact interval)
-
-
-def _concat(a: FieldSample, b: FieldSample) -> FieldSample:
-    """Two samples' rows together."""
-    return FieldSample(
-        **{
-            name: np.concatenate([getattr(a, name), getattr(b, name)])
-            for name in (
-                "phi_rad",
-                "clearance_rad",
-                "normal_factor_mm",
-                "radius_mm",
-                "minimum_rad",
-                "contact_face_mm",
-                "contact_profile_mm",
-                "edge",
-            )
-        }
-    )
 
 
 def tooth_contact(
@@ -677,20 +652,8 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     # separations at the contact gear angle of each position (same lag for every pair)
     compound_mm = compound_um * 1e-3
     main = st.sample
-    sep = _separation_mm(
-        FieldSample(
-            phi_rad=main.phi_rad[st.inv],
-            clearance_rad=main.clearance_rad[st.inv],
-            normal_factor_mm=main.normal_factor_mm[st.inv],
-            radius_mm=main.radius_mm[st.inv],
-            minimum_rad=g.ravel(),
-            contact_face_mm=main.contact_face_mm[st.inv],
-            contact_profile_mm=main.contact_profile_mm[st.inv],
-            edge=st.edge_all.ravel(),
-        ),
-        np.repeat(lag, pairs),
-        separation,
-    ).reshape((positions, pairs) + field.pinion.shape)
+    sep = _separation_mm(_slice(main, st.inv), np.repeat(lag, pairs), separation)
+    sep = sep.reshape((positions, pairs) + field.pinion.shape)
     pattern = sep.min(axis=(0, 1)) * 1e3
     face = field.pinion.face_mm - frame.toe_mm
     profile = field.pinion.profile_mm - frame.root_mm
