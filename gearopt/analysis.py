@@ -1,9 +1,10 @@
 """Contact analysis of a design: the options the evaluators share, and the analyses themselves.
 
-:func:`analyze` generates a design's flanks, places them in the housing (with the design's
-``[misalignment]`` unless the options give another) and runs the unloaded TCA of both sides,
-the backlash and the ease-off (:mod:`gearopt.mesh`). The evaluator plugins ``tca``, ``backlash``
-and ``ease-off`` call the same functions with options taken from their conditions.
+:func:`meshed_pair` generates a design's flanks and places them in the housing (with the
+design's ``[misalignment]`` unless the options give another); :func:`contact_sides`,
+:func:`pair_backlash` and :func:`pair_ease_off` run the unloaded TCA of both sides, the backlash
+and the ease-off on it (:mod:`gearopt.mesh`). The evaluator plugins ``tca``, ``backlash`` and
+``ease-off`` call them with options taken from their conditions.
 """
 
 from __future__ import annotations
@@ -26,7 +27,14 @@ from gearopt.mesh import (
     tooth_contacts,
 )
 
-__all__ = ["AnalysisOptions", "TCA_GRID", "analyze", "meshed_pair"]
+__all__ = [
+    "AnalysisOptions",
+    "TCA_GRID",
+    "contact_sides",
+    "meshed_pair",
+    "pair_backlash",
+    "pair_ease_off",
+]
 
 #: The FlankMap grid of the contact analyses (n_face, n_profile): the profile is sampled more
 #: finely than the flank default because the pinion's fold spoils interpolation in its lowest
@@ -159,22 +167,4 @@ def pair_ease_off(pair: MeshedPair) -> dict[str, EaseOff]:
     return {
         "drive": ease_off(pair.drive, frame=pair.frame, side="drive"),
         "coast": ease_off(pair.coast, frame=pair.frame, side="coast"),
-    }
-
-
-def analyze(
-    design: Design, options: AnalysisOptions | None = None, *, plugin_manager=None
-) -> dict[str, Any]:
-    """Every contact analysis of a design, as the objects of :mod:`gearopt.mesh`:
-    ``{"pair", "tca", "tca_coast", "backlash", "ease_off", "options"}``."""
-    options = options or AnalysisOptions()
-    pair = meshed_pair(design, options, plugin_manager=plugin_manager)
-    sides = contact_sides(pair, options)
-    return {
-        "pair": pair,
-        "tca": sides["drive"],
-        "tca_coast": sides["coast"],
-        "backlash": pair_backlash(pair, options),
-        "ease_off": pair_ease_off(pair),
-        "options": options,
     }

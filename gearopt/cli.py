@@ -109,16 +109,12 @@ def _cmd_settings(args: argparse.Namespace) -> int:
 
 
 def _cmd_flanks(args: argparse.Namespace) -> int:
-    from gearopt.flank import FLANKS, MEMBERS, FlankGrid
+    from gearopt.flank import FLANKS, MEMBERS
     from gearopt.thickness import design_chordal_thickness
 
     design = load_design(args.design)
     model = get_machine_model(design.model)
-    try:
-        n_face, n_profile = (int(part) for part in args.grid.split(","))
-    except ValueError:
-        raise DesignError("--grid", args.grid, "must be two integers n_face,n_profile") from None
-    grid = FlankGrid(n_face=n_face, n_profile=n_profile)
+    grid = _parse_grid(args.grid)
     out: dict[str, Any] = {"design": design.name, "model": design.model, "grid": list(grid.shape)}
     for member in MEMBERS:
         maps = model.generate_flanks(design, member=member, grid=grid)

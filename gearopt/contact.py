@@ -240,19 +240,6 @@ class ClearanceField:
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         return self._engine.sample(np.zeros(len(phi), np.intp), phi, gear_angle_rad, refine)
 
-    def minimum_near(self, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
-        """Refined minimum at pinion angles ``phi_rad`` started from known nearby contact points
-        (``face_mm``, ``profile_mm`` on the pinion grid): no node field, for the extra
-        evaluations of a mesh cycle (hand-overs, contact ends). Returns ``(value, s, h,
-        edge)``; value +inf where the start is off the flanks."""
-        phi = np.atleast_1d(np.asarray(phi_rad, float))
-        side = np.zeros(len(phi), np.intp)
-        return self._engine.near(side, phi, face_mm, profile_mm, gear_angle_rad)
-
-    def minimum(self, phi_rad: NDArray, gear_angle_rad: NDArray | float = 0.0) -> NDArray:
-        """Refined minimum clearance (rad) at relative pinion angles ``phi_rad``."""
-        return self.sample(phi_rad, gear_angle_rad).minimum_rad
-
 
 class JointField:
     """Several clearance fields of one pair (the drive and coast sides) evaluated together:
@@ -268,7 +255,10 @@ class JointField:
         return self._engine.sample(np.asarray(side, np.intp), phi_rad, gear_angle_rad, refine)
 
     def minimum_near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
-        """As :meth:`ClearanceField.minimum_near`, row k on field ``side[k]``."""
+        """Refined minima at pinion angles ``phi_rad`` (row k on field ``side[k]``) started from
+        known nearby contact points (``face_mm``, ``profile_mm`` on the pinion grid): no node
+        field, for the extra evaluations of a mesh cycle (hand-overs, contact ends). Returns
+        ``(value, s, h, edge)``; value +inf where the start is off the flanks."""
         side = np.asarray(side, np.intp)
         return self._engine.near(side, phi_rad, face_mm, profile_mm, gear_angle_rad)
 
