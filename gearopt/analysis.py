@@ -112,28 +112,47 @@ class AnalysisOptions:
         }
 
 
-#: the last few meshed pairs, so that evaluators of one design (``gearopt analyze`` runs tca,
-#: backlash and ease-off) generate its flanks once; keyed by the design object's identity
-_RECENT: list[tuple[Design, tuple, MeshedPair]] = []
+#: the last few designs' flanks and meshed pairs, so that the evaluators of one design
+#: (``gearopt analyze`` runs tca, backlash and ease-off; a study evaluates several
+#: misalignments) generate its flanks once; keyed by the design object's identity
+_RECENT: list[tuple[Design, tuple, Any]] = []
+
+
+def _recent(design: Design, key: tuple, make):
+    for known, known_key, value in _RECENT:
+        if known is design and known_key == key:
+            return value
+    value = make()
+    _RECENT.insert(0, (design, key, value))
+    del _RECENT[8:]
+    return value
 
 
 def meshed_pair(design: Design, options: AnalysisOptions, *, plugin_manager=None) -> MeshedPair:
     """The design's flanks generated on the options' grid and placed in the housing (the last
-    few are kept: the same design object with the same grid and misalignment is meshed once)."""
-    key = (options.grid.shape, options.misalignment, plugin_manager is None)
-    for known, known_key, pair in _RECENT:
-        if known is design and known_key == key:
-            return pair
-    pair = mesh_pair(
+    few are kept: the same design object on the same grid is generated once, and placed once
+    per misalignment)."""
+    if plugin_manager is not None:
+        return mesh_pair(
+            design,
+            grid=options.grid,
+            misalignment=options.misalignment,
+            plugin_manager=plugin_manager,
+        )
+    from gearopt import generate_flanks
+
+    flanks = _recent(
         design,
-        grid=options.grid,
-        misalignment=options.misalignment,
-        plugin_manager=plugin_manager,
+        ("flanks", options.grid.shape),
+        lambda: tuple(generate_flanks(design, m, grid=options.grid) for m in ("pinion", "gear")),
     )
-    if plugin_manager is None:
-        _RECENT.insert(0, (design, key, pair))
-        del _RECENT[4:]
-    return pair
+    return _recent(
+        design,
+        ("pair", options.grid.shape, options.misalignment),
+        lambda: mesh_pair(
+            design, grid=options.grid, misalignment=options.misalignment, flanks=flanks
+        ),
+    )
 
 
 def contact_sides(pair: MeshedPair, options: AnalysisOptions) -> dict[str, ToothContact]:

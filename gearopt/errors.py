@@ -18,6 +18,7 @@ __all__ = [
     "SettingsError",
     "NotAvailableError",
     "PluginError",
+    "StudyError",
 ]
 
 _MISSING = object()
@@ -67,3 +68,8 @@ class NotAvailableError(GearoptError):
 
 class PluginError(GearoptError):
     """A plugin breaks the plugin contract (duplicate name, wrong return type, ...)."""
+
+
+class StudyError(GearoptError):
+    """A study file, its storage or a study run breaks a rule (unknown objective, bad bounds,
+    a storage that cannot be opened, ...)."""

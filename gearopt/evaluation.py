@@ -88,9 +88,24 @@ class BaseObjective(abc.ABC):
     direction: ClassVar[str] = "minimize"
     requires: ClassVar[tuple[str, ...]] = ()
 
+    def reads(self, **options: Any) -> dict[str, str]:
+        """The evaluation labels ``value`` reads with these options, each with the evaluator
+        it must come from; raise a :class:`~gearopt.errors.StudyError` naming a bad option.
+
+        A study checks this once, when its file is read, so that a typo fails before the first
+        trial. The default reads each evaluator of ``requires`` under its own name and takes no
+        options.
+        """
+        if options:
+            from gearopt.errors import StudyError
+
+            raise StudyError(f"objective {self.name}", sorted(options), "takes no options")
+        return {name: name for name in self.requires}
+
     @abc.abstractmethod
     def value(self, evaluations: Mapping[str, Evaluation], **options: Any) -> float:
-        """Return a finite value from the evaluations (keyed by evaluator name)."""
+        """Return a finite value from one trial's evaluations, keyed by their labels in the
+        study (a label defaults to the evaluator's name)."""
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

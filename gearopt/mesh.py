@@ -857,14 +857,21 @@ class MeshedPair:
     backlash_radius_mm: float
 
 
-def mesh_pair(design, *, grid=None, misalignment=None, plugin_manager=None) -> MeshedPair:
-    """Generate a design's flanks and place them in the housing with ``misalignment`` (default:
-    the design's ``[misalignment]``)."""
+def mesh_pair(
+    design, *, grid=None, misalignment=None, plugin_manager=None, flanks=None
+) -> MeshedPair:
+    """Generate a design's flanks (or take ``flanks``, the ``(pinion, gear)`` answers of
+    :func:`gearopt.generate_flanks`) and place them in the housing with ``misalignment``
+    (default: the design's ``[misalignment]``)."""
     import gearopt
     from gearopt.contact import Placement
 
-    pinion = gearopt.generate_flanks(design, "pinion", grid=grid, plugin_manager=plugin_manager)
-    gear = gearopt.generate_flanks(design, "gear", grid=grid, plugin_manager=plugin_manager)
+    if flanks is None:
+        flanks = tuple(
+            gearopt.generate_flanks(design, member, grid=grid, plugin_manager=plugin_manager)
+            for member in ("pinion", "gear")
+        )
+    pinion, gear = flanks
     placement = Placement(
         shaft_angle_deg=design.pair.shaft_angle_deg,
         misalignment=design.misalignment if misalignment is None else misalignment,

@@ -1,0 +1,345 @@
+"""Study files: what a study searches, evaluates and minimises, read from TOML or built in Python.
+
+A study file::
+
+    [study]
+    name = "cyclo_palloid_contact"      # the Optuna study name (default: the file's stem)
+    design = "seed001_section5_3.toml"  # the base design, relative to the study file
+    sampler = "tpe"                     # tpe | random | nsga2 | qmc
+    seed = 7
+    pick = "utopia"                     # multi-objective: utopia | "objective:<label>"
+    artifacts = false                   # per-trial PNG plots as Optuna artifacts
+
+    [search]                            # dotted design keys: [low, high] or {low, high, log}
+    "machine.pinion.inner_cutter_radius_mm" = [73.0, 77.0]
+    "machine.pinion.blade_parabola_coefficient_per_mm" = "model"   # the model's own bounds
+
+    [evaluations.tca]                   # a label; evaluator defaults to the label
+    [evaluations.misaligned]
+    evaluator = "tca"
+    conditions = {misalignment = {offset_mm = 0.221}}
+
+    [[objectives]]                      # objective plugins; label names the Optuna metric
+    name = "worst_te"
+    on = ["tca", "misaligned"]
+
+    [[constraints]]
+    name = "backlash_window"
+    min_um = 150.0
+    max_um = 260.0
+
+    [[enqueue]]                         # given designs, evaluated first
+    "machine.pinion.inner_cutter_radius_mm" = 75.0
+
+    [grid]                              # a sweep: every combination is enqueued
+    "machine.pinion.blade_parabola_coefficient_per_mm" = [0.0, 0.0015]
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from gearopt.design import Design, load_design, with_overrides
+from gearopt.errors import GearoptError, StudyError
+from gearopt.plugins import evaluators, get_machine_model, objectives
+
+__all__ = [
+    "SAMPLERS",
+    "Dimension",
+    "EvaluationSpec",
+    "ObjectiveSpec",
+    "StudySpec",
+    "load_study_spec",
+    "parse_study_spec",
+]
+
+SAMPLERS = ("tpe", "random", "nsga2", "qmc")
+_STUDY_KEYS = ("name", "design", "sampler", "seed", "pick", "artifacts")
+_TABLES = ("study", "search", "evaluations", "objectives", "constraints", "enqueue", "grid")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Dimension:
+    """One searched design key: a float in ``[low, high]`` (log scale if ``log``)."""
+
+    key: str
+    low: float
+    high: float
+    log: bool = False
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):
+            raise StudyError(f"search.{self.key}", (self.low, self.high), "needs finite low < high")
+        if self.log and self.low <= 0.0:
+            raise StudyError(f"search.{self.key}", self.low, "a log scale needs low > 0")
+
+    def check(self, value: Any, where: str) -> float:
+        """``value`` as a float inside the bounds, or a :class:`StudyError`."""
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise StudyError(f"{where}.{self.key}", value, "must be a number")
+        if not self.low <= value <= self.high:
+            raise StudyError(
+                f"{where}.{self.key}", value, f"must lie in the search range [{self.low}, {self.high}]"
+            )
+        return float(value)
+
+
+@dataclass(frozen=True, kw_only=True)
+class EvaluationSpec:
+    """One evaluation of every trial: an evaluator under conditions, stored under ``label``."""
+
+    label: str
+    evaluator: str
+    conditions: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ObjectiveSpec:
+    """One objective or constraint: the plugin ``name``, the Optuna metric ``label``, its
+    ``options`` and, from the plugin, ``kind`` and ``direction``."""
+
+    name: str
+    label: str
+    kind: str
+    direction: str
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudySpec:
+    """A validated study: base design, search space, evaluations, objectives, constraints,
+    sampler, seed, the pick rule of multi-objective studies and the given designs."""
+
+    name: str
+    design: Design
+    search: tuple[Dimension, ...]
+    evaluations: tuple[EvaluationSpec, ...]
+    objectives: tuple[ObjectiveSpec, ...]
+    constraints: tuple[ObjectiveSpec, ...] = ()
+    sampler: str = "tpe"
+    seed: int | None = None
+    pick: str = "utopia"
+    artifacts: bool = False
+    enqueue: tuple[Mapping[str, float], ...] = ()
+    path: str | None = None
+
+    def __post_init__(self) -> None:
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", self.name):
+            raise StudyError("study.name", self.name, "use letters, digits, '_', '-' and '.'")
+        if self.sampler not in SAMPLERS:
+            raise StudyError("study.sampler", self.sampler, f"must be one of {SAMPLERS}")
+        if not self.search:
+            raise StudyError("search", rule="name at least one design key to search")
+        if not self.objectives:
+            raise StudyError("objectives", rule="name at least one objective")
+        labels = [o.label for o in self.objectives + self.constraints]
+        if len(set(labels)) != len(labels):
+            raise StudyError("objectives", labels, "labels must be unique")
+        if self.pick != "utopia":
+            target = self.pick.removeprefix("objective:")
+            if not self.pick.startswith("objective:") or target not in labels[: len(self.objectives)]:
+                raise StudyError(
+                    "study.pick", self.pick, "must be 'utopia' or 'objective:<objective label>'"
+                )
+
+    @property
+    def directions(self) -> list[str]:
+        return [o.direction for o in self.objectives]
+
+    @property
+    def metric_names(self) -> list[str]:
+        return [o.label for o in self.objectives]
+
+    @property
+    def dimensions(self) -> dict[str, Dimension]:
+        return {d.key: d for d in self.search}
+
+    def check_params(self, params: Mapping[str, Any], where: str) -> dict[str, float]:
+        """Given design values as searched parameters: every key searched, every value inside
+        its range (a given design outside the space would be resampled by Optuna)."""
+        dims = self.dimensions
+        unknown = set(params) - set(dims)
+        if unknown:
+            raise StudyError(where, sorted(unknown), f"not searched keys; searched: {sorted(dims)}")
+        return {key: dims[key].check(value, where) for key, value in params.items()}
+
+    def design_for(self, params: Mapping[str, Any]) -> Design:
+        """The base design with the searched keys set."""
+        return with_overrides(self.design, params)
+
+
+def _float(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise StudyError(where, value, "must be a number")
+    return float(value)
+
+
+def _dimension(key: str, value: Any, design: Design) -> Dimension:
+    where = f"search.{key}"
+    if value == "model":
+        model = get_machine_model(design.model)
+        declared = {d.key: d for d in model.search_space(design)}
+        if key not in declared:
+            raise StudyError(where, value, f"the model declares no bounds; it has {sorted(declared)}")
+        d = declared[key]
+        return Dimension(key=key, low=d.low, high=d.high, log=d.log)
+    if isinstance(value, list) and len(value) == 2:
+        return Dimension(key=key, low=_float(value[0], where), high=_float(value[1], where))
+    if isinstance(value, Mapping) and set(value) <= {"low", "high", "log"}:
+        if "low" not in value or "high" not in value:
+            raise StudyError(where, dict(value), "needs low and high")
+        return Dimension(
+            key=key,
+            low=_float(value["low"], where),
+            high=_float(value["high"], where),
+            log=bool(value.get("log", False)),
+        )
+    raise StudyError(where, value, 'must be [low, high], {low, high, log} or "model"')
+
+
+def _objective(entry: Any, kind: str, where: str, known: Mapping[str, EvaluationSpec]):
+    if not isinstance(entry, Mapping) or not isinstance(entry.get("name"), str):
+        raise StudyError(where, entry, "must be a table with name = <objective plugin>")
+    options = {k: v for k, v in entry.items() if k not in ("name", "label", "direction")}
+    available = objectives()
+    name = entry["name"]
+    if name not in available:
+        raise StudyError(f"{where}.name", name, f"unknown objective; installed: {sorted(available)}")
+    plugin = available[name]
+    if plugin.kind != kind:
+        raise StudyError(f"{where}.name", name, f"is a {plugin.kind}, listed under {kind}s")
+    try:
+        reads = plugin.reads(**options)
+    except GearoptError as exc:
+        raise StudyError(where, entry, exc.rule or str(exc)) from None
+    for label, evaluator in reads.items():
+        if label not in known:
+            raise StudyError(where, label, f"reads an evaluation not in [evaluations]: {sorted(known)}")
+        if known[label].evaluator != evaluator:
+            raise StudyError(where, label, f"must be an evaluation of {evaluator!r}")
+    direction = entry.get("direction", plugin.direction)
+    if direction not in ("minimize", "maximize"):
+        raise StudyError(f"{where}.direction", direction, "must be minimize or maximize")
+    return ObjectiveSpec(
+        name=name,
+        label=str(entry.get("label", name)),
+        kind=kind,
+        direction=direction,
+        options=options,
+    )
+
+
+def _evaluations(table: Mapping[str, Any]) -> tuple[EvaluationSpec, ...]:
+    installed = evaluators()
+    specs = []
+    for label, entry in table.items():
+        where = f"evaluations.{label}"
+        if not isinstance(entry, Mapping) or not set(entry) <= {"evaluator", "conditions"}:
+            raise StudyError(where, entry, "must be a table with evaluator and conditions")
+        name = entry.get("evaluator", label)
+        if name not in installed:
+            raise StudyError(f"{where}.evaluator", name, f"unknown; installed: {sorted(installed)}")
+        conditions = entry.get("conditions", {})
+        if not isinstance(conditions, Mapping):
+            raise StudyError(f"{where}.conditions", conditions, "must be a table")
+        specs.append(EvaluationSpec(label=label, evaluator=name, conditions=dict(conditions)))
+    return tuple(specs)
+
+
+def _given(spec_search: Mapping[str, Dimension], data: Mapping[str, Any]) -> list[dict]:
+    given = []
+    for i, entry in enumerate(data.get("enqueue", [])):
+        if not isinstance(entry, Mapping):
+            raise StudyError(f"enqueue[{i}]", entry, "must be a table of design keys")
+        given.append(dict(entry))
+    grid = data.get("grid", {})
+    if grid:
+        keys = list(grid)
+        for key in keys:
+            if not isinstance(grid[key], list) or not grid[key]:
+                raise StudyError(f"grid.{key}", grid[key], "must be a non-empty list of values")
+        for combo in itertools.product(*(grid[k] for k in keys)):
+            given.append(dict(zip(keys, combo, strict=True)))
+    return given
+
+
+def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None) -> StudySpec:
+    """A :class:`StudySpec` from a parsed study file (``path`` resolves the base design)."""
+    unknown = set(data) - set(_TABLES)
+    if unknown:
+        raise StudyError("study file", sorted(unknown), f"unknown tables; known: {_TABLES}")
+    study = data.get("study", {})
+    if not isinstance(study, Mapping):
+        raise StudyError("study", study, "must be a table")
+    if set(study) - set(_STUDY_KEYS):
+        raise StudyError("study", sorted(set(study) - set(_STUDY_KEYS)), f"known: {_STUDY_KEYS}")
+    if "design" not in study:
+        raise StudyError("study.design", rule="name the base design file")
+    base = Path(path).resolve().parent if path else Path.cwd()
+    design = load_design(base / study["design"])
+    search = data.get("search", {})
+    if not isinstance(search, Mapping):
+        raise StudyError("search", search, "must be a table of design keys")
+    dims = tuple(_dimension(key, value, design) for key, value in search.items())
+    evals = _evaluations(data.get("evaluations", {}))
+    if not evals:
+        raise StudyError("evaluations", rule="name at least one evaluation")
+    known = {e.label: e for e in evals}
+    objs = tuple(
+        _objective(e, "objective", f"objectives[{i}]", known)
+        for i, e in enumerate(data.get("objectives", []))
+    )
+    cons = tuple(
+        _objective(e, "constraint", f"constraints[{i}]", known)
+        for i, e in enumerate(data.get("constraints", []))
+    )
+    seed = study.get("seed")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+        raise StudyError("study.seed", seed, "must be an integer")
+    default_name = Path(path).stem if path else "study"
+    spec = StudySpec(
+        name=str(study.get("name", default_name)),
+        design=design,
+        search=dims,
+        evaluations=evals,
+        objectives=objs,
+        constraints=cons,
+        sampler=str(study.get("sampler", "tpe")),
+        seed=seed,
+        pick=str(study.get("pick", "utopia")),
+        artifacts=bool(study.get("artifacts", False)),
+        path=str(path) if path else None,
+    )
+    given = tuple(
+        spec.check_params(p, f"enqueue[{i}]") for i, p in enumerate(_given(spec.dimensions, data))
+    )
+    for i, params in enumerate(given):
+        try:
+            spec.design_for(params)
+        except GearoptError as exc:
+            raise StudyError(f"enqueue[{i}]", params, f"gives an invalid design: {exc}") from None
+    return StudySpec(**{**spec.__dict__, "enqueue": given})
+
+
+def load_study_spec(path: str | Path) -> StudySpec:
+    """Read and validate a study file."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise StudyError("study file", str(path), "does not exist") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError("study file", str(path), f"malformed TOML: {exc}") from None
+    return parse_study_spec(data, path=path)
+
+
+def as_sequence(value: Any) -> Sequence:
+    """``value`` as a list (a scalar becomes a one-element list)."""
+    return value if isinstance(value, list | tuple) else [value]
