@@ -5,7 +5,8 @@
 ``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
 ``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
-``gearopt change-gears MACHINE --ratio R`` the best change gears of its set. Errors in the input
+``gearopt change-gears MACHINE --ratio R`` the best change gears of its set;
+``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`). Errors in the input
 are printed as one line naming the parameter, its value and the rule (exit status 2).
 """
 
@@ -21,6 +22,7 @@ from typing import Any
 from gearopt.design import load_design
 from gearopt.errors import DesignError, GearoptError
 from gearopt.plugins import get_machine_model, list_plugins
+from gearopt.study_cli import add_study_parser
 
 __all__ = ["main"]
 
@@ -474,6 +476,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--reserve", help="gears already in use, e.g. 48,45,60,60")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_change_gears)
+    add_study_parser(sub)
     return parser
 
 

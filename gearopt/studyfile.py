@@ -41,7 +41,7 @@ import itertools
 import math
 import re
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -339,7 +339,3 @@ def load_study_spec(path: str | Path) -> StudySpec:
         raise StudyError("study file", str(path), f"malformed TOML: {exc}") from None
     return parse_study_spec(data, path=path)
 
-
-def as_sequence(value: Any) -> Sequence:
-    """``value`` as a list (a scalar becomes a one-element list)."""
-    return value if isinstance(value, list | tuple) else [value]

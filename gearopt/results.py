@@ -1,0 +1,238 @@
+"""The gearopt tables: trial results for dashboards, in the study's own database.
+
+Optuna's tables hold the trials, parameters and objective values (``optuna-dashboard`` reads
+them). Beside them, in the same database, gearopt writes with SQLAlchemy what a dashboard needs
+to draw a gear engineer's plots, keyed by study name and Optuna trial number:
+
+``gearopt_trials``       one row per evaluated trial: attempt, seconds, worker pid, coordinator
+``gearopt_metrics``      every evaluator metric, long format (evaluation, metric, value)
+``gearopt_objectives``   objective and constraint values by label (kind: objective/constraint)
+``gearopt_settings``     the machine settings of each member (member, key, value)
+``gearopt_curves``       TE, contact path and backlash curves (evaluation, curve, side, idx, x, y)
+``gearopt_patterns``     contact-pattern outlines, closed polygons (evaluation, side, idx,
+                         face_mm, profile_mm)
+``gearopt_studies``      one row per study (the study file's search space as JSON)
+``gearopt_coordinators`` the coordinators that ran a study, with their last heartbeat (UTC)
+
+Views join them with Optuna's tables, COMPLETE trials only: ``gearopt_trial_params``
+(study, trial_number, param, value) and ``gearopt_trial_metrics`` (study, trial_number,
+evaluation, metric, value). Rows are written before the trial is told, and removed when a trial
+is failed, so the views hold one row set per COMPLETE trial.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from collections.abc import Iterable
+
+import sqlalchemy as sa
+
+from gearopt.trial import TrialOutcome
+
+__all__ = ["ResultsStore", "TABLES", "VIEWS"]
+
+_meta = sa.MetaData()
+
+
+def _keyed(name: str, *columns: sa.Column) -> sa.Table:
+    return sa.Table(
+        name,
+        _meta,
+        sa.Column("study", sa.String(256), primary_key=True),
+        sa.Column("trial_number", sa.Integer, primary_key=True),
+        *columns,
+    )
+
+
+_S = sa.String(128)
+trials_t = _keyed(
+    "gearopt_trials",
+    sa.Column("attempt", sa.Integer, nullable=False),
+    sa.Column("seconds", sa.Float, nullable=False),
+    sa.Column("worker_pid", sa.Integer, nullable=False),
+    sa.Column("coordinator", sa.String(64), nullable=False),
+)
+metrics_t = _keyed(
+    "gearopt_metrics",
+    sa.Column("evaluation", _S, primary_key=True),
+    sa.Column("metric", _S, primary_key=True),
+    sa.Column("value", sa.Float, nullable=False),
+)
+objectives_t = _keyed(
+    "gearopt_objectives",
+    sa.Column("label", _S, primary_key=True),
+    sa.Column("kind", sa.String(16), nullable=False),
+    sa.Column("value", sa.Float, nullable=False),
+)
+settings_t = _keyed(
+    "gearopt_settings",
+    sa.Column("member", sa.String(16), primary_key=True),
+    sa.Column("key", _S, primary_key=True),
+    sa.Column("value", sa.Float, nullable=False),
+)
+curves_t = _keyed(
+    "gearopt_curves",
+    sa.Column("evaluation", _S, primary_key=True),
+    sa.Column("curve", sa.String(32), primary_key=True),
+    sa.Column("side", sa.String(16), primary_key=True),
+    sa.Column("idx", sa.Integer, primary_key=True),
+    sa.Column("x", sa.Float, nullable=False),
+    sa.Column("y", sa.Float, nullable=False),
+)
+patterns_t = _keyed(
+    "gearopt_patterns",
+    sa.Column("evaluation", _S, primary_key=True),
+    sa.Column("side", sa.String(16), primary_key=True),
+    sa.Column("idx", sa.Integer, primary_key=True),
+    sa.Column("face_mm", sa.Float, nullable=False),
+    sa.Column("profile_mm", sa.Float, nullable=False),
+)
+studies_t = sa.Table(
+    "gearopt_studies",
+    _meta,
+    sa.Column("study", sa.String(256), primary_key=True),
+    sa.Column("search", sa.Text, nullable=False),
+    sa.Column("created_utc", sa.DateTime, nullable=False),
+)
+coordinators_t = sa.Table(
+    "gearopt_coordinators",
+    _meta,
+    sa.Column("id", sa.String(64), primary_key=True),
+    sa.Column("study", sa.String(256), nullable=False),
+    sa.Column("host", sa.String(256), nullable=False),
+    sa.Column("pid", sa.Integer, nullable=False),
+    sa.Column("heartbeat_utc", sa.DateTime, nullable=False),
+)
+
+#: the per-trial tables, in the order rows are written
+TABLES = (trials_t, metrics_t, objectives_t, settings_t, curves_t, patterns_t)
+
+VIEWS = {
+    "gearopt_trial_params": """
+        SELECT s.study_name AS study, t.number AS trial_number, p.param_name AS param,
+               p.param_value AS value
+        FROM trials t JOIN studies s ON s.study_id = t.study_id
+        JOIN trial_params p ON p.trial_id = t.trial_id
+        WHERE t.state = 'COMPLETE'""",
+    "gearopt_trial_metrics": """
+        SELECT m.study, m.trial_number, m.evaluation, m.metric, m.value
+        FROM gearopt_metrics m
+        JOIN studies s ON s.study_name = m.study
+        JOIN trials t ON t.study_id = s.study_id AND t.number = m.trial_number
+        WHERE t.state = 'COMPLETE'""",
+}
+
+
+def _utcnow() -> dt.datetime:
+    return dt.datetime.now(dt.UTC).replace(tzinfo=None)
+
+
+class ResultsStore:
+    """The gearopt tables of one database (created on first use, next to Optuna's)."""
+
+    def __init__(self, url: str, *, engine: sa.Engine | None = None) -> None:
+        self.engine = engine or sa.create_engine(url)
+        _meta.create_all(self.engine)
+        with self.engine.begin() as con:
+            existing = set(sa.inspect(con).get_view_names())
+            for name, body in VIEWS.items():
+                if name not in existing:
+                    try:
+                        with con.begin_nested():
+                            con.execute(sa.text(f"CREATE VIEW {name} AS {body}"))
+                    except sa.exc.DBAPIError:  # another coordinator created it meanwhile
+                        pass
+
+    def register_study(self, study: str, search: dict) -> bool:
+        """Record the study; True for the first coordinator ever to do so (it enqueues the
+        study file's given designs), False when the study was known."""
+        try:
+            with self.engine.begin() as con:
+                con.execute(
+                    studies_t.insert().values(
+                        study=study, search=json.dumps(search), created_utc=_utcnow()
+                    )
+                )
+            return True
+        except sa.exc.IntegrityError:
+            return False
+
+    def heartbeat(self, coordinator: str, study: str, host: str, pid: int) -> None:
+        """Record that ``coordinator`` is alive now."""
+        with self.engine.begin() as con:
+            done = con.execute(
+                coordinators_t.update()
+                .where(coordinators_t.c.id == coordinator)
+                .values(heartbeat_utc=_utcnow())
+            ).rowcount
+            if not done:
+                con.execute(
+                    coordinators_t.insert().values(
+                        id=coordinator, study=study, host=host, pid=pid, heartbeat_utc=_utcnow()
+                    )
+                )
+
+    def coordinators(self) -> dict[str, tuple[str, int, dt.datetime]]:
+        """``{id: (host, pid, last heartbeat UTC)}``."""
+        with self.engine.connect() as con:
+            rows = con.execute(sa.select(coordinators_t)).all()
+        return {r.id: (r.host, r.pid, r.heartbeat_utc) for r in rows}
+
+    def write(
+        self, study: str, outcome: TrialOutcome, *, attempt: int, coordinator: str, labels
+    ) -> None:
+        """Write a trial's rows in one transaction (``labels``: objective label -> kind)."""
+        key = {"study": study, "trial_number": outcome.number}
+        rows = {
+            trials_t: [
+                {
+                    **key,
+                    "attempt": attempt,
+                    "seconds": outcome.seconds,
+                    "worker_pid": outcome.pid,
+                    "coordinator": coordinator,
+                }
+            ],
+            metrics_t: [
+                {**key, "evaluation": e, "metric": m, "value": v} for e, m, v in outcome.metrics
+            ],
+            objectives_t: [
+                {**key, "label": label, "kind": kind, "value": value}
+                for (label, kind), value in zip(
+                    labels.items(),
+                    [*outcome.values, *outcome.constraints.values()],
+                    strict=True,
+                )
+            ],
+            settings_t: [
+                {**key, "member": m, "key": k, "value": v} for m, k, v in outcome.settings
+            ],
+            curves_t: [
+                {**key, "evaluation": e, "curve": c, "side": s, "idx": i, "x": x, "y": y}
+                for e, c, s, i, x, y in outcome.curves
+            ],
+            patterns_t: [
+                {**key, "evaluation": e, "side": s, "idx": i, "face_mm": f, "profile_mm": p}
+                for e, s, i, f, p in outcome.patterns
+            ],
+        }
+        with self.engine.begin() as con:
+            self._delete(con, study, [outcome.number])
+            for table, values in rows.items():
+                if values:
+                    con.execute(table.insert(), values)
+
+    def forget(self, study: str, numbers: Iterable[int]) -> None:
+        """Remove the rows of trials that were failed."""
+        numbers = list(numbers)
+        if numbers:
+            with self.engine.begin() as con:
+                self._delete(con, study, numbers)
+
+    @staticmethod
+    def _delete(con, study: str, numbers: list[int]) -> None:
+        for table in TABLES:
+            con.execute(
+                table.delete().where(table.c.study == study, table.c.trial_number.in_(numbers))
+            )

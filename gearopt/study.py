@@ -1,0 +1,498 @@
+"""The study coordinator: Optuna ask/tell over a pool of worker processes.
+
+One coordinator process owns the storage (Optuna discourages several processes writing one
+SQLite file): it asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to a
+joblib/loky pool of ``jobs`` workers, writes the gearopt tables (:mod:`gearopt.results`) and
+tells Optuna, in that order. Workers never touch the database.
+
+Counting: a run ends when the study holds ``trials`` COMPLETE trials (infeasible ones count,
+FAIL ones do not), so the same command again continues a study and is a no-op on a finished one.
+
+Crashes:
+
+- a worker that dies fails its trial (the one whose start marker names the dead process), which
+  is re-enqueued with the same parameters, at most twice; loky fails every pending future when
+  one worker dies, so the innocent trials are resubmitted as they are;
+- a coordinator that dies leaves RUNNING trials: the next coordinator fails them and re-enqueues
+  their parameters, when their coordinator is gone (same host: its process is dead; another
+  host: no heartbeat for ``STALE_AFTER_S``). Trial numbers are never reused.
+
+Reproducibility: with ``jobs = 1``, or ``deterministic``, trials are asked in synchronous batches
+of ``jobs`` and told in order, so a seeded sampler suggests the same sequence of parameters;
+otherwise the workers are kept busy asynchronously.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import datetime as dt
+import math
+import os
+import re
+import shutil
+import socket
+import sys
+import tempfile
+import time
+import uuid
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import optuna
+from optuna.trial import TrialState
+
+from gearopt.errors import GearoptError, StudyError
+from gearopt.studyfile import StudySpec
+from gearopt.trial import TrialOutcome, work
+
+__all__ = [
+    "STALE_AFTER_S",
+    "RunSummary",
+    "default_storage_url",
+    "enqueue",
+    "open_study",
+    "pick_best",
+    "run_study",
+    "save_design",
+]
+
+#: a coordinator on another host whose heartbeat is older than this is taken for dead
+STALE_AFTER_S = 120.0
+#: attempts of one design: the first and two re-enqueued ones
+MAX_ATTEMPTS = 3
+_COORD = "gearopt_coordinator"
+_ATTEMPT = "gearopt_attempt"
+
+
+def default_storage_url(spec: StudySpec) -> str:
+    """``sqlite:///<study name>.db`` beside the study file (the name sanitised)."""
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", spec.name)
+    folder = Path(spec.path).resolve().parent if spec.path else Path.cwd()
+    return f"sqlite:///{folder / (name + '.db')}"
+
+
+def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
+    seed = spec.seed
+    if spec.sampler == "tpe":
+        return optuna.samplers.TPESampler(seed=seed, multivariate=True, constant_liar=True)
+    if spec.sampler == "random":
+        return optuna.samplers.RandomSampler(seed=seed)
+    if spec.sampler == "nsga2":
+        return optuna.samplers.NSGAIISampler(seed=seed)
+    return optuna.samplers.QMCSampler(seed=seed)
+
+
+def open_study(spec: StudySpec, storage: str | None = None):
+    """The Optuna study of ``spec`` (created when new) and its :class:`ResultsStore`; a new
+    study gets its metric names and the study file's given designs."""
+    from gearopt.results import ResultsStore
+
+    url = storage or default_storage_url(spec)
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    try:
+        rdb = optuna.storages.RDBStorage(url)
+        study = optuna.create_study(
+            storage=rdb,
+            sampler=_sampler(spec),
+            study_name=spec.name,
+            directions=spec.directions,
+            load_if_exists=True,
+        )
+    except (ImportError, ModuleNotFoundError) as exc:
+        raise StudyError("storage", url, f"needs a driver that is not installed ({exc})") from None
+    except Exception as exc:  # SQLAlchemy/driver errors: a storage that cannot be opened
+        if isinstance(exc, GearoptError):
+            raise
+        raise StudyError("storage", url, f"cannot be opened ({type(exc).__name__}: {exc})") from None
+    wanted = [optuna.study.StudyDirection[d.upper()] for d in spec.directions]
+    if list(study.directions) != wanted:
+        raise StudyError(
+            "study.name",
+            spec.name,
+            f"exists in {url} with other directions {[d.name for d in study.directions]}",
+        )
+    results = ResultsStore(url, engine=rdb.engine)
+    search = {d.key: [d.low, d.high, d.log] for d in spec.search}
+    if results.register_study(spec.name, search):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            study.set_metric_names(spec.metric_names)
+        for params in spec.enqueue:
+            study.enqueue_trial(dict(params), user_attrs={_ATTEMPT: 1})
+    return study, results
+
+
+def enqueue(spec: StudySpec, params: Mapping[str, float], storage: str | None = None) -> None:
+    """Put a given design at the head of the study's queue."""
+    params = spec.check_params(params, "enqueue")
+    spec.design_for(params)  # refuse an invalid design now, not in a worker
+    study, _ = open_study(spec, storage)
+    study.enqueue_trial(dict(params), user_attrs={_ATTEMPT: 1})
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunSummary:
+    """What a run did: counts, times, the best (or picked) trial and where its design went."""
+
+    study: str
+    storage: str
+    complete: int
+    failed_this_run: int
+    evaluated_this_run: int
+    wall_s: float
+    worker_s: float
+    coordinator_s: float
+    jobs: int
+    best: optuna.trial.FrozenTrial | None = None
+    best_design_path: str | None = None
+    recovered: list[int] = field(default_factory=list)
+
+    @property
+    def trials_per_s(self) -> float:
+        return self.evaluated_this_run / self.wall_s if self.wall_s > 0 else 0.0
+
+    @property
+    def worker_efficiency(self) -> float:
+        """Time the workers spent evaluating over the time they were there (wall x jobs)."""
+        return self.worker_s / (self.wall_s * self.jobs) if self.wall_s > 0 else 0.0
+
+    @property
+    def coordinator_ms_per_trial(self) -> float:
+        n = max(self.evaluated_this_run, 1)
+        return 1e3 * self.coordinator_s / n
+
+
+def _alive(pid: int) -> bool:
+    status = Path(f"/proc/{pid}/status")
+    if status.parent.parent.exists() and Path("/proc/self").exists():
+        try:
+            text = status.read_text()
+        except OSError:
+            return False
+        return "\nState:\tZ" not in text and "\nState:\tX" not in text
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _params(trial: optuna.trial.FrozenTrial) -> dict:
+    return dict(trial.params) or dict(trial.system_attrs.get("fixed_params", {}))
+
+
+def _retry(study, results, spec: StudySpec, trial, reason: str) -> bool:
+    """Fail ``trial`` (a FrozenTrial or the number of one) and re-enqueue its parameters when
+    attempts remain; False when another coordinator finished it first."""
+    number = trial.number
+    try:
+        study._storage.set_trial_user_attr(trial._trial_id, "gearopt_error", reason[:500])
+        study.tell(number, state=TrialState.FAIL)
+    except (RuntimeError, ValueError):
+        return False
+    results.forget(spec.name, [number])
+    attempt = int(trial.user_attrs.get(_ATTEMPT, 1))
+    params = _params(trial)
+    if params and attempt < MAX_ATTEMPTS:
+        study.enqueue_trial(params, user_attrs={_ATTEMPT: attempt + 1, "gearopt_retry_of": number})
+    return True
+
+
+def recover(study, results, spec: StudySpec, me: str) -> list[int]:
+    """Fail and re-enqueue the RUNNING trials whose coordinator is gone; their numbers."""
+    coords = results.coordinators()
+    host = socket.gethostname()
+    now = dt.datetime.now(dt.UTC).replace(tzinfo=None)
+    done = []
+    for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        owner = trial.user_attrs.get(_COORD)
+        if owner == me:
+            continue
+        known = coords.get(owner)
+        if known is not None:
+            o_host, o_pid, beat = known
+            if o_host == host:
+                if _alive(o_pid) and (now - beat).total_seconds() < STALE_AFTER_S:
+                    continue
+            elif (now - beat).total_seconds() < STALE_AFTER_S:
+                continue
+        elif (now - trial.datetime_start).total_seconds() < STALE_AFTER_S:
+            continue  # asked a moment ago, its coordinator not yet recorded
+        if _retry(study, results, spec, trial, f"coordinator {owner} died"):
+            done.append(trial.number)
+    return done
+
+
+def _executor(jobs: int):
+    from joblib.externals.loky import get_reusable_executor
+
+    return get_reusable_executor(max_workers=jobs, timeout=60)
+
+
+def _broken(exc: BaseException) -> bool:
+    from concurrent.futures.process import BrokenProcessPool
+
+    from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+    return isinstance(exc, TerminatedWorkerError | BrokenProcessPool)
+
+
+def run_study(
+    spec: StudySpec,
+    *,
+    trials: int,
+    jobs: int = 2,
+    storage: str | None = None,
+    deterministic: bool = False,
+    progress: bool = True,
+    save_best: bool = True,
+    max_failures: int | None = None,
+    on_told: Callable[[int], None] | None = None,
+) -> RunSummary:
+    """Run ``spec`` until its study holds ``trials`` COMPLETE trials.
+
+    Parameters
+    ----------
+    trials
+        COMPLETE trials the study must hold at the end (FAIL ones do not count).
+    jobs
+        Worker processes (loky).
+    storage
+        SQLAlchemy URL (default :func:`default_storage_url`); PostgreSQL works the same, and
+        several coordinators may share one study there.
+    deterministic
+        Synchronous batches of ``jobs`` trials told in order (``jobs = 1`` always is).
+    save_best
+        Save the best (or picked) design as ``<study name>_best.toml`` beside the study file.
+    max_failures
+        Stop with a :class:`StudyError` when more trials than this fail in this run (default:
+        ``max(10, trials)``): a search space that only gives failing designs.
+    """
+    if not isinstance(trials, int) or trials < 1:
+        raise StudyError("--trials", trials, "must be a positive integer")
+    if not isinstance(jobs, int) or jobs < 1:
+        raise StudyError("--jobs", jobs, "must be a positive integer")
+    start = time.perf_counter()
+    url = storage or default_storage_url(spec)
+    study, results = open_study(spec, url)
+    me, host, pid = uuid.uuid4().hex, socket.gethostname(), os.getpid()
+    results.heartbeat(me, spec.name, host, pid)
+    recovered = recover(study, results, spec, me)
+    labels = {o.label: "objective" for o in spec.objectives}
+    labels.update({c.label: "constraint" for c in spec.constraints})
+    limit = max(10, trials) if max_failures is None else max_failures
+    batch = deterministic or jobs == 1
+    markers = tempfile.mkdtemp(prefix="gearopt-trials-")
+    pending: dict[int, tuple[Any, cf.Future, dict, int]] = {}
+    failed = evaluated = 0
+    worker_s = 0.0
+    bar = _progress(progress, trials, spec)
+    last_beat = time.monotonic()
+
+    def counts() -> tuple[int, int]:
+        trials_ = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE, TrialState.RUNNING))
+        complete = sum(t.state == TrialState.COMPLETE for t in trials_)
+        return complete, len(trials_) - complete
+
+    def submit(trial, params, attempt):
+        future = executor.submit(work, spec, trial.number, params, markers)
+        pending[trial.number] = (trial, future, params, attempt)
+
+    def ask():
+        trial = study.ask()
+        trial.set_user_attr(_COORD, me)
+        attempt = int(trial.user_attrs.get(_ATTEMPT, 1))
+        trial.set_user_attr(_ATTEMPT, attempt)
+        params = {
+            d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search
+        }
+        submit(trial, params, attempt)
+
+    def tell(number: int, outcome: TrialOutcome) -> None:
+        nonlocal failed, evaluated, worker_s
+        trial, _, params, attempt = pending.pop(number)
+        evaluated += 1
+        worker_s += outcome.seconds
+        trial.set_user_attr("gearopt_seconds", round(outcome.seconds, 4))
+        if outcome.failed:
+            failed += 1
+            trial.set_user_attr("gearopt_error", (outcome.error or "")[:500])
+            study.tell(trial, state=TrialState.FAIL)
+        else:
+            results.write(spec.name, outcome, attempt=attempt, coordinator=me, labels=labels)
+            for label, value in outcome.constraints.items():
+                trial.set_constraint(label, value)
+            study.tell(trial, list(outcome.values))
+            if bar is not None:
+                bar.update(1)
+                _best_postfix(bar, study, spec)
+        if on_told is not None:
+            on_told(number)
+
+    def worker_died() -> None:
+        """Fail the trials whose worker died; resubmit the innocent ones."""
+        nonlocal executor, failed
+        executor = _executor(jobs)
+        for number in list(pending):
+            trial, future, params, attempt = pending[number]
+            if not future.done() or future.exception() is None or not _broken(future.exception()):
+                continue
+            marker = Path(markers, f"{number}.pid")
+            dead = marker.exists() and not _alive(int(marker.read_text() or 0))
+            if dead:
+                pending.pop(number)
+                failed += 1
+                frozen = study._storage.get_trial(trial._trial_id)
+                _retry(study, results, spec, frozen, "its worker process died")
+            else:
+                marker.unlink(missing_ok=True)
+                submit(trial, params, attempt)
+
+    executor = _executor(jobs)
+    try:
+        while True:
+            if time.monotonic() - last_beat > 5.0:
+                results.heartbeat(me, spec.name, host, pid)
+                recovered += recover(study, results, spec, me)
+                last_beat = time.monotonic()
+            if failed > limit:
+                raise StudyError(
+                    "study", spec.name, f"{failed} trials failed in this run (limit {limit})"
+                )
+            complete, running = counts()
+            free = trials - complete - running
+            if not pending:
+                if complete >= trials:
+                    break
+                if free <= 0:  # the rest runs on other coordinators
+                    time.sleep(0.5)
+                    continue
+            if batch:
+                if not pending:
+                    for _ in range(min(jobs, free)):
+                        ask()
+                    cf.wait([p[1] for p in pending.values()])
+            else:
+                for _ in range(min(jobs - len(pending), max(free, 0))):
+                    ask()
+                cf.wait([p[1] for p in pending.values()], timeout=5.0, return_when="FIRST_COMPLETED")
+            broken = False
+            for number in sorted(pending):
+                future = pending[number][1]
+                if not future.done():
+                    if batch:
+                        break  # told in order
+                    continue
+                exc = future.exception()
+                if exc is None:
+                    tell(number, future.result())
+                elif _broken(exc):
+                    broken = True
+                    if batch:
+                        break
+                else:  # pickling or pool errors: the trial fails, the run goes on
+                    outcome = TrialOutcome(number=number, error=f"{type(exc).__name__}: {exc}")
+                    tell(number, outcome)
+            if broken:
+                worker_died()
+    finally:
+        # a coordinator interrupted here leaves RUNNING trials for the next run to recover
+        if bar is not None:
+            bar.close()
+        shutil.rmtree(markers, ignore_errors=True)
+    complete, _ = counts()
+    best = pick_best(study, spec)
+    path = save_design(spec, best) if (save_best and best is not None) else None
+    wall = time.perf_counter() - start
+    return RunSummary(
+        study=spec.name,
+        storage=url,
+        complete=complete,
+        failed_this_run=failed,
+        evaluated_this_run=evaluated,
+        wall_s=wall,
+        worker_s=worker_s,
+        coordinator_s=max(wall - worker_s / jobs, 0.0) if evaluated else 0.0,
+        jobs=jobs,
+        best=best,
+        best_design_path=path,
+        recovered=recovered,
+    )
+
+
+def _progress(progress: bool, total: int, spec: StudySpec):
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=spec.name, unit="trial", file=sys.stderr, dynamic_ncols=True)
+
+
+def _best_postfix(bar, study, spec: StudySpec) -> None:
+    best = pick_best(study, spec)
+    if best is not None:
+        text = ", ".join(f"{k}={v:.4g}" for k, v in zip(spec.metric_names, best.values, strict=True))
+        bar.set_postfix_str(f"best {text}")
+
+
+def _feasible(trial: optuna.trial.FrozenTrial) -> bool:
+    return all(c <= 0.0 for c in trial.constraints.values())
+
+
+def pick_best(study, spec: StudySpec) -> optuna.trial.FrozenTrial | None:
+    """The best feasible COMPLETE trial; for several objectives the Pareto design the study's
+    ``pick`` rule chooses: ``utopia`` (least distance to the front's ideal point, each
+    objective scaled by its range on the front) or ``objective:<label>`` (the front's best of
+    that objective). None when no feasible trial exists."""
+    done = [
+        t
+        for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+        if _feasible(t) and t.values is not None
+    ]
+    if not done:
+        return None
+    signs = [1.0 if d == "minimize" else -1.0 for d in spec.directions]
+    if len(signs) == 1:
+        return min(done, key=lambda t: (signs[0] * t.values[0], t.number))
+    scored = [[s * v for s, v in zip(signs, t.values, strict=True)] for t in done]
+    front = [
+        i
+        for i, a in enumerate(scored)
+        if not any(
+            all(x <= y for x, y in zip(b, a, strict=True)) and b != a for b in scored
+        )
+    ]
+    if spec.pick.startswith("objective:"):
+        k = spec.metric_names.index(spec.pick.removeprefix("objective:"))
+        return done[min(front, key=lambda i: (scored[i][k], done[i].number))]
+    lows = [min(scored[i][k] for i in front) for k in range(len(signs))]
+    highs = [max(scored[i][k] for i in front) for k in range(len(signs))]
+
+    def distance(i: int) -> float:
+        return math.hypot(
+            *[
+                (scored[i][k] - lows[k]) / (highs[k] - lows[k]) if highs[k] > lows[k] else 0.0
+                for k in range(len(signs))
+            ]
+        )
+
+    return done[min(front, key=lambda i: (distance(i), done[i].number))]
+
+
+def save_design(spec: StudySpec, trial: optuna.trial.FrozenTrial) -> str:
+    """Write the trial's design as ``<study name>_best.toml`` beside the study file."""
+    import tomli_w
+
+    data = dict(spec.design_for(trial.params).source)
+    meta = data.setdefault("meta", {})
+    meta["name"] = f"{spec.name}_best"
+    meta["source"] = f"study {spec.name}, trial {trial.number}"
+    folder = Path(spec.path).resolve().parent if spec.path else Path.cwd()
+    path = folder / f"{spec.name}_best.toml"
+    path.write_text(tomli_w.dumps(data), encoding="utf-8")
+    return str(path)
