@@ -6,8 +6,9 @@
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
 ``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
 ``gearopt change-gears MACHINE --ratio R`` the best change gears of its set;
-``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`). Errors in the input
-are printed as one line naming the parameter, its value and the rule (exit status 2).
+``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`).
+Errors in the input are printed as one line naming the parameter, its value and the rule
+(exit status 2).
 """
 
 from __future__ import annotations

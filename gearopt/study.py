@@ -106,7 +106,8 @@ def open_study(spec: StudySpec, storage: str | None = None):
     except Exception as exc:  # SQLAlchemy/driver errors: a storage that cannot be opened
         if isinstance(exc, GearoptError):
             raise
-        raise StudyError("storage", url, f"cannot be opened ({type(exc).__name__}: {exc})") from None
+        why = f"cannot be opened ({type(exc).__name__}: {exc})"
+        raise StudyError("storage", url, why) from None
     wanted = [optuna.study.StudyDirection[d.upper()] for d in spec.directions]
     if list(study.directions) != wanted:
         raise StudyError(
@@ -308,9 +309,7 @@ def run_study(
         trial.set_user_attr(_COORD, me)
         attempt = int(trial.user_attrs.get(_ATTEMPT, 1))
         trial.set_user_attr(_ATTEMPT, attempt)
-        params = {
-            d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search
-        }
+        params = {d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search}
         submit(trial, params, attempt)
 
     def tell(number: int, outcome: TrialOutcome) -> None:
@@ -380,7 +379,8 @@ def run_study(
             else:
                 for _ in range(min(jobs - len(pending), max(free, 0))):
                     ask()
-                cf.wait([p[1] for p in pending.values()], timeout=5.0, return_when="FIRST_COMPLETED")
+                futures = [p[1] for p in pending.values()]
+                cf.wait(futures, timeout=5.0, return_when="FIRST_COMPLETED")
             broken = False
             for number in sorted(pending):
                 future = pending[number][1]
@@ -436,7 +436,8 @@ def _progress(progress: bool, total: int, spec: StudySpec):
 def _best_postfix(bar, study, spec: StudySpec) -> None:
     best = pick_best(study, spec)
     if best is not None:
-        text = ", ".join(f"{k}={v:.4g}" for k, v in zip(spec.metric_names, best.values, strict=True))
+        pairs = zip(spec.metric_names, best.values, strict=True)
+        text = ", ".join(f"{k}={v:.4g}" for k, v in pairs)
         bar.set_postfix_str(f"best {text}")
 
 
@@ -463,9 +464,7 @@ def pick_best(study, spec: StudySpec) -> optuna.trial.FrozenTrial | None:
     front = [
         i
         for i, a in enumerate(scored)
-        if not any(
-            all(x <= y for x, y in zip(b, a, strict=True)) and b != a for b in scored
-        )
+        if not any(all(x <= y for x, y in zip(b, a, strict=True)) and b != a for b in scored)
     ]
     if spec.pick.startswith("objective:"):
         k = spec.metric_names.index(spec.pick.removeprefix("objective:"))

@@ -15,7 +15,8 @@ __all__ = ["add_study_parser"]
 def _parse_assignment(text: str) -> tuple[str, float]:
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
-        raise StudyError("enqueue", text, "write KEY=VALUE, e.g. machine.pinion.inner_cutter_radius_mm=75")
+        example = "machine.pinion.inner_cutter_radius_mm=75"
+        raise StudyError("enqueue", text, f"write KEY=VALUE, e.g. {example}")
     try:
         parsed = tomllib.loads(f"v = {value.strip()}")["v"]
     except tomllib.TOMLDecodeError:
@@ -138,4 +139,3 @@ def add_study_parser(sub) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--storage", help=storage_help)
     p.set_defaults(func=_cmd_export)
-

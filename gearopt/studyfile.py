@@ -86,7 +86,7 @@ class Dimension:
             raise StudyError(f"{where}.{self.key}", value, "must be a number")
         if not self.low <= value <= self.high:
             raise StudyError(
-                f"{where}.{self.key}", value, f"must lie in the search range [{self.low}, {self.high}]"
+                f"{where}.{self.key}", value, f"must lie in the searched [{self.low}, {self.high}]"
             )
         return float(value)
 
@@ -144,7 +144,8 @@ class StudySpec:
             raise StudyError("objectives", labels, "labels must be unique")
         if self.pick != "utopia":
             target = self.pick.removeprefix("objective:")
-            if not self.pick.startswith("objective:") or target not in labels[: len(self.objectives)]:
+            named = labels[: len(self.objectives)]
+            if not self.pick.startswith("objective:") or target not in named:
                 raise StudyError(
                     "study.pick", self.pick, "must be 'utopia' or 'objective:<objective label>'"
                 )
@@ -187,7 +188,9 @@ def _dimension(key: str, value: Any, design: Design) -> Dimension:
         model = get_machine_model(design.model)
         declared = {d.key: d for d in model.search_space(design)}
         if key not in declared:
-            raise StudyError(where, value, f"the model declares no bounds; it has {sorted(declared)}")
+            raise StudyError(
+                where, value, f"the model has no bounds for it; it has {sorted(declared)}"
+            )
         d = declared[key]
         return Dimension(key=key, low=d.low, high=d.high, log=d.log)
     if isinstance(value, list) and len(value) == 2:
@@ -211,7 +214,7 @@ def _objective(entry: Any, kind: str, where: str, known: Mapping[str, Evaluation
     available = objectives()
     name = entry["name"]
     if name not in available:
-        raise StudyError(f"{where}.name", name, f"unknown objective; installed: {sorted(available)}")
+        raise StudyError(f"{where}.name", name, f"unknown; installed: {sorted(available)}")
     plugin = available[name]
     if plugin.kind != kind:
         raise StudyError(f"{where}.name", name, f"is a {plugin.kind}, listed under {kind}s")
@@ -221,7 +224,7 @@ def _objective(entry: Any, kind: str, where: str, known: Mapping[str, Evaluation
         raise StudyError(where, entry, exc.rule or str(exc)) from None
     for label, evaluator in reads.items():
         if label not in known:
-            raise StudyError(where, label, f"reads an evaluation not in [evaluations]: {sorted(known)}")
+            raise StudyError(where, label, f"is not in [evaluations]: {sorted(known)}")
         if known[label].evaluator != evaluator:
             raise StudyError(where, label, f"must be an evaluation of {evaluator!r}")
     direction = entry.get("direction", plugin.direction)
@@ -338,4 +341,3 @@ def load_study_spec(path: str | Path) -> StudySpec:
     except tomllib.TOMLDecodeError as exc:
         raise StudyError("study file", str(path), f"malformed TOML: {exc}") from None
     return parse_study_spec(data, path=path)
-

@@ -136,9 +136,12 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
             e.label: installed[e.evaluator].evaluate(design, e.conditions) for e in spec.evaluations
         }
         plugins = objectives()
-        values = tuple(float(plugins[o.name].value(evaluations, **o.options)) for o in spec.objectives)
+        values = tuple(
+            float(plugins[o.name].value(evaluations, **o.options)) for o in spec.objectives
+        )
         constraints = {
-            c.label: float(plugins[c.name].value(evaluations, **c.options)) for c in spec.constraints
+            c.label: float(plugins[c.name].value(evaluations, **c.options))
+            for c in spec.constraints
         }
         bad = [v for v in (*values, *constraints.values()) if not math.isfinite(v)]
         if bad:

@@ -51,7 +51,11 @@ def _side(objective: str, options: Mapping[str, Any]) -> tuple[str, ...]:
 
 def _labels(objective: str, value: Any) -> tuple[str, ...]:
     labels = (value,) if isinstance(value, str) else value
-    if not isinstance(labels, Sequence) or not labels or not all(isinstance(x, str) for x in labels):
+    if (
+        not isinstance(labels, Sequence)
+        or not labels
+        or not all(isinstance(x, str) for x in labels)
+    ):
         raise StudyError(f"objective {objective}.on", value, "must be a label or a list of labels")
     return tuple(labels)
 
@@ -189,7 +193,7 @@ class BacklashWindow(BaseObjective):
         unknown = set(options) - set(self.options)
         if unknown:
             raise StudyError(
-                f"constraint {self.name}", sorted(unknown), f"unknown options; known: {self.options}"
+                f"constraint {self.name}", sorted(unknown), f"unknown options; known {self.options}"
             )
         for key in ("min_um", "max_um"):
             if not isinstance(options.get(key), int | float):
