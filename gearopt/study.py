@@ -57,6 +57,7 @@ __all__ = [
     "pick_best",
     "run_study",
     "save_design",
+    "trial_objective",
 ]
 
 #: a coordinator on another host whose heartbeat is older than this is taken for dead
@@ -333,24 +334,51 @@ def run_study(
         if on_told is not None:
             on_told(number)
 
+    held: list[tuple[Any, dict, int]] = []  # innocent trials to resubmit
+    suspects: list[tuple[Any, dict, int]] = []  # started when a worker died: run each alone
+    alone: set[int] = set()
+
     def worker_died() -> None:
-        """Fail the trials whose worker died; resubmit the innocent ones."""
+        """Sort the trials of a broken pool. loky fails every pending future and stops every
+        worker when one dies, so a dead process does not say whose trial killed it: a trial
+        that had not started is innocent (resubmitted); of those that had started, a lone one
+        is guilty (failed and re-enqueued); several are run again one at a time, and the one
+        that breaks the pool alone is guilty."""
         nonlocal executor, failed
         executor = _executor(jobs)
-        for number in list(pending):
-            trial, future, params, attempt = pending[number]
-            if not future.done() or future.exception() is None or not _broken(future.exception()):
-                continue
-            marker = Path(markers, f"{number}.pid")
-            dead = marker.exists() and not _alive(int(marker.read_text() or 0))
-            if dead:
-                pending.pop(number)
+        broken = {
+            n: pending.pop(n)
+            for n in list(pending)
+            if pending[n][1].done()
+            and pending[n][1].exception() is not None
+            and _broken(pending[n][1].exception())
+        }
+        started = [n for n in broken if Path(markers, f"{n}.pid").exists()]
+        for number, (trial, _, params, attempt) in broken.items():
+            Path(markers, f"{number}.pid").unlink(missing_ok=True)
+            if number in alone or started == [number]:
                 failed += 1
                 frozen = study._storage.get_trial(trial._trial_id)
                 _retry(study, results, spec, frozen, "its worker process died")
+            elif number in started:
+                suspects.append((trial, params, attempt))
             else:
-                marker.unlink(missing_ok=True)
+                held.append((trial, params, attempt))
+        alone.clear()
+
+    def refill(free: int) -> None:
+        if suspects:
+            if not pending:
+                trial, params, attempt = suspects.pop(0)
+                alone.add(trial.number)
                 submit(trial, params, attempt)
+            return
+        while held and len(pending) < jobs:
+            submit(*held.pop(0))
+        if batch and pending and not held:
+            return
+        for _ in range(min(jobs - len(pending), max(free, 0))):
+            ask()
 
     executor = _executor(jobs)
     try:
@@ -365,21 +393,18 @@ def run_study(
                 )
             complete, running = counts()
             free = trials - complete - running
-            if not pending:
+            if not (pending or held or suspects):
                 if complete >= trials:
                     break
                 if free <= 0:  # the rest runs on other coordinators
                     time.sleep(0.5)
                     continue
+            if not batch or not pending:
+                refill(free)
+            futures = [p[1] for p in pending.values()]
             if batch:
-                if not pending:
-                    for _ in range(min(jobs, free)):
-                        ask()
-                    cf.wait([p[1] for p in pending.values()])
+                cf.wait(futures)
             else:
-                for _ in range(min(jobs - len(pending), max(free, 0))):
-                    ask()
-                futures = [p[1] for p in pending.values()]
                 cf.wait(futures, timeout=5.0, return_when="FIRST_COMPLETED")
             broken = False
             for number in sorted(pending):
@@ -495,3 +520,23 @@ def save_design(spec: StudySpec, trial: optuna.trial.FrozenTrial) -> str:
     path = folder / f"{spec.name}_best.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
     return str(path)
+
+
+def trial_objective(spec: StudySpec) -> Callable[[optuna.trial.Trial], Any]:
+    """An Optuna objective function of ``spec`` for ``study.optimize`` in one process (a
+    notebook, a debugger): it suggests the searched keys, evaluates the trial in this process,
+    sets the constraints and returns the objective values. :func:`run_study` is the way to run
+    a study on several workers with crash recovery and the gearopt tables."""
+    from gearopt.trial import evaluate_trial
+
+    def objective(trial: optuna.trial.Trial):
+        params = {d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search}
+        outcome = evaluate_trial(spec, trial.number, params)
+        if outcome.failed:
+            raise StudyError(f"trial {trial.number}", params, outcome.error or "failed")
+        for label, value in outcome.constraints.items():
+            trial.set_constraint(label, value)
+        values = outcome.values
+        return values[0] if len(values) == 1 else values
+
+    return objective

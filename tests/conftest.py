@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +14,7 @@ import gearopt
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
+TOY = Path(__file__).parent / "toy_plugin"
 SEED_CASES = ROOT.parent / "shared" / "reference" / "seed_cases.json"
 
 
@@ -36,3 +39,26 @@ def table3_design() -> gearopt.Design:
 @pytest.fixture(scope="session")
 def table3_text() -> str:
     return (STUDIES / "seed001_table3.toml").read_text()
+
+
+@pytest.fixture(scope="session")
+def toy_site(tmp_path_factory):
+    """The toy third-party distribution, pip-installed into a folder of its own."""
+    target = tmp_path_factory.mktemp("toy_site")
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--no-build-isolation",
+            "--target",
+            str(target),
+            str(TOY),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    return target

@@ -112,29 +112,6 @@ def test_unknown_model_lists_the_installed_ones(table3_text):
     assert "cyclo-palloid" in info.value.rule
 
 
-@pytest.fixture(scope="module")
-def toy_site(tmp_path_factory):
-    """The toy third-party distribution, pip-installed into a folder of its own."""
-    target = tmp_path_factory.mktemp("toy_site")
-    subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--no-deps",
-            "--no-build-isolation",
-            "--target",
-            str(target),
-            str(TOY),
-        ],
-        check=True,
-        capture_output=True,
-    )
-    return target
-
-
 @pytest.fixture
 def toy_on_path(toy_site, monkeypatch):
     monkeypatch.syspath_prepend(str(toy_site))

@@ -212,6 +212,44 @@ class ToyObjective(gearopt.BaseObjective):
         return evaluations["toy-blank"].metrics["crown_gear_teeth"]
 
 
+class ToyProbeEvaluator(gearopt.BaseEvaluator):
+    """A cheap stand-in for a real evaluation, for tests of the study machinery.
+
+    Metric ``probe`` = (tool_tip_width_mm - 1.1)^2. Conditions: ``sleep_s`` (pretend to work),
+    ``exit_at_mm`` (the worker process dies, ``os._exit``, when the tool tip width is exactly
+    that), ``refuse_above_mm`` (a DesignError when the width exceeds it).
+    """
+
+    name = "toy-probe"
+    description = "Tool tip width's distance from 1.1 mm (toy evaluator for study tests)"
+
+    def evaluate(self, design, conditions=None):
+        import os
+        import time
+
+        conditions = dict(conditions or {})
+        width = design.machine.tool_tip_width_mm
+        time.sleep(conditions.get("sleep_s", 0.0))
+        if width == conditions.get("exit_at_mm"):
+            os._exit(3)
+        if width > conditions.get("refuse_above_mm", math.inf):
+            raise gearopt.DesignError("machine.tool_tip_width_mm", width, "refused by the probe")
+        return gearopt.Evaluation(
+            evaluator=self.name,
+            metrics={"probe": (width - 1.1) ** 2},
+            conditions=conditions,
+        )
+
+
+class ToyProbeObjective(gearopt.BaseObjective):
+    name = "toy-probe"
+    description = "The toy probe metric (toy objective for study tests)"
+    requires = ("toy-probe",)
+
+    def value(self, evaluations, **options):
+        return evaluations["toy-probe"].metrics["probe"]
+
+
 @gearopt.hookimpl
 def gearopt_machine_models():
     return [ToyPlaner()]
@@ -219,9 +257,9 @@ def gearopt_machine_models():
 
 @gearopt.hookimpl
 def gearopt_evaluators():
-    return [ToyBlankEvaluator()]
+    return [ToyBlankEvaluator(), ToyProbeEvaluator()]
 
 
 @gearopt.hookimpl
 def gearopt_objectives():
-    return [ToyObjective()]
+    return [ToyObjective(), ToyProbeObjective()]

@@ -1,0 +1,464 @@
+"""Studies: study files, objectives, the coordinator's queue and crash recovery, the tables.
+
+The queue tests run ``gearopt study run`` in fresh processes on the toy plugin's cheap
+``toy-probe`` evaluator (tests/toy_plugin), whose conditions can make a worker sleep, die or
+refuse a design: the machinery is what is under test, not the gear physics.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import optuna
+import pytest
+import sqlalchemy as sa
+from optuna.trial import TrialState
+
+import gearopt
+from gearopt.errors import StudyError
+from gearopt.evaluation import Evaluation
+from gearopt.study import pick_best
+from gearopt.studyfile import load_study_spec, parse_study_spec
+from gearopt.trial import pattern_outline
+
+from .conftest import ROOT, STUDIES, TOY
+
+EXAMPLE = STUDIES / "cyclo_palloid_contact.toml"
+
+TOY_STUDY = """
+[study]
+name = "toy_probe"
+design = "toy_design.toml"
+sampler = "{sampler}"
+seed = 11
+
+[search]
+"machine.tool_tip_width_mm" = [0.8, 1.6]
+
+[evaluations.toy-probe]
+conditions = {conditions}
+
+[[objectives]]
+name = "toy-probe"
+label = "probe"
+"""
+
+
+def _toy_study(folder: Path, *, conditions: str = "{}", sampler: str = "tpe", extra: str = ""):
+    shutil.copy(TOY / "gearopt_toy" / "toy_design.toml", folder / "toy_design.toml")
+    path = folder / "toy_probe.toml"
+    path.write_text(TOY_STUDY.format(conditions=conditions, sampler=sampler) + extra)
+    return path
+
+
+def _gearopt(args, toy_site, *, check=True, **kw):
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    run = subprocess.run(
+        [sys.executable, "-m", "gearopt.cli", *map(str, args)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        **kw,
+    )
+    if check and run.returncode != 0:
+        raise AssertionError(f"gearopt {args} failed:\n{run.stdout}\n{run.stderr}")
+    return run
+
+
+def _trials(db: Path, name: str = "toy_probe") -> list[optuna.trial.FrozenTrial]:
+    study = optuna.load_study(study_name=name, storage=f"sqlite:///{db}")
+    return study.get_trials(deepcopy=False)
+
+
+def _states(trials) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for t in trials:
+        out[t.state.name] = out.get(t.state.name, 0) + 1
+    return out
+
+
+# --- study files -------------------------------------------------------------------------
+
+
+def test_example_study_file_is_valid():
+    spec = load_study_spec(EXAMPLE)
+    keys = {d.key for d in spec.search}
+    for key in (
+        "inner_cutter_radius_mm",
+        "outer_cutter_radius_mm",
+        "additional_slope_angle_deg",
+        "blade_parabola_coefficient_per_mm",
+    ):
+        assert f"machine.pinion.{key}" in keys
+    assert spec.metric_names == ["worst_te_arcsec", "pattern_movement_mm"]
+    assert [c.label for c in spec.constraints] == ["backlash_window_um", "edge_contact"]
+    assert spec.directions == ["minimize", "minimize"]
+    assert len(spec.enqueue) == 1
+
+
+@pytest.mark.parametrize(
+    ("edit", "parameter"),
+    [
+        (
+            ("[evaluations.backlash]", "[evaluations.backlash]\nevaluator = 'nope'"),
+            "evaluations.backlash.evaluator",
+        ),
+        (('name = "worst_te"', 'name = "best_te"'), "objectives[0].name"),
+        (('on = ["tca", "misaligned"]', 'on = ["tca", "tilted"]'), "objectives[0]"),
+        (("min_um = 150.0", "min_um = 300.0"), "constraints[0]"),
+        (("= [74.0, 76.0]", "= [76.0, 74.0]"), "search.machine.pinion.inner_cutter_radius"),
+        (('pick = "utopia"', 'pick = "knee"'), "study.pick"),
+        (("= 75.0\n", "= 80.0\n"), "enqueue[0].machine.pinion.inner_cutter_radius_mm"),
+        (('sampler = "tpe"', 'sampler = "cmaes2"'), "study.sampler"),
+        (('name = "worst_te"', 'name = "backlash_window"'), "objectives[0].name"),
+    ],
+)
+def test_bad_study_files_name_the_parameter(tmp_path, edit, parameter):
+    text = EXAMPLE.read_text()
+    assert edit[0] in text
+    path = tmp_path / "study.toml"
+    path.write_text(text.replace(edit[0], edit[1], 1))
+    shutil.copy(STUDIES / "seed001_section5_3.toml", tmp_path)
+    with pytest.raises(StudyError) as info:
+        load_study_spec(path)
+    assert info.value.parameter.startswith(parameter)
+
+
+def test_grid_sweeps_are_enqueued_as_every_combination():
+    data = {
+        "study": {"design": str(STUDIES / "seed001_section5_3.toml")},
+        "search": {
+            "machine.pinion.inner_cutter_radius_mm": [74.0, 76.0],
+            "machine.pinion.blade_parabola_coefficient_per_mm": "model",
+        },
+        "evaluations": {"tca": {}},
+        "objectives": [{"name": "te_peak_to_peak"}],
+        "grid": {
+            "machine.pinion.inner_cutter_radius_mm": [74.5, 75.5],
+            "machine.pinion.blade_parabola_coefficient_per_mm": [0.001, 0.002, 0.003],
+        },
+    }
+    spec = parse_study_spec(data)
+    assert len(spec.enqueue) == 6
+    assert {tuple(p.values()) for p in spec.enqueue} == {
+        (r, a) for r in (74.5, 75.5) for a in (0.001, 0.002, 0.003)
+    }
+    # "model": the machine model's own declared bounds
+    (declared,) = [
+        d
+        for d in gearopt.get_machine_model("cyclo-palloid").search_space(spec.design)
+        if d.key == "machine.pinion.blade_parabola_coefficient_per_mm"
+    ]
+    assert spec.dimensions[declared.key].high == declared.high
+
+
+# --- objectives --------------------------------------------------------------------------
+
+
+def _tca(**metrics):
+    base = {
+        "te_peak_to_peak_arcsec": 1.0,
+        "pattern_center_offset_face_mm": 0.0,
+        "pattern_center_offset_profile_mm": 0.0,
+        "pattern_bias_mm": 0.0,
+        "edge_contact": 0.0,
+    }
+    base.update(metrics)
+    base.update({"coast_" + k: v for k, v in base.items() if not k.startswith("coast_")})
+    return Evaluation(evaluator="tca", metrics=base)
+
+
+def test_objectives_read_the_labelled_evaluations():
+    objs = gearopt.objectives()
+    nominal = _tca(pattern_center_offset_face_mm=1.0, pattern_center_offset_profile_mm=-0.5)
+    shifted = _tca(
+        te_peak_to_peak_arcsec=7.0,
+        pattern_center_offset_face_mm=4.0,
+        pattern_center_offset_profile_mm=3.5,
+        pattern_bias_mm=-2.0,
+        edge_contact=1.0,
+    )
+    evals = {"tca": nominal, "mis": shifted}
+    assert objs["worst_te"].value(evals, on=["tca", "mis"]) == 7.0
+    assert objs["te_peak_to_peak"].value(evals) == 1.0
+    assert objs["pattern_center_offset"].value(evals) == pytest.approx(np.hypot(1.0, 0.5))
+    assert objs["pattern_center_offset"].value(evals, component="profile") == 0.5
+    assert objs["pattern_bias"].value(evals, on="mis") == 2.0
+    assert objs["pattern_movement"].value(evals, misaligned="mis") == pytest.approx(5.0)
+    assert objs["edge_contact"].value(evals) == -0.5
+    assert objs["edge_contact"].value(evals, on=["tca", "mis"]) == 0.5
+
+
+@pytest.mark.parametrize(
+    ("low", "high", "interference", "expected"),
+    [
+        (150.0, 260.0, 0.0, 240.0 - 260.0),
+        (210.0, 260.0, 0.0, 10.0),
+        (150.0, 230.0, 0.0, 10.0),
+        (150.0, 260.0, 1.0, 110.0),
+    ],
+)
+def test_backlash_window_is_a_constraint_in_um(low, high, interference, expected):
+    backlash = Evaluation(
+        evaluator="backlash",
+        metrics={
+            "backlash_min_um": 200.0,
+            "backlash_mean_um": 210.0,
+            "backlash_max_um": 240.0,
+            "interference": interference,
+        },
+    )
+    window = gearopt.objectives()["backlash_window"]
+    assert window.kind == "constraint"
+    assert window.value({"backlash": backlash}, min_um=low, max_um=high) == pytest.approx(expected)
+
+
+def test_pattern_outline_closes_around_the_marked_nodes():
+    face, profile = np.linspace(0, 24, 7), np.linspace(0, 10, 6)
+    pattern = np.full((7, 6), 50.0)
+    pattern[2:5, 1:4] = 1.0
+    pattern[3, 4] = 2.0
+    pattern[0, :] = np.inf
+    outline = pattern_outline(pattern, face, profile, 6.5)
+    # root side toe -> heel, then top side heel -> toe
+    np.testing.assert_allclose(outline[:, 0], [8, 12, 16, 16, 12, 8])
+    np.testing.assert_allclose(outline[:, 1], [2, 2, 2, 6, 8, 6])
+    assert pattern_outline(pattern, face, profile, 0.5).shape == (0, 2)
+
+
+def test_pick_best_respects_constraints_and_the_pick_rule():
+    spec = load_study_spec(EXAMPLE)
+    study = optuna.create_study(directions=spec.directions)
+    dists = {
+        k: optuna.distributions.FloatDistribution(d.low, d.high) for k, d in spec.dimensions.items()
+    }
+    params = {k: d.low for k, d in spec.dimensions.items()}
+    rows = [((1.0, 9.0), 0.0), ((9.0, 1.0), 0.0), ((4.0, 4.0), 0.0), ((0.5, 0.5), 5.0)]
+    for values, excess in rows:
+        study.add_trial(
+            optuna.trial.create_trial(
+                values=list(values),
+                params=params,
+                distributions=dists,
+                system_attrs={"constraints:backlash_window_um": excess},
+            )
+        )
+    # the infeasible (0.5, 0.5) dominates all but is never picked; utopia: the balanced one
+    assert pick_best(study, spec).values == [4.0, 4.0]
+    other = type(spec)(**{**spec.__dict__, "pick": "objective:pattern_movement_mm"})
+    assert pick_best(study, other).values == [9.0, 1.0]
+
+
+# --- the coordinator ---------------------------------------------------------------------
+
+
+def test_run_reaches_n_complete_trials_and_the_same_command_is_a_no_op(tmp_path, toy_site):
+    study = _toy_study(tmp_path)
+    args = ["study", "run", study, "--trials", 7, "--jobs", 2, "--json", "--no-progress"]
+    first = json.loads(_gearopt(args, toy_site).stdout)
+    assert first["complete"] == 7 and first["evaluated_this_run"] == 7
+    again = json.loads(_gearopt(args, toy_site).stdout)
+    assert again["complete"] == 7 and again["evaluated_this_run"] == 0
+    more = json.loads(_gearopt([*args[:3], "--trials", 9, *args[5:]], toy_site).stdout)
+    assert more["complete"] == 9 and more["evaluated_this_run"] == 2
+    db = tmp_path / "toy_probe.db"
+    trials = _trials(db)
+    assert _states(trials) == {"COMPLETE": 9}
+    assert sorted(t.number for t in trials) == list(range(9))
+    # the best design is saved as a design file, and it is that trial's design
+    best = json.loads(
+        _gearopt(args[:3] + ["--trials", 9, "--json", "--no-progress"], toy_site).stdout
+    )
+    saved = Path(best["best"]["design"])
+    assert saved.exists()
+    text = saved.read_text()
+    width = best["best"]["params"]["machine.tool_tip_width_mm"]
+    assert re.search(rf"tool_tip_width_mm = {re.escape(repr(width))}", text)
+    assert best["best"]["values"]["probe"] == pytest.approx((width - 1.1) ** 2)
+    assert best["best"]["values"]["probe"] == min(t.values[0] for t in trials)
+
+
+def test_gearopt_tables_hold_one_row_set_per_complete_trial(tmp_path, toy_site):
+    study = _toy_study(tmp_path, conditions="{refuse_above_mm = 1.5}")
+    _gearopt(["study", "enqueue", study, "machine.tool_tip_width_mm=1.55"], toy_site)
+    _gearopt(["study", "run", study, "--trials", 5, "--no-progress"], toy_site)
+    engine = sa.create_engine(f"sqlite:///{tmp_path / 'toy_probe.db'}")
+    trials = _trials(tmp_path / "toy_probe.db")
+    complete = {t.number for t in trials if t.state == TrialState.COMPLETE}
+    failed = {t.number for t in trials if t.state == TrialState.FAIL}
+    assert len(complete) == 5 and 0 in failed  # the refused given design failed, not retried
+    assert "refused by the probe" in trials[0].user_attrs["gearopt_error"]
+    with engine.connect() as con:
+        for table in ("gearopt_trials", "gearopt_metrics", "gearopt_objectives"):
+            numbers = con.execute(sa.text(f"SELECT trial_number FROM {table}")).scalars().all()
+            assert sorted(numbers) == sorted(complete), table
+        params = con.execute(sa.text("SELECT * FROM gearopt_trial_params")).all()
+        assert {r.trial_number for r in params} == complete
+        rows = con.execute(
+            sa.text("SELECT trial_number, value FROM gearopt_trial_metrics WHERE metric = 'probe'")
+        ).all()
+    by_number = {t.number: t for t in trials}
+    for number, value in rows:
+        width = by_number[number].params["machine.tool_tip_width_mm"]
+        assert value == pytest.approx((width - 1.1) ** 2, rel=1e-12)
+
+
+def test_deterministic_runs_repeat_their_parameters(tmp_path, toy_site):
+    sequences = []
+    for run, jobs in enumerate((2, 2, 1, 1)):
+        folder = tmp_path / f"run{run}"
+        folder.mkdir()
+        study = _toy_study(folder)
+        args = ["study", "run", study, "--trials", 6, "--jobs", jobs, "--no-progress"]
+        _gearopt([*args, "--deterministic"], toy_site)
+        trials = sorted(_trials(folder / "toy_probe.db"), key=lambda t: t.number)
+        sequences.append([t.params["machine.tool_tip_width_mm"] for t in trials])
+    assert sequences[0] == sequences[1]
+    assert sequences[2] == sequences[3]
+    assert len(set(sequences[0])) == 6
+
+
+def test_a_dead_worker_fails_only_its_trial_retried_at_most_twice(tmp_path, toy_site):
+    study = _toy_study(tmp_path, conditions="{exit_at_mm = 1.58, sleep_s = 0.2}")
+    _gearopt(["study", "enqueue", study, "machine.tool_tip_width_mm=1.0"], toy_site)
+    _gearopt(["study", "enqueue", study, "machine.tool_tip_width_mm=1.58"], toy_site)
+    _gearopt(["study", "enqueue", study, "machine.tool_tip_width_mm=1.2"], toy_site)
+    out = _gearopt(["study", "run", study, "--trials", 8, "--jobs", 2, "--no-progress"], toy_site)
+    trials = _trials(tmp_path / "toy_probe.db")
+    failed = [t for t in trials if t.state == TrialState.FAIL]
+    complete = [t for t in trials if t.state == TrialState.COMPLETE]
+    assert len(complete) == 8, out.stdout
+    # the killer design: its first attempt and two retries, each failed; nothing else failed
+    assert [t.params["machine.tool_tip_width_mm"] for t in failed] == [1.58] * 3, out.stdout
+    assert all("worker process died" in t.user_attrs["gearopt_error"] for t in failed)
+    assert [t.user_attrs["gearopt_attempt"] for t in failed] == [1, 2, 3]
+    # the innocent given designs ran to completion (resubmitted when the pool broke)
+    widths = [t.params["machine.tool_tip_width_mm"] for t in complete]
+    assert 1.0 in widths and 1.2 in widths
+    assert len({t.number for t in trials}) == len(trials)
+
+
+def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
+    study = _toy_study(tmp_path, conditions="{sleep_s = 0.4}")
+    db = tmp_path / "toy_probe.db"
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study)]
+    args += ["--trials", "10", "--jobs", "2", "--no-progress"]
+    proc = subprocess.Popen(
+        args, env=env, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    deadline = time.monotonic() + 120
+    try:
+        while time.monotonic() < deadline:
+            time.sleep(0.2)
+            if db.exists():
+                try:
+                    states = _states(_trials(db))
+                except Exception:  # the study is being created
+                    continue
+                if states.get("COMPLETE", 0) >= 3 and states.get("RUNNING", 0) >= 1:
+                    break
+        else:
+            pytest.fail("the study did not start")
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # coordinator and its workers
+        proc.wait()
+    before = _trials(db)
+    running = [t for t in before if t.state == TrialState.RUNNING]
+    assert running
+    killed = {t.number: t.params["machine.tool_tip_width_mm"] for t in running}
+    _gearopt(["study", "run", study, "--trials", 10, "--jobs", 2, "--no-progress"], toy_site)
+    after = _trials(db)
+    states = _states(after)
+    assert states["COMPLETE"] == 10 and "RUNNING" not in states
+    assert len({t.number for t in after}) == len(after)
+    by_number = {t.number: t for t in after}
+    retries = [t for t in after if "gearopt_retry_of" in t.user_attrs]
+    for number, width in killed.items():
+        assert by_number[number].state == TrialState.FAIL
+        again = [t for t in retries if t.user_attrs["gearopt_retry_of"] == number]
+        assert len(again) == 1 and again[0].params["machine.tool_tip_width_mm"] == width
+        assert again[0].state == TrialState.COMPLETE
+
+
+def test_export_writes_the_trials_and_tables(tmp_path, toy_site):
+    study = _toy_study(tmp_path)
+    _gearopt(["study", "run", study, "--trials", 3, "--no-progress"], toy_site)
+    out = tmp_path / "export"
+    listed = _gearopt(["study", "export", study, "--out", out], toy_site).stdout.split()
+    names = {Path(p).name for p in listed}
+    assert {"toy_probe_trials.csv", "toy_probe_gearopt_metrics.csv"} <= names
+    import pandas as pd
+
+    trials = pd.read_csv(out / "toy_probe_trials.csv")
+    assert len(trials) == 3 and "params_machine.tool_tip_width_mm" in trials.columns
+
+
+def test_bad_cli_input_is_one_line(tmp_path, toy_site):
+    study = _toy_study(tmp_path)
+    run = _gearopt(
+        ["study", "enqueue", study, "machine.tool_tip_width_mm=3"], toy_site, check=False
+    )
+    assert run.returncode == 2 and "StudyError" in run.stderr and "[0.8, 1.6]" in run.stderr
+    run = _gearopt(["study", "run", study, "--trials", 0], toy_site, check=False)
+    assert run.returncode == 2 and "--trials" in run.stderr
+    run = _gearopt(["study", "run", study, "--storage", "nosuchdb://x"], toy_site, check=False)
+    assert run.returncode == 2 and "storage" in run.stderr
+
+
+# --- the example study -------------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_example_study_runs_and_fills_the_dashboard_tables(tmp_path):
+    for name in ("cyclo_palloid_contact.toml", "seed001_section5_3.toml"):
+        shutil.copy(STUDIES / name, tmp_path)
+    run = subprocess.run(
+        [sys.executable, "-m", "gearopt.cli", "study", "run", "cyclo_palloid_contact.toml"]
+        + ["--trials", "4", "--json", "--no-progress"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["complete"] == 4
+    engine = sa.create_engine(f"sqlite:///{tmp_path / 'cyclo_palloid_contact.db'}")
+    with engine.connect() as con:
+        te = con.execute(
+            sa.text(
+                "SELECT COUNT(*) FROM gearopt_curves WHERE curve = 'te' AND evaluation = 'tca'"
+                " AND trial_number = 0"
+            )
+        ).scalar()
+        pattern = con.execute(
+            sa.text("SELECT COUNT(*) FROM gearopt_patterns WHERE trial_number = 0")
+        ).scalar()
+        settings = con.execute(
+            sa.text(
+                "SELECT value FROM gearopt_settings WHERE trial_number = 0 AND member = 'pinion'"
+                " AND key = 'inner_cutter_radius_mm'"
+            )
+        ).scalar()
+    assert te == 2 * 21  # drive and coast, 21 positions
+    assert pattern > 4
+    assert settings == 75.0  # the published design, enqueued first
+    # the README's example queries run on it and find rows
+    queries = re.findall(r"```sql\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    assert len(queries) >= 3
+    with engine.connect() as con:
+        for query in queries:
+            for statement in filter(str.strip, query.split(";")):
+                rows = con.execute(sa.text(statement), {"study": "cyclo_palloid_contact"}).all()
+                assert rows, statement
