@@ -13,7 +13,8 @@ from .conftest import STUDIES
 
 
 def test_every_study_design_loads():
-    paths = sorted(STUDIES.glob("*.toml"))
+    # study files (a [study] table) sit beside the designs; tests/test_study.py reads those
+    paths = [p for p in sorted(STUDIES.glob("*.toml")) if "[study]" not in p.read_text()]
     assert len(paths) >= 4
     for path in paths:
         design = gearopt.load_design(path)

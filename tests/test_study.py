@@ -462,3 +462,50 @@ def test_example_study_runs_and_fills_the_dashboard_tables(tmp_path):
             for statement in filter(str.strip, query.split(";")):
                 rows = con.execute(sa.text(statement), {"study": "cyclo_palloid_contact"}).all()
                 assert rows, statement
+
+
+# --- PostgreSQL: several coordinators on one study ----------------------------------------
+
+
+@pytest.fixture
+def postgres_url():
+    url = os.environ.get("GEAROPT_TEST_POSTGRES_URL")
+    if not url:
+        if os.environ.get("CI"):
+            pytest.fail("CI must provide GEAROPT_TEST_POSTGRES_URL (.ci/postgres)")
+        pytest.skip("no PostgreSQL server (set GEAROPT_TEST_POSTGRES_URL, see .ci/postgres)")
+    return url
+
+
+def test_two_coordinators_share_a_postgres_study(tmp_path, toy_site, postgres_url):
+    name = f"toy_pg_{os.getpid()}_{time.time_ns()}"
+    study = _toy_study(tmp_path, conditions="{sleep_s = 0.15}")
+    study.write_text(study.read_text().replace('name = "toy_probe"', f'name = "{name}"'))
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study), "--trials", "16"]
+    args += ["--jobs", "2", "--no-progress", "--storage", postgres_url]
+    procs = [
+        subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(2)
+    ]
+    for proc in procs:
+        out, err = proc.communicate(timeout=300)
+        assert proc.returncode == 0, err
+    trials = optuna.load_study(study_name=name, storage=postgres_url).get_trials(deepcopy=False)
+    states = _states(trials)
+    # together they stop at 16, give or take the trials in flight when the last one counted
+    assert 16 <= states["COMPLETE"] <= 16 + 2 * 2 and set(states) == {"COMPLETE"}
+    assert len({t.number for t in trials}) == len(trials)
+    engine = sa.create_engine(postgres_url)
+    with engine.connect() as con:
+        rows = con.execute(
+            sa.text("SELECT trial_number, coordinator FROM gearopt_trials WHERE study = :s"),
+            {"s": name},
+        ).all()
+        metrics = con.execute(
+            sa.text("SELECT trial_number FROM gearopt_trial_metrics WHERE study = :s"), {"s": name}
+        ).scalars()
+        metric_numbers = sorted(metrics)
+    complete = sorted(t.number for t in trials if t.state == TrialState.COMPLETE)
+    assert sorted(r.trial_number for r in rows) == complete == metric_numbers
+    assert len({r.coordinator for r in rows}) == 2  # both did part of the work
