@@ -148,3 +148,26 @@ def plot_analysis(design, evaluations: Mapping, directory) -> list[Path]:
         plt.close("all")
         raise GearoptError("--plot", str(directory), f"cannot write the figures: {exc}") from None
     return paths
+
+
+def plot_evaluations(evaluations: Mapping, directory, title: str) -> list[Path]:
+    """Figures of a study trial's evaluations (keyed by label) into ``directory``:
+    ``<label>_te.png`` and ``<label>_pattern.png`` for each TCA, ``<label>_backlash.png``,
+    ``<label>_ease_off.png``; evaluations of other evaluators are skipped."""
+    plt = _pyplot()
+    out = Path(directory)
+    drawers = {
+        "tca": (
+            ("te", lambda e, p: _te(plt, e, title, p)),
+            ("pattern", lambda e, p: _pattern(plt, e, title, p)),
+        ),
+        "backlash": (("backlash", lambda e, p: _backlash(plt, e.report["backlash"], title, p)),),
+        "ease-off": (("ease_off", lambda e, p: _ease_off(plt, e.report["ease_off"], title, p)),),
+    }
+    paths = []
+    for label, evaluation in evaluations.items():
+        for name, draw in drawers.get(evaluation.evaluator, ()):
+            path = out / f"{label}_{name}.png"
+            draw(evaluation, path)
+            paths.append(path)
+    return paths

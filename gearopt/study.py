@@ -362,6 +362,8 @@ def run_study(
             study.tell(trial, state=TrialState.FAIL)
         else:
             results.write(spec.name, outcome, attempt=attempt, coordinator=me, labels=labels)
+            if outcome.figures:
+                _upload(spec, study, trial, outcome.figures)
             for label, value in outcome.constraints.items():
                 trial.set_constraint(label, value)
             study.tell(trial, list(outcome.values))
@@ -485,6 +487,31 @@ def run_study(
         best_design_path=path,
         recovered=recovered,
     )
+
+
+def artifact_dir(spec: StudySpec) -> Path:
+    """Where a study's artifacts go: ``<study name>_artifacts`` beside the study file (give
+    it to ``optuna-dashboard --artifact-dir``)."""
+    folder = Path(spec.path).resolve().parent if spec.path else Path.cwd()
+    return folder / f"{spec.name}_artifacts"
+
+
+def _upload(spec: StudySpec, study, trial, figures) -> None:
+    from optuna.artifacts import FileSystemArtifactStore, upload_artifact
+
+    base = artifact_dir(spec)
+    base.mkdir(parents=True, exist_ok=True)
+    store = FileSystemArtifactStore(str(base))
+    with tempfile.TemporaryDirectory() as folder:
+        for name, data in figures:
+            path = Path(folder, f"trial{trial.number}_{name}")
+            path.write_bytes(data)
+            upload_artifact(
+                artifact_store=store,
+                file_path=str(path),
+                study_or_trial=trial,
+                mimetype="image/png",
+            )
 
 
 def _progress(progress: bool, total: int, spec: StudySpec):

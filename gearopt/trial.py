@@ -32,7 +32,8 @@ class TrialOutcome:
     ``constraints`` the constraint values by label (feasible when <= 0). The row lists feed
     the dashboard tables: ``metrics`` (evaluation, metric, value), ``curves`` (evaluation,
     curve, side, index, x, y), ``patterns`` (evaluation, side, index, face_mm, profile_mm),
-    ``settings`` (member, key, value). ``error`` says why a trial failed.
+    ``settings`` (member, key, value); ``figures`` the PNG files (name, bytes) a study with
+    ``artifacts = true`` stores as Optuna artifacts. ``error`` says why a trial failed.
     """
 
     number: int
@@ -42,6 +43,7 @@ class TrialOutcome:
     curves: list[tuple[str, str, str, int, float, float]] = field(default_factory=list)
     patterns: list[tuple[str, str, int, float, float]] = field(default_factory=list)
     settings: list[tuple[str, str, float]] = field(default_factory=list)
+    figures: list[tuple[str, bytes]] = field(default_factory=list)
     error: str | None = None
     seconds: float = 0.0
     pid: int = 0
@@ -117,6 +119,17 @@ def _settings(spec: StudySpec, design) -> list[tuple[str, str, float]]:
     ]
 
 
+def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:
+    """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`) as (name, bytes)."""
+    import tempfile
+
+    from gearopt.plots import plot_evaluations
+
+    with tempfile.TemporaryDirectory() as folder:
+        paths = plot_evaluations(evaluations, folder, f"{spec.name}: {design.name}")
+        return [(p.name, p.read_bytes()) for p in paths]
+
+
 def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) -> TrialOutcome:
     """Evaluate trial ``number`` of ``spec`` with the searched keys set to ``params``.
 
@@ -160,6 +173,7 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
             curves=curves,
             patterns=patterns,
             settings=_settings(spec, design),
+            figures=_figures(spec, design, evaluations) if spec.artifacts else [],
             seconds=time.perf_counter() - start,
             pid=pid,
         )

@@ -423,6 +423,9 @@ def test_bad_cli_input_is_one_line(tmp_path, toy_site):
 def test_example_study_runs_and_fills_the_dashboard_tables(tmp_path):
     for name in ("cyclo_palloid_contact.toml", "seed001_section5_3.toml"):
         shutil.copy(STUDIES / name, tmp_path)
+    study_file = tmp_path / "cyclo_palloid_contact.toml"
+    text = study_file.read_text().replace('pick = "utopia"', 'pick = "utopia"\nartifacts = true')
+    study_file.write_text(text)
     run = subprocess.run(
         [sys.executable, "-m", "gearopt.cli", "study", "run", "cyclo_palloid_contact.toml"]
         + ["--trials", "4", "--json", "--no-progress"],
@@ -454,6 +457,23 @@ def test_example_study_runs_and_fills_the_dashboard_tables(tmp_path):
     assert te == 2 * 21  # drive and coast, 21 positions
     assert pattern > 4
     assert settings == 75.0  # the published design, enqueued first
+    # each trial's figures are Optuna artifacts
+    from optuna.artifacts import get_all_artifact_meta
+
+    study = optuna.load_study(study_name="cyclo_palloid_contact", storage=str(engine.url))
+    first = study.trials[0]
+    names = sorted(m.filename for m in get_all_artifact_meta(first, storage=study._storage))
+    assert names == [
+        f"trial0_{label}.png"
+        for label in (
+            "backlash_backlash",
+            "misaligned_pattern",
+            "misaligned_te",
+            "tca_pattern",
+            "tca_te",
+        )
+    ]
+    assert (tmp_path / "cyclo_palloid_contact_artifacts").is_dir()
     # the README's example queries run on it and find rows
     queries = re.findall(r"```sql\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
     assert len(queries) >= 3
