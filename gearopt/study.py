@@ -268,18 +268,72 @@ def recover(study, results, spec: StudySpec, me: str) -> list[int]:
     return done
 
 
-def _executor(jobs: int):
+def _executor(jobs: int, backend: str = "loky", scheduler: str | None = None):
+    if backend == "dask":
+        return _JoblibBatches(jobs, scheduler)
     from joblib.externals.loky import get_reusable_executor
 
     return get_reusable_executor(max_workers=jobs, timeout=60)
 
 
+class _Resubmit(Exception):
+    """A batch stopped before this task ran: submit it again."""
+
+
+class _JoblibBatches:
+    """Runs submitted calls in batches through joblib's ``dask`` backend on a Dask cluster
+    (``scheduler``: its address; default a local cluster of ``jobs`` workers) and resolves
+    their futures in order. A task that kills Dask workers ends as ``KilledWorker`` (Dask
+    retries it on other workers first); the calls after it in the batch are resubmitted."""
+
+    def __init__(self, jobs: int, scheduler: str | None) -> None:
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise StudyError("--backend", "dask", "needs dask: pip install -e '.[dask]'") from None
+        if scheduler:
+            self.client = Client(scheduler)
+        else:
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True)
+            self.client = Client(cluster)
+        self.jobs = jobs
+        self.queue: list[tuple[cf.Future, Callable, tuple]] = []
+
+    def submit(self, fn, *args) -> cf.Future:
+        future: cf.Future = cf.Future()
+        self.queue.append((future, fn, args))
+        return future
+
+    def flush(self) -> None:
+        import joblib
+
+        queue, self.queue = self.queue, []
+        if not queue:
+            return
+        done = 0
+        try:
+            with joblib.parallel_config(backend="dask", n_jobs=self.jobs):
+                results = joblib.Parallel(return_as="generator")(
+                    joblib.delayed(fn)(*args) for _, fn, args in queue
+                )
+                for future, _ in zip((q[0] for q in queue), results, strict=False):
+                    future.set_result(_)
+                    done += 1
+        except Exception as exc:  # noqa: BLE001 - the failing task's own error
+            queue[done][0].set_exception(exc)
+            for future, _, _ in queue[done + 1 :]:
+                future.set_exception(_Resubmit())
+
+
 def _broken(exc: BaseException) -> bool:
+    """A worker process died under the trial (loky), or the trial killed Dask workers."""
     from concurrent.futures.process import BrokenProcessPool
 
     from joblib.externals.loky.process_executor import TerminatedWorkerError
 
-    return isinstance(exc, TerminatedWorkerError | BrokenProcessPool)
+    return isinstance(exc, TerminatedWorkerError | BrokenProcessPool) or (
+        type(exc).__name__ == "KilledWorker"
+    )
 
 
 def run_study(
@@ -293,6 +347,8 @@ def run_study(
     save_best: bool = True,
     max_failures: int | None = None,
     on_told: Callable[[int], None] | None = None,
+    backend: str = "loky",
+    scheduler: str | None = None,
 ) -> RunSummary:
     """Run ``spec`` until its study holds ``trials`` COMPLETE trials.
 
@@ -312,11 +368,17 @@ def run_study(
     max_failures
         Stop with a :class:`StudyError` when more trials than this fail in this run (default:
         ``max(10, trials)``): a search space that only gives failing designs.
+    backend, scheduler
+        ``"loky"`` (local worker processes) or ``"dask"``: the evaluations go through joblib's
+        dask backend to the Dask cluster at ``scheduler`` (default: a local cluster of
+        ``jobs`` workers), in synchronous batches of ``jobs`` trials.
     """
     if not isinstance(trials, int) or trials < 1:
         raise StudyError("--trials", trials, "must be a positive integer")
     if not isinstance(jobs, int) or jobs < 1:
         raise StudyError("--jobs", jobs, "must be a positive integer")
+    if backend not in ("loky", "dask"):
+        raise StudyError("--backend", backend, "must be loky or dask")
     start = time.perf_counter()
     url = storage or default_storage_url(spec)
     study, results = open_study(spec, url)
@@ -326,7 +388,7 @@ def run_study(
     labels = {o.label: "objective" for o in spec.objectives}
     labels.update({c.label: "constraint" for c in spec.constraints})
     limit = max(10, trials) if max_failures is None else max_failures
-    batch = deterministic or jobs == 1
+    batch = deterministic or jobs == 1 or backend == "dask"
     markers = tempfile.mkdtemp(prefix="gearopt-trials-")
     pending: dict[int, tuple[Any, cf.Future, dict, int]] = {}
     failed = evaluated = 0
@@ -341,7 +403,13 @@ def run_study(
         return rows.get("COMPLETE", 0), rows.get("RUNNING", 0)
 
     def submit(trial, params, attempt):
-        future = executor.submit(work, spec, trial.number, params, markers)
+        try:
+            future = executor.submit(work, spec, trial.number, params, markers)
+        except Exception as exc:  # the pool broke since the last look: sorted out below
+            if not _broken(exc):
+                raise
+            future = cf.Future()
+            future.set_exception(exc)
         pending[trial.number] = (trial, future, params, attempt)
 
     def ask():
@@ -384,7 +452,8 @@ def run_study(
         is guilty (failed and re-enqueued); several are run again one at a time, and the one
         that breaks the pool alone is guilty."""
         nonlocal executor, failed
-        executor = _executor(jobs)
+        if backend == "loky":
+            executor = _executor(jobs)
         broken = {
             n: pending.pop(n)
             for n in list(pending)
@@ -393,9 +462,10 @@ def run_study(
             and _broken(pending[n][1].exception())
         }
         started = [n for n in broken if Path(markers, f"{n}.pid").exists()]
-        for number, (trial, _, params, attempt) in broken.items():
+        for number, (trial, future, params, attempt) in broken.items():
             Path(markers, f"{number}.pid").unlink(missing_ok=True)
-            if number in alone or started == [number]:
+            killer = type(future.exception()).__name__ == "KilledWorker"  # Dask names it
+            if killer or number in alone or started == [number]:
                 failed += 1
                 frozen = study._storage.get_trial(trial._trial_id)
                 _retry(study, results, spec, frozen, "its worker process died")
@@ -419,7 +489,7 @@ def run_study(
         for _ in range(min(jobs - len(pending), max(free, 0))):
             ask()
 
-    executor = _executor(jobs)
+    executor = _executor(jobs, backend, scheduler)
     try:
         while True:
             if time.monotonic() - last_beat > 5.0:
@@ -441,6 +511,8 @@ def run_study(
             if not batch or not pending:
                 refill(free)
             futures = [p[1] for p in pending.values()]
+            if hasattr(executor, "flush"):
+                executor.flush()
             if batch:
                 cf.wait(futures)
             else:
@@ -455,6 +527,9 @@ def run_study(
                 exc = future.exception()
                 if exc is None:
                     tell(number, future.result())
+                elif isinstance(exc, _Resubmit):
+                    trial, _, params, attempt = pending.pop(number)
+                    held.append((trial, params, attempt))
                 elif _broken(exc):
                     broken = True
                     if batch:
@@ -468,6 +543,8 @@ def run_study(
         # a coordinator interrupted here leaves RUNNING trials for the next run to recover
         if bar is not None:
             bar.close()
+        if isinstance(executor, _JoblibBatches):
+            executor.client.close()
         shutil.rmtree(markers, ignore_errors=True)
     complete, _ = counts()
     best = pick_best(study, spec)

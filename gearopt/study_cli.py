@@ -36,6 +36,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         storage=args.storage,
         deterministic=args.deterministic,
         progress=not args.no_progress,
+        backend=args.backend,
+        scheduler=args.scheduler,
     )
     best = summary.best
     report = {
@@ -123,6 +125,13 @@ def add_study_parser(sub) -> None:
         action="store_true",
         help="synchronous batches of JOBS trials told in order (reproducible with a seed)",
     )
+    p.add_argument(
+        "--backend",
+        choices=("loky", "dask"),
+        default="loky",
+        help="worker pool: local processes (loky) or a Dask cluster through joblib's dask backend",
+    )
+    p.add_argument("--scheduler", help="Dask scheduler address (default: a local cluster)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=_cmd_run)

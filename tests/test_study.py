@@ -416,6 +416,18 @@ def test_bad_cli_input_is_one_line(tmp_path, toy_site):
     assert run.returncode == 2 and "storage" in run.stderr
 
 
+def test_the_dask_backend_runs_the_evaluations_on_a_cluster(tmp_path, toy_site):
+    pytest.importorskip("dask.distributed")
+    study = _toy_study(tmp_path)
+    args = ["study", "run", study, "--trials", 4, "--jobs", 2, "--backend", "dask"]
+    report = json.loads(_gearopt([*args, "--json", "--no-progress"], toy_site).stdout)
+    assert report["complete"] == 4 and report["evaluated_this_run"] == 4
+    engine = sa.create_engine(f"sqlite:///{tmp_path / 'toy_probe.db'}")
+    with engine.connect() as con:
+        rows = con.execute(sa.text("SELECT trial_number FROM gearopt_trials")).scalars()
+        assert sorted(rows) == [0, 1, 2, 3]
+
+
 # --- the example study -------------------------------------------------------------------
 
 
