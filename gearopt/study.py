@@ -184,7 +184,7 @@ class RunSummary:
     evaluated_this_run: int
     wall_s: float
     worker_s: float
-    coordinator_s: float
+    coordinator_s: float  # asking, telling, writing the tables, recovering: waits excluded
     jobs: int
     best: optuna.trial.FrozenTrial | None = None
     best_design_path: str | None = None
@@ -490,6 +490,7 @@ def run_study(
             ask()
 
     executor = _executor(jobs, backend, scheduler)
+    busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
     try:
         while True:
             if time.monotonic() - last_beat > 5.0:
@@ -507,16 +508,22 @@ def run_study(
                     break
                 if free <= 0:  # the rest runs on other coordinators
                     time.sleep(0.5)
+                    mark = time.perf_counter()
                     continue
             if not batch or not pending:
                 refill(free)
             futures = [p[1] for p in pending.values()]
+            busy_s += time.perf_counter() - mark
             if hasattr(executor, "flush"):
                 executor.flush()
-            if batch:
-                cf.wait(futures)
-            else:
-                cf.wait(futures, timeout=5.0, return_when="FIRST_COMPLETED")
+            # wake every few seconds to keep the heartbeat fresh while long trials run
+            until = "ALL_COMPLETED" if batch else "FIRST_COMPLETED"
+            while futures and (
+                not cf.wait(futures, timeout=5.0, return_when=until).done
+                or (batch and not all(f.done() for f in futures))
+            ):
+                results.heartbeat(me, spec.name, host, pid)
+            mark = time.perf_counter()
             broken = False
             for number in sorted(pending):
                 future = pending[number][1]
@@ -558,7 +565,7 @@ def run_study(
         evaluated_this_run=evaluated,
         wall_s=wall,
         worker_s=worker_s,
-        coordinator_s=max(wall - worker_s / jobs, 0.0) if evaluated else 0.0,
+        coordinator_s=busy_s,
         jobs=jobs,
         best=best,
         best_design_path=path,
