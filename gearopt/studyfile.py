@@ -38,7 +38,6 @@ A study file::
 from __future__ import annotations
 
 import itertools
-import math
 import re
 import tomllib
 from collections.abc import Mapping
@@ -47,7 +46,8 @@ from pathlib import Path
 from typing import Any
 
 from gearopt.design import Design, load_design, with_overrides
-from gearopt.errors import GearoptError, StudyError
+from gearopt.errors import GearoptError, PluginError, StudyError
+from gearopt.machine import SearchDimension
 from gearopt.plugins import evaluators, get_machine_model, objectives
 
 __all__ = [
@@ -65,30 +65,17 @@ _STUDY_KEYS = ("name", "design", "sampler", "seed", "pick", "artifacts")
 _TABLES = ("study", "search", "evaluations", "objectives", "constraints", "enqueue", "grid")
 
 
-@dataclass(frozen=True, kw_only=True)
-class Dimension:
-    """One searched design key: a float in ``[low, high]`` (log scale if ``log``)."""
+#: a searched design key is a machine model's kind of search dimension
+Dimension = SearchDimension
 
-    key: str
-    low: float
-    high: float
-    log: bool = False
 
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):
-            raise StudyError(f"search.{self.key}", (self.low, self.high), "needs finite low < high")
-        if self.log and self.low <= 0.0:
-            raise StudyError(f"search.{self.key}", self.low, "a log scale needs low > 0")
-
-    def check(self, value: Any, where: str) -> float:
-        """``value`` as a float inside the bounds, or a :class:`StudyError`."""
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise StudyError(f"{where}.{self.key}", value, "must be a number")
-        if not self.low <= value <= self.high:
-            raise StudyError(
-                f"{where}.{self.key}", value, f"must lie in the searched [{self.low}, {self.high}]"
-            )
-        return float(value)
+def _check_value(dim: Dimension, value: Any, where: str) -> float:
+    """``value`` as a float inside the dimension's bounds, or a :class:`StudyError`."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise StudyError(f"{where}.{dim.key}", value, "must be a number")
+    if not dim.low <= value <= dim.high:
+        raise StudyError(f"{where}.{dim.key}", value, f"must lie in [{dim.low}, {dim.high}]")
+    return float(value)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -169,7 +156,7 @@ class StudySpec:
         unknown = set(params) - set(dims)
         if unknown:
             raise StudyError(where, sorted(unknown), f"not searched keys; searched: {sorted(dims)}")
-        return {key: dims[key].check(value, where) for key, value in params.items()}
+        return {key: _check_value(dims[key], value, where) for key, value in params.items()}
 
     def design_for(self, params: Mapping[str, Any]) -> Design:
         """The base design with the searched keys set."""
@@ -191,20 +178,22 @@ def _dimension(key: str, value: Any, design: Design) -> Dimension:
             raise StudyError(
                 where, value, f"the model has no bounds for it; it has {sorted(declared)}"
             )
-        d = declared[key]
-        return Dimension(key=key, low=d.low, high=d.high, log=d.log)
+        return declared[key]
     if isinstance(value, list) and len(value) == 2:
-        return Dimension(key=key, low=_float(value[0], where), high=_float(value[1], where))
-    if isinstance(value, Mapping) and set(value) <= {"low", "high", "log"}:
-        if "low" not in value or "high" not in value:
-            raise StudyError(where, dict(value), "needs low and high")
+        bounds = {"low": value[0], "high": value[1]}
+    elif isinstance(value, Mapping) and {"low", "high"} <= set(value) <= {"low", "high", "log"}:
+        bounds = dict(value)
+    else:
+        raise StudyError(where, value, 'must be [low, high], {low, high, log} or "model"')
+    try:
         return Dimension(
             key=key,
-            low=_float(value["low"], where),
-            high=_float(value["high"], where),
-            log=bool(value.get("log", False)),
+            low=_float(bounds["low"], where),
+            high=_float(bounds["high"], where),
+            log=bool(bounds.get("log", False)),
         )
-    raise StudyError(where, value, 'must be [low, high], {low, high, log} or "model"')
+    except PluginError as exc:
+        raise StudyError(where, value, exc.rule) from None
 
 
 def _objective(entry: Any, kind: str, where: str, known: Mapping[str, EvaluationSpec]):

@@ -60,6 +60,16 @@ def _labels(objective: str, value: Any) -> tuple[str, ...]:
     return tuple(labels)
 
 
+def _known_options(objective: BaseObjective, options: Mapping[str, Any]) -> None:
+    unknown = set(options) - set(objective.options)
+    if unknown:
+        raise StudyError(
+            f"{objective.kind} {objective.name}",
+            sorted(unknown),
+            f"unknown options; known: {objective.options}",
+        )
+
+
 def _metric(evaluations: Mapping[str, Evaluation], label: str, key: str) -> float:
     return float(evaluations[label].metrics[key])
 
@@ -73,11 +83,7 @@ class _ContactObjective(BaseObjective):
 
     def reads(self, **options: Any) -> dict[str, str]:
         """Labels this objective reads, with the evaluator each must be."""
-        unknown = set(options) - set(self.options)
-        if unknown:
-            raise StudyError(
-                f"objective {self.name}", sorted(unknown), f"unknown options; known: {self.options}"
-            )
+        _known_options(self, options)
         _side(self.name, options)
         labels = _labels(self.name, options.get("on", self.default_on))
         return {label: self.requires[0] for label in labels}
@@ -156,11 +162,7 @@ class PatternMovement(_ContactObjective):
     options = ("nominal", "misaligned", "side")
 
     def reads(self, **options):
-        unknown = set(options) - set(self.options)
-        if unknown:
-            raise StudyError(
-                f"objective {self.name}", sorted(unknown), f"unknown options; known: {self.options}"
-            )
+        _known_options(self, options)
         if "misaligned" not in options:
             raise StudyError(
                 f"objective {self.name}.misaligned", rule="name the misaligned TCA's label"
@@ -190,11 +192,7 @@ class BacklashWindow(BaseObjective):
     options: ClassVar[tuple[str, ...]] = ("on", "min_um", "max_um")
 
     def reads(self, **options):
-        unknown = set(options) - set(self.options)
-        if unknown:
-            raise StudyError(
-                f"constraint {self.name}", sorted(unknown), f"unknown options; known {self.options}"
-            )
+        _known_options(self, options)
         for key in ("min_um", "max_um"):
             if not isinstance(options.get(key), int | float):
                 raise StudyError(f"constraint {self.name}.{key}", options.get(key), "is required")
