@@ -125,7 +125,8 @@ def _fast_sqlite(engine: sa.Engine) -> None:
 
 def open_study(spec: StudySpec, storage: str | None = None):
     """The Optuna study of ``spec`` (created when new) and its :class:`ResultsStore`; a new
-    study gets its metric names and the study file's given designs."""
+    study gets its metric names and the study file's given designs, an existing one the given
+    designs added to the file since (a design with a trial already is skipped)."""
     from gearopt.results import ResultsStore
 
     url = storage or default_storage_url(spec)
@@ -156,12 +157,14 @@ def open_study(spec: StudySpec, storage: str | None = None):
     _fast_sqlite(rdb.engine)
     results = ResultsStore(url, engine=rdb.engine)
     search = {d.key: [d.low, d.high, d.log] for d in spec.search}
-    if results.register_study(spec.name, search):
+    first = results.register_study(spec.name, search)
+    if first:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(spec.metric_names)
-        for params in spec.enqueue:
-            study.enqueue_trial(dict(params), user_attrs={_ATTEMPT: 1})
+    # the study file's given designs: all of them the first time, later the ones added since
+    for params in spec.enqueue:
+        study.enqueue_trial(dict(params), user_attrs={_ATTEMPT: 1}, skip_if_exists=not first)
     return study, results
 
 

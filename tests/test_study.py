@@ -541,3 +541,17 @@ def test_two_coordinators_share_a_postgres_study(tmp_path, toy_site, postgres_ur
     complete = sorted(t.number for t in trials if t.state == TrialState.COMPLETE)
     assert sorted(r.trial_number for r in rows) == complete == metric_numbers
     assert len({r.coordinator for r in rows}) == 2  # both did part of the work
+
+
+def test_given_designs_added_to_the_file_later_are_enqueued_once(tmp_path, toy_site):
+    given = '\n[[enqueue]]\n"machine.tool_tip_width_mm" = {}\n'
+    study = _toy_study(tmp_path, extra=given.format(0.9))
+    args = ["study", "run", study, "--trials", 2, "--jobs", 1, "--no-progress"]
+    _gearopt(args, toy_site)
+    study.write_text(study.read_text() + given.format(1.3))
+    _gearopt([*args[:3], "--trials", 4, *args[5:]], toy_site)
+    widths = [
+        t.params["machine.tool_tip_width_mm"]
+        for t in sorted(_trials(tmp_path / "toy_probe.db"), key=lambda t: t.number)
+    ]
+    assert widths[0] == 0.9 and widths[2] == 1.3 and widths.count(0.9) == 1
