@@ -89,9 +89,16 @@ def gearopt_objectives() -> list[BaseObjective]:
     Returns
     -------
     list of gearopt.BaseObjective
-        Instances; ``value(evaluations, **options)`` maps the evaluations of one trial (keyed by
-        evaluator name; ``requires`` lists the evaluators it reads) to one finite float.
-        ``kind = "constraint"`` values are feasible when <= 0.
+        Instances; ``value(evaluations, **options)`` maps the evaluations of one trial to one
+        finite float. The evaluations are keyed by their labels in the study file
+        (``[evaluations.<label>]``, a label defaulting to the evaluator's name); ``options`` are
+        the other keys of the study file's ``[[objectives]]`` or ``[[constraints]]`` entry.
+        ``reads(**options)`` says which labels ``value`` reads and of which evaluator each must
+        be, and refuses bad options with a :class:`gearopt.errors.StudyError`: a study calls it
+        when its file is read, before any trial. ``kind = "constraint"`` values are feasible
+        when <= 0 (the study passes them to ``trial.set_constraint``); objectives are
+        minimised unless ``direction = "maximize"``. The built-ins are in
+        ``gearopt_plugins.objectives``.
 
     Notes
     -----
