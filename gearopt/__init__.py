@@ -21,6 +21,7 @@ from gearopt.errors import (
     NotAvailableError,
     PluginError,
     SettingsError,
+    StudyError,
     UnknownKeyError,
 )
 from gearopt.evaluation import BaseEvaluator, BaseObjective, Evaluation
@@ -72,9 +73,12 @@ __all__ = [
     "PluginError",
     "SearchDimension",
     "SettingsError",
+    "StudyError",
     "UnknownKeyError",
     "__version__",
     "basic_settings",
+    "load_study_spec",
+    "run_study",
     "compute_blank",
     "evaluators",
     "generate_flanks",
@@ -90,3 +94,16 @@ __all__ = [
     "parse_design",
     "with_overrides",
 ]
+
+
+def __getattr__(name: str):
+    # the study API imports Optuna: only when it is asked for
+    if name == "run_study":
+        from gearopt.study import run_study
+
+        return run_study
+    if name == "load_study_spec":
+        from gearopt.studyfile import load_study_spec
+
+        return load_study_spec
+    raise AttributeError(f"module 'gearopt' has no attribute {name!r}")
