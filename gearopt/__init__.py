@@ -1,7 +1,8 @@
 """gearopt: open, plugin-based design optimisation of spiral bevel gears.
 
 Public API: design files (:func:`load_design`), machine settings (:func:`basic_settings`), the
-plugin contract (:data:`hookimpl`, the ``Base*`` classes) and the plugin registries.
+plugin contract (:data:`hookimpl`, the ``Base*`` classes), the plugin registries and studies
+(:func:`load_study_spec`, :func:`run_study`).
 """
 
 from gearopt.blank import Blank, compute_blank
