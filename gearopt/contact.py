@@ -222,8 +222,9 @@ class ClearanceField:
 
     def _at(self, s, h, phi, gear_angle_rad):
         """``(delta, valid)`` at pinion grid coordinates off the nodes (see ``_Engine.at``)."""
-        side = np.zeros(np.broadcast(s, h, phi).shape, np.intp)
-        return self._engine.at(side, s, h, phi, gear_angle_rad)
+        s, h = np.broadcast_arrays(np.asarray(s, float), np.asarray(h, float))
+        side = np.zeros(np.broadcast(s, phi).shape, np.intp)
+        return self._engine.at(side, np.stack([s, h]), phi, gear_angle_rad)
 
     def sample(
         self,
@@ -340,63 +341,166 @@ class _Engine:
         cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
         self.refine_cells = np.concatenate([c.ravel() for c in cells])
         self.pinion_cells = cells[0].size
-        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields])
+        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
         self.gear_cells = first.gear._lookup[8].size
-        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields])
+        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
         self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
+        self._linear_maps(fields)
+
+    def _linear_maps(self, fields) -> None:
+        """The affine maps of the evaluations, folded into a few tables.
+
+        With the pinion turned by phi, ``q = B Rz(phi) p + c``; the gear's unit grid coordinates
+        are ``x2 = (s2 - s0) / ds2``, ``y2 = (h2 - h0) / dh2`` with ``s2 = qz cos g + R2 sin g``,
+        ``h2 = -qz sin g + R2 cos g``. Four outputs are linear in p: qx, qy and the qz parts of
+        x2, y2 (``lin @ p + const``); x2, y2 add ``rho_coef * R2``. Turned by phi, output o is
+        ``kx_o x + ky_o y + (lin_o2 z + const_o)`` with ``kx_o = lin_o0 cos + lin_o1 sin`` and
+        ``ky_o = lin_o1 cos - lin_o0 sin``: ``rotation @ (cos, sin)`` gives (kx, ky).
+        """
+        first = fields[0]
+        b, c = first.b, first.c
+        s0, ia, imax, h0, ib, jmax, n_cols = first.gear._lookup[:7]
+        g = math.radians(first.gear.pitch_angle_deg)
+        cg, sg = math.cos(g), math.sin(g)
+        lin = np.array([b[0], b[1], ia * cg * b[2], -ib * sg * b[2]])
+        const = np.array([c[0], c[1], ia * (cg * c[2] - s0), -ib * (sg * c[2] + h0)])
+        self._rotation = np.concatenate(
+            [np.stack([lin[:, 0], lin[:, 1]], 1), np.stack([lin[:, 1], -lin[:, 0]], 1)]
+        )
+        self._rho_coef = np.array([ia * sg, ib * cg])
+        self._gear_table = (np.array([imax, jmax]), n_cols)
+        self._lin_z, self._const = lin[:, 2], const
+        # the node tables: x, y and the z terms (with the constants) of every side's nodes;
+        # the normals' x, y and z terms of qx, qy (no constants)
+        self.node_xy = np.stack([self.points[0], self.points[1]])
+        self.node_z = lin[:, 2, None, None] * self.points[2] + const[:, None, None]
+        self.node_nxy = np.stack([self.normals[0], self.normals[1]])
+        self.node_nz = lin[:2, 2, None, None] * self.normals[2]
+        # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
+        # z terms (z = L1 = s cos g1 - h sin g1)
+        p0, pia, pimax, ph0, pib, pjmax, p_cols = first.pinion._lookup[:7]
+        cg1, sg1 = self.cos_sin_pitch
+        self._pinion_unit = (np.array([[p0], [ph0]]), np.array([[pia], [pib]]))
+        self._pinion_table = (np.array([pimax, pjmax]), p_cols)
+        self._pinion_map = np.concatenate(
+            [np.array([[sg1, cg1]]), np.stack([lin[:, 2] * cg1, -lin[:, 2] * sg1], 1)]
+        )
+        self._pinion_const = np.concatenate([[0.0], const])[:, None]
 
     # --- evaluation ---------------------------------------------------------------------
 
     @staticmethod
-    def _hermite(fm: FlankMap, coef_t, s, h, offset):
-        """The local interpolant of ``fm``'s grid with the cell tables ``coef_t`` (one table
-        per side, ``offset`` cells into them): ``(Theta, cell index, within the grid)``."""
-        i, j, u, v, within = fm._cell_of(s, h)
-        k = i * fm._lookup[6] + j + offset
-        return hermite_cells(coef_t, k, u, v), k, within
+    def _cells(coef, xy, table, offset):
+        """The local interpolant at unit grid coordinates ``xy`` (``(2, ...)``; cell tables
+        ``coef``, ``offset`` cells in): ``(Theta, cell index, within the grid)``. Beyond the
+        grid the edge cell's polynomial goes on (unit coordinates outside [0, 1])."""
+        limit, n_cols = table
+        index = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
+        np.fmin(index, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=index)
+        index = index.astype(np.intp)
+        uv = xy - index
+        inside = uv >= 0.0
+        inside &= uv <= 1.0
+        cell = index[0] * n_cols
+        cell += index[1]
+        cell += offset
+        return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
+
+    def _turned(self, phi, ndim):
+        """``(kx, ky)``, each ``(4, ...)``: the coefficients of x and y in the four linear
+        outputs at pinion angles ``phi``, shaped to broadcast over ``ndim`` dimensions."""
+        phi = np.asarray(phi, float)
+        flat = phi.reshape(-1)
+        cs = np.empty((2, flat.size))
+        np.cos(flat, out=cs[0])
+        np.sin(flat, out=cs[1])
+        k = self._rotation @ cs
+        return k.reshape((2, 4) + (1,) * (ndim - phi.ndim) + phi.shape)
+
+    def _clearance(self, side, x, y, z, phi, angle, normals=None):
+        """Angular clearance of pinion points with coordinates ``x``, ``y`` and z terms ``z``
+        (``(4, ...)``, :meth:`_linear_maps`) at pinion angles ``phi``:
+        ``(delta, valid, R2, normal factor or None)``."""
+        ndim = max(np.ndim(x), np.ndim(phi))
+        kx, ky = self._turned(phi, ndim)
+        out = kx * x
+        out += ky * y
+        out += z
+        sq = out[:2] * out[:2]
+        radius = sq[0] + sq[1]
+        np.sqrt(radius, out=radius)
+        theta = np.arctan2(out[1], out[0])
+        xy = out[2:]
+        xy += self._rho_coef.reshape((2,) + (1,) * radius.ndim) * radius
+        flank, cell, within = self._cells(
+            self.gear_coef, xy, self._gear_table, side * self.gear_cells
+        )
+        valid = self.gear_ok[cell]
+        valid &= within
+        gap = flank - theta
+        gap += (angle + self.turn0[side]) - self.ratio * phi
+        turns = np.rint(gap * (0.5 / math.pi))
+        turns *= 2.0 * math.pi
+        gap -= turns
+        gap *= self.gear_sense[side]
+        if normals is None:
+            return gap, valid, radius, None
+        nxy, nz = normals
+        m = kx[:2] * nxy[0]
+        m += ky[:2] * nxy[1]
+        m += nz
+        factor = m[1] * out[0]
+        factor -= m[0] * out[1]
+        return gap, valid, radius, np.abs(factor, out=factor)
 
     def gap(self, side, p, n, phi, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles
         ``phi`` on fields ``side`` (all broadcast): ``(delta, normal factor, R2, valid)``."""
-        c, s = np.cos(phi), np.sin(phi)
-        b, off = self.b, self.c
-        x, y, z = p
-        xt, yt = c * x - s * y, s * x + c * y
-        qx = b[0, 0] * xt + b[0, 1] * yt + (b[0, 2] * z + off[0])
-        qy = b[1, 0] * xt + b[1, 1] * yt + (b[1, 2] * z + off[1])
-        qz = b[2, 0] * xt + b[2, 1] * yt + (b[2, 2] * z + off[2])
-        radius = np.hypot(qx, qy)
-        theta = np.arctan2(qy, qx)
-        s2, h2 = self.gear_grid.to_grid(qz, radius)
-        flank, k, within = self._hermite(
-            self.gear_grid, self.gear_coef, s2, h2, side * self.gear_cells
-        )
-        valid = self.gear_ok[k] & within
-        turn = -self.ratio * phi + (gear_angle_rad + self.turn0[side])
-        gap = flank - theta + turn
-        delta = self.gear_sense[side] * ((gap + math.pi) % (2.0 * math.pi) - math.pi)
-        if n is None:
-            return delta, None, radius, valid
-        nx, ny, nz = n
-        nxt, nyt = c * nx - s * ny, s * nx + c * ny
-        mx = b[0, 0] * nxt + b[0, 1] * nyt + b[0, 2] * nz
-        my = b[1, 0] * nxt + b[1, 1] * nyt + b[1, 2] * nz
-        factor = np.abs(my * qx - mx * qy)
+        if np.broadcast(p[0], phi).ndim == 0:  # single points: as one-element arrays
+            one = self.gap(
+                side,
+                [np.reshape(a, 1) for a in p],
+                n and [np.reshape(a, 1) for a in n],
+                np.reshape(phi, 1),
+                np.reshape(gear_angle_rad, 1),
+            )
+            return tuple(None if a is None else a[0] for a in one)
+        x, y, z = np.broadcast_arrays(*(np.asarray(a, float) for a in p))
+        lead = (1,) * max(x.ndim, np.ndim(phi))
+        zt = self._lin_z.reshape((4,) + lead) * z
+        zt += self._const.reshape((4,) + lead)
+        normals = None
+        if n is not None:
+            nx, ny, nz = np.broadcast_arrays(*(np.asarray(a, float) for a in n))
+            normals = (np.stack([nx, ny]), self._lin_z[:2].reshape((2,) + lead) * nz)
+        delta, valid, radius, factor = self._clearance(side, x, y, zt, phi, gear_angle_rad, normals)
         return delta, factor, radius, valid
 
-    def at(self, side, s, h, phi, gear_angle_rad):
-        """Clearance at pinion grid coordinates (s, h) off the nodes by the local Hermite
-        interpolants: ``(delta, valid)``. ``delta`` is the smooth extension beyond the flanks
-        (finite everywhere); ``valid`` is False outside either flank and in the pinion's lowest
-        generated cells, where the envelope's fold spoils any interpolant."""
-        cg, sg = self.cos_sin_pitch
-        big_r = s * sg + h * cg
-        theta, k, within = self._hermite(
-            self.pinion_grid, self.pinion_coef, s, h, side * self.pinion_cells
+    def at(self, side, sh, phi, gear_angle_rad):
+        """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
+        the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
+        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
+        the pinion's lowest generated cells, where the envelope's fold spoils any
+        interpolant."""
+        if np.broadcast(sh[0], phi).ndim == 0:  # single points: as one-element arrays
+            one = self.at(side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad)
+            return one[0][0], one[1][0]
+        origin, scale = self._pinion_unit
+        xy = sh - origin.reshape((2,) + (1,) * (sh.ndim - 1))
+        xy *= scale.reshape((2,) + (1,) * (sh.ndim - 1))
+        theta, cell, within = self._cells(
+            self.pinion_coef, xy, self._pinion_table, side * self.pinion_cells
         )
-        p = (big_r * np.cos(theta), big_r * np.sin(theta), s * cg - h * sg)
-        delta, _, _, valid = self.gap(side, p, None, phi, gear_angle_rad)
-        return delta, self.refine_cells[k] & within & valid
+        lin = self._pinion_map @ sh.reshape(2, -1)
+        lin += self._pinion_const
+        lin = lin.reshape((5,) + sh.shape[1:])
+        big_r = lin[0]
+        delta, valid, _, _ = self._clearance(
+            side, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:], phi, gear_angle_rad
+        )
+        valid &= within
+        valid &= self.refine_cells[cell]
+        return delta, valid
 
     def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True) -> FieldSample:
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
@@ -404,26 +508,31 @@ class _Engine:
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
-        delta, factor, radius, valid = self.gap(
-            side[:, None],
-            tuple(c[side] for c in self.points),
-            tuple(c[side] for c in self.normals),
-            phi[:, None],
-            angle[:, None],
-        )
-        # scatter back onto the grid (off-mask nodes +inf; padding dropped)
         n, size = len(phi), self.shape[0] * self.shape[1]
-        real = self.node_real[side]
-        rows_idx = np.broadcast_to(np.arange(n)[:, None], real.shape)[real]
-        cols_idx = self.node_index[side][real]
-        full = np.full((n, size), np.inf)
+        field_ = np.full((n, size), np.inf)
         fac = np.zeros((n, size))
         rad = np.zeros((n, size))
-        full[rows_idx, cols_idx] = np.where(valid, delta, np.inf)[real]
-        fac[rows_idx, cols_idx] = factor[real]
-        rad[rows_idx, cols_idx] = radius[real]
+        # each side's rows on its own generated nodes (its node tables broadcast over rows),
+        # put back onto the grid (off-mask nodes +inf)
+        for k in np.unique(side):
+            rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
+            count = int(self.node_real[k].sum())
+            nodes = self.node_index[k, :count]
+            delta, valid, radius, factor = self._clearance(
+                k,
+                self.node_xy[0, k, :count],
+                self.node_xy[1, k, :count],
+                self.node_z[:, k, None, :count],
+                phi[rows, None],
+                angle[rows, None],
+                (self.node_nxy[:, k, :count], self.node_nz[:, k, None, :count]),
+            )
+            at = (rows[:, None], nodes)
+            field_[at] = np.where(valid, delta, np.inf)
+            fac[at] = factor
+            rad[at] = radius
         shape = (n,) + self.shape
-        field_, fac, rad = full.reshape(shape), fac.reshape(shape), rad.reshape(shape)
+        field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
         rows = np.arange(len(phi))
         f0 = field_[rows, i, j]
@@ -516,56 +625,36 @@ class _Engine:
         Returns ``(value, s, h, edge)``: edge where the Newton part of the last step would take
         the point off the flanks to a clearance lower by more than the edge tolerance.
         """
-        ds, dh = self.ds, self.dh
-        es, eh = 0.25 * ds, 0.25 * dh
-        st = self._STENCIL
+        cell = np.array([[self.ds], [self.dh]])
+        quarter = self._STENCIL.T[:, None, :] * (0.25 * cell[:, :, None])  # (2, 1, 9) mm
         fr = self._FRACTIONS
+        nf = len(fr)
         n = len(s)
         rows = np.arange(n)
         edge = np.zeros(n, bool)
         tol = self.tol_rad[side]
-        f = np.empty((n, len(st)))
-        need = np.ones(n, bool)
-        sc = side[:, None]
-        best = None if f0 is None else f0.copy()
-        for _ in range(iterations):
-            if need.any():  # stencils not already evaluated with the last step
-                f[need], ok0 = self.at(
-                    sc[need],
-                    s[need, None] + st[:, 0] * es,
-                    h[need, None] + st[:, 1] * eh,
-                    phi[need, None],
-                    angle[need, None],
-                )
-                if best is None:  # the start's own value: the stencil's centre
-                    best = np.where(ok0[:, 0], f[:, 0], np.inf)
-            gs, gh = 0.5 * (f[:, 1] - f[:, 2]) / es, 0.5 * (f[:, 3] - f[:, 4]) / eh
-            hss = (f[:, 1] - 2.0 * f[:, 0] + f[:, 2]) / es**2
-            hhh = (f[:, 3] - 2.0 * f[:, 0] + f[:, 4]) / eh**2
-            hsh = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8]) / (es * eh)
-            # in cell units, so that both directions weigh alike
-            g2 = (gs * ds, gh * dh)
-            h2 = (hss * ds * ds, hsh * ds * dh, hhh * dh * dh)
-            step, curved = _pseudo_newton(*g2, *h2)
+        sh = np.stack([s, h])
+        sc, ph, an = side[:, None], phi[:, None], angle[:, None]
+        f, ok0 = self.at(sc, sh[:, :, None] + quarter, ph, an)
+        best = np.where(ok0[:, 0], f[:, 0], np.inf) if f0 is None else f0.copy()
+        for it in range(iterations):
+            d = f @ self._DIFFERENCES  # gradient and Hessian in cell units
+            g2, h2 = d[:, :2].T, (d[:, 2], d[:, 3], d[:, 4])
+            step, curved = _pseudo_newton(g2, *h2)
             # the Newton part's predicted fall (a valley's slope along itself is not edge)
             fall = -(
-                g2[0] * curved[:, 0]
-                + g2[1] * curved[:, 1]
-                + 0.5 * (h2[0] * curved[:, 0] ** 2 + 2 * h2[1] * curved[:, 0] * curved[:, 1])
-                + 0.5 * h2[2] * curved[:, 1] ** 2
+                g2[0] * curved[0]
+                + g2[1] * curved[1]
+                + 0.5 * (h2[0] * curved[0] ** 2 + 2 * h2[1] * curved[0] * curved[1])
+                + 0.5 * h2[2] * curved[1] ** 2
             )
             # the step cut back by halvings, the Newton part's end, and the stencil around the
-            # full step, at once
-            ts = s[:, None] + fr * (step[:, :1] * ds)
-            th = h[:, None] + fr * (step[:, 1:] * dh)
-            pts_s = np.concatenate(
-                [ts, s[:, None] + curved[:, :1] * ds, ts[:, :1] + st[1:, 0] * es], axis=1
-            )
-            pts_h = np.concatenate(
-                [th, h[:, None] + curved[:, 1:] * dh, th[:, :1] + st[1:, 1] * eh], axis=1
-            )
-            fa, oka = self.at(sc, pts_s, pts_h, phi[:, None], angle[:, None])
-            nf = len(fr)
+            # full step (not after the last step), at once
+            ts = sh[:, :, None] + fr * (step * cell)[:, :, None]
+            parts = [ts, sh[:, :, None] + (curved * cell)[:, :, None]]
+            if it < iterations - 1:
+                parts.append(ts[:, :, :1] + quarter[:, :, 1:])
+            fa, oka = self.at(sc, np.concatenate(parts, axis=2), ph, an)
             ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
             k = np.argmax(ok, axis=1)
@@ -573,18 +662,35 @@ class _Engine:
             # edge: the Newton part would take the point off the flanks, where the clearance
             # falls on by more than the tolerance (the minimum is pressed against the boundary)
             edge = ~oka[:, nf] & (fall > tol)
-            moved = np.abs(ts[rows, k] - s) + np.abs(th[rows, k] - h)
-            s = np.where(take, ts[rows, k], s)
-            h = np.where(take, th[rows, k], h)
+            new = ts[:, rows, k]
+            moved = np.abs(new - sh).sum(axis=0)
+            sh = np.where(take, new, sh)
             best = np.where(take, ft[rows, k], best)
+            # converged: no row moved more than a thousandth of a cell
+            if it == iterations - 1 or not np.any(take & (moved > 1e-3 * min(self.ds, self.dh))):
+                break
             full = take & (k == 0)
             f[full, 0] = fa[full, 0]
             f[full, 1:] = fa[full, nf + 1 :]
-            need = ~full
-            # converged: no row moved more than a thousandth of a cell
-            if not np.any(take & (moved > 1e-3 * min(ds, dh))):
-                break
-        return best, s, h, edge
+            need = take & (k > 0)  # a point that stayed keeps its stencil
+            if need.any():
+                f[need], _ = self.at(sc[need], sh[:, need, None] + quarter, ph[need], an[need])
+        return best, sh[0], sh[1], edge
+
+
+def _differences() -> NDArray:
+    """``(9, 5)``: stencil values (``_Engine._STENCIL``, a quarter cell) to the gradient and
+    the Hessian (ss, sh, hh) in cell units by central differences."""
+    d = np.zeros((9, 5))
+    d[1, 0], d[2, 0] = 2.0, -2.0
+    d[3, 1], d[4, 1] = 2.0, -2.0
+    d[[1, 2], 2], d[0, 2] = 16.0, -32.0
+    d[[5, 8], 3], d[[6, 7], 3] = 4.0, -4.0
+    d[[3, 4], 4], d[0, 4] = 16.0, -32.0
+    return d
+
+
+_Engine._DIFFERENCES = _differences()
 
 
 def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
@@ -593,30 +699,29 @@ def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
     return np.unravel_index(flat, field_.shape[1:])
 
 
-def _pseudo_newton(gs, gh, hss, hsh, hhh, free: float = 2.0) -> NDArray:
-    """``(n, 2)`` steps of 2 x 2 symmetric systems: Newton's -H^+ g on the positive
-    eigenvalues plus a descent of at most ``free`` cells along the others (a valley or a ridge
-    keeps its slope), at most two cells per component; and the Newton part alone."""
+def _pseudo_newton(g, hss, hsh, hhh, free: float = 2.0) -> tuple[NDArray, NDArray]:
+    """``(2, n)`` steps of 2 x 2 symmetric systems (gradient ``g``, ``(2, n)``): Newton's
+    -H^+ g on the positive eigenvalues plus a descent of at most ``free`` cells along the others
+    (a valley or a ridge keeps its slope), at most two cells per component; and the Newton part
+    alone."""
     mean = 0.5 * (hss + hhh)
     root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
     scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
     diagonal = np.abs(hsh) <= 1e-12 * scale
-    lam1, lam2 = mean + root, mean - root
-    ex = np.where(diagonal, np.where(hss >= hhh, 1.0, 0.0), hsh)
-    ey = np.where(diagonal, np.where(hss >= hhh, 0.0, 1.0), lam1 - hss)
+    lam = np.stack([mean + root, mean - root])
+    larger = hss >= hhh
+    ex = np.where(diagonal, larger, hsh)
+    ey = np.where(diagonal, ~larger, lam[0] - hss)
     norm = np.hypot(ex, ey)
     norm = np.where(norm > 0.0, norm, 1.0)
     ex, ey = ex / norm, ey / norm
-    gnorm = np.hypot(gs, gh)
-    step = np.zeros((len(gs), 2))
-    curved = np.zeros((len(gs), 2))
-    for lam, vx, vy in ((lam1, ex, ey), (lam2, -ey, ex)):
-        slope = vx * gs + vy * gh
-        use = lam > 1e-6 * scale
-        newton = -slope / np.where(use, lam, 1.0)
-        steep = np.abs(slope) > 1e-9 * np.maximum(gnorm, 1e-300)
-        descent = np.where(steep, -np.sign(slope) * free, 0.0)
-        along = np.where(use, np.clip(newton, -free, free), descent)
-        step += along[:, None] * np.stack([vx, vy], axis=1)
-        curved += np.where(use, along, 0.0)[:, None] * np.stack([vx, vy], axis=1)
+    vectors = np.stack([np.stack([ex, ey]), np.stack([-ey, ex])])  # (eigenpair, component, n)
+    slope = vectors[:, 0] * g[0] + vectors[:, 1] * g[1]
+    use = lam > 1e-6 * scale
+    newton = -slope / np.where(use, lam, 1.0)
+    steep = np.abs(slope) > 1e-9 * np.maximum(np.hypot(g[0], g[1]), 1e-300)
+    descent = np.where(steep, -np.sign(slope) * free, 0.0)
+    along = np.where(use, np.clip(newton, -free, free), descent)
+    step = (along[:, None] * vectors).sum(axis=0)
+    curved = (np.where(use, along, 0.0)[:, None] * vectors).sum(axis=0)
     return np.clip(step, -2.0, 2.0), np.clip(curved, -2.0, 2.0)
