@@ -635,6 +635,9 @@ class _Engine:
         tol = self.tol_rad[side]
         sh = np.stack([s, h])
         sc, ph, an = side[:, None], phi[:, None], angle[:, None]
+        # a small batch costs numpy's per-call overhead, not points: it evaluates the stencils
+        # around every cut-back point with the step, so that no point needs a call of its own
+        around = nf if n <= 32 else 1
         f, ok0 = self.at(sc, sh[:, :, None] + quarter, ph, an)
         best = np.where(ok0[:, 0], f[:, 0], np.inf) if f0 is None else f0.copy()
         for it in range(iterations):
@@ -653,7 +656,7 @@ class _Engine:
             ts = sh[:, :, None] + fr * (step * cell)[:, :, None]
             parts = [ts, sh[:, :, None] + (curved * cell)[:, :, None]]
             if it < iterations - 1:
-                parts.append(ts[:, :, :1] + quarter[:, :, 1:])
+                parts.append((ts[:, :, :around, None] + quarter[:, :, None, 1:]).reshape(2, n, -1))
             fa, oka = self.at(sc, np.concatenate(parts, axis=2), ph, an)
             ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
@@ -669,10 +672,10 @@ class _Engine:
             # converged: no row moved more than a thousandth of a cell
             if it == iterations - 1 or not np.any(take & (moved > 1e-3 * min(self.ds, self.dh))):
                 break
-            full = take & (k == 0)
-            f[full, 0] = fa[full, 0]
-            f[full, 1:] = fa[full, nf + 1 :]
-            need = take & (k > 0)  # a point that stayed keeps its stencil
+            known = np.flatnonzero(take & (k < around))
+            f[known, 0] = ft[known, k[known]]
+            f[known, 1:] = fa[:, nf + 1 :].reshape(n, around, -1)[known, k[known]]
+            need = take & (k >= around)  # a point that stayed keeps its stencil
             if need.any():
                 f[need], _ = self.at(sc[need], sh[:, need, None] + quarter, ph[need], an[need])
         return best, sh[0], sh[1], edge
@@ -707,6 +710,15 @@ def _pseudo_newton(g, hss, hsh, hhh, free: float = 2.0) -> tuple[NDArray, NDArra
     mean = 0.5 * (hss + hhh)
     root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
     scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
+    if np.all(mean - root > 1e-6 * scale):
+        # both curvatures positive everywhere: the Newton step -H^-1 g, which is the same
+        # when it is within ``free`` cells along both eigenvectors (shorter than ``free``)
+        det = hss * hhh - hsh * hsh
+        step = np.empty_like(g)
+        np.divide(hsh * g[1] - hhh * g[0], det, out=step[0])
+        np.divide(hsh * g[0] - hss * g[1], det, out=step[1])
+        if np.all(np.einsum("ij,ij->j", step, step) <= free * free):
+            return step, step
     diagonal = np.abs(hsh) <= 1e-12 * scale
     lam = np.stack([mean + root, mean - root])
     larger = hss >= hhh
