@@ -264,6 +264,29 @@ class JointField:
         return self._engine.near(side, phi_rad, face_mm, profile_mm, gear_angle_rad)
 
 
+class _Rows:
+    """Per-row constants of the clearance (:meth:`_Engine._rows`): the coefficients of x and y
+    in the four linear outputs (``kx``, ``ky``, each ``(4, ...)``), the gear's ideal turn, the
+    gear's sense and the sides' offsets into the gear and pinion cell tables."""
+
+    __slots__ = ("kx", "ky", "turn", "sense", "gear_offset", "pinion_offset")
+
+    def __init__(self, kx, ky, turn, sense, gear_offset, pinion_offset) -> None:
+        self.kx, self.ky, self.turn, self.sense = kx, ky, turn, sense
+        self.gear_offset, self.pinion_offset = gear_offset, pinion_offset
+
+    def subset(self, rows) -> _Rows:
+        """The rows ``rows`` (an index or mask of the first axis)."""
+        return _Rows(
+            self.kx[:, rows],
+            self.ky[:, rows],
+            self.turn[rows],
+            self.sense[rows],
+            self.gear_offset[rows],
+            self.pinion_offset[rows],
+        )
+
+
 class _Engine:
     """The clearance computations on stacked tables of K fields (sides).
 
@@ -273,6 +296,7 @@ class _Engine:
     (the fields must share them).
     """
 
+    _CHUNK = 8192  # points per node-field evaluation
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
@@ -406,25 +430,31 @@ class _Engine:
         cell += offset
         return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
 
-    def _turned(self, phi, ndim):
-        """``(kx, ky)``, each ``(4, ...)``: the coefficients of x and y in the four linear
-        outputs at pinion angles ``phi``, shaped to broadcast over ``ndim`` dimensions."""
-        phi = np.asarray(phi, float)
+    def _rows(self, side, phi, angle) -> _Rows:
+        """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one
+        shape; the rows' points broadcast against it."""
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), angle)
         flat = phi.reshape(-1)
         cs = np.empty((2, flat.size))
         np.cos(flat, out=cs[0])
         np.sin(flat, out=cs[1])
-        k = self._rotation @ cs
-        return k.reshape((2, 4) + (1,) * (ndim - phi.ndim) + phi.shape)
+        k = (self._rotation @ cs).reshape((2, 4) + phi.shape)
+        turn = (angle + self.turn0[side]) - self.ratio * phi
+        return _Rows(
+            k[0],
+            k[1],
+            turn,
+            self.gear_sense[side],
+            side * self.gear_cells,
+            side * self.pinion_cells,
+        )
 
-    def _clearance(self, side, x, y, z, phi, angle, normals=None):
+    def _clearance(self, rows: _Rows, x, y, z, normals=None):
         """Angular clearance of pinion points with coordinates ``x``, ``y`` and z terms ``z``
-        (``(4, ...)``, :meth:`_linear_maps`) at pinion angles ``phi``:
+        (``(4, ...)``, :meth:`_linear_maps`) on ``rows``:
         ``(delta, valid, R2, normal factor or None)``."""
-        ndim = max(np.ndim(x), np.ndim(phi))
-        kx, ky = self._turned(phi, ndim)
-        out = kx * x
-        out += ky * y
+        out = rows.kx * x
+        out += rows.ky * y
         out += z
         sq = out[:2] * out[:2]
         radius = sq[0] + sq[1]
@@ -432,22 +462,20 @@ class _Engine:
         theta = np.arctan2(out[1], out[0])
         xy = out[2:]
         xy += self._rho_coef.reshape((2,) + (1,) * radius.ndim) * radius
-        flank, cell, within = self._cells(
-            self.gear_coef, xy, self._gear_table, side * self.gear_cells
-        )
+        flank, cell, within = self._cells(self.gear_coef, xy, self._gear_table, rows.gear_offset)
         valid = self.gear_ok[cell]
         valid &= within
         gap = flank - theta
-        gap += (angle + self.turn0[side]) - self.ratio * phi
+        gap += rows.turn
         turns = np.rint(gap * (0.5 / math.pi))
         turns *= 2.0 * math.pi
         gap -= turns
-        gap *= self.gear_sense[side]
+        gap *= rows.sense
         if normals is None:
             return gap, valid, radius, None
         nxy, nz = normals
-        m = kx[:2] * nxy[0]
-        m += ky[:2] * nxy[1]
+        m = rows.kx[:2] * nxy[0]
+        m += rows.ky[:2] * nxy[1]
         m += nz
         factor = m[1] * out[0]
         factor -= m[0] * out[1]
@@ -456,24 +484,26 @@ class _Engine:
     def gap(self, side, p, n, phi, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles
         ``phi`` on fields ``side`` (all broadcast): ``(delta, normal factor, R2, valid)``."""
-        if np.broadcast(p[0], phi).ndim == 0:  # single points: as one-element arrays
+        x, y, z = (np.asarray(a, float) for a in p)
+        shape = np.broadcast_shapes(x.shape, y.shape, z.shape, np.shape(phi), np.shape(side))
+        if not shape:  # a single point: as a one-element array
             one = self.gap(
-                side,
+                np.reshape(side, 1),
                 [np.reshape(a, 1) for a in p],
                 n and [np.reshape(a, 1) for a in n],
                 np.reshape(phi, 1),
                 np.reshape(gear_angle_rad, 1),
             )
             return tuple(None if a is None else a[0] for a in one)
-        x, y, z = np.broadcast_arrays(*(np.asarray(a, float) for a in p))
-        lead = (1,) * max(x.ndim, np.ndim(phi))
-        zt = self._lin_z.reshape((4,) + lead) * z
-        zt += self._const.reshape((4,) + lead)
+        x, y, z = (np.broadcast_to(a, shape) for a in (x, y, z))
+        rows = self._rows(*(np.broadcast_to(a, shape) for a in (side, phi, gear_angle_rad)))
+        zt = self._lin_z.reshape((4,) + (1,) * len(shape)) * z
+        zt += self._const.reshape((4,) + (1,) * len(shape))
         normals = None
         if n is not None:
-            nx, ny, nz = np.broadcast_arrays(*(np.asarray(a, float) for a in n))
-            normals = (np.stack([nx, ny]), self._lin_z[:2].reshape((2,) + lead) * nz)
-        delta, valid, radius, factor = self._clearance(side, x, y, zt, phi, gear_angle_rad, normals)
+            nx, ny, nz = (np.broadcast_to(np.asarray(a, float), shape) for a in n)
+            normals = (np.stack([nx, ny]), self._lin_z[:2].reshape((2,) + (1,) * len(shape)) * nz)
+        delta, valid, radius, factor = self._clearance(rows, x, y, zt, normals)
         return delta, factor, radius, valid
 
     def at(self, side, sh, phi, gear_angle_rad):
@@ -482,21 +512,29 @@ class _Engine:
         beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
         the pinion's lowest generated cells, where the envelope's fold spoils any
         interpolant."""
-        if np.broadcast(sh[0], phi).ndim == 0:  # single points: as one-element arrays
+        shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
+        if not shape:  # a single point: as a one-element array
             one = self.at(side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad)
             return one[0][0], one[1][0]
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), gear_angle_rad)
+        lead = (1,) * (len(shape) - phi.ndim)
+        rows = self._rows(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
+        return self._at(rows, np.broadcast_to(sh, (2,) + shape))
+
+    def _at(self, rows: _Rows, sh):
+        """:meth:`at` on known rows."""
         origin, scale = self._pinion_unit
         xy = sh - origin.reshape((2,) + (1,) * (sh.ndim - 1))
         xy *= scale.reshape((2,) + (1,) * (sh.ndim - 1))
         theta, cell, within = self._cells(
-            self.pinion_coef, xy, self._pinion_table, side * self.pinion_cells
+            self.pinion_coef, xy, self._pinion_table, rows.pinion_offset
         )
         lin = self._pinion_map @ sh.reshape(2, -1)
         lin += self._pinion_const
         lin = lin.reshape((5,) + sh.shape[1:])
         big_r = lin[0]
         delta, valid, _, _ = self._clearance(
-            side, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:], phi, gear_angle_rad
+            rows, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:]
         )
         valid &= within
         valid &= self.refine_cells[cell]
@@ -515,22 +553,27 @@ class _Engine:
         # each side's rows on its own generated nodes (its node tables broadcast over rows),
         # put back onto the grid (off-mask nodes +inf)
         for k in np.unique(side):
-            rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
             count = int(self.node_real[k].sum())
             nodes = self.node_index[k, :count]
-            delta, valid, radius, factor = self._clearance(
-                k,
-                self.node_xy[0, k, :count],
-                self.node_xy[1, k, :count],
-                self.node_z[:, k, None, :count],
-                phi[rows, None],
-                angle[rows, None],
-                (self.node_nxy[:, k, :count], self.node_nz[:, k, None, :count]),
-            )
-            at = (rows[:, None], nodes)
-            field_[at] = np.where(valid, delta, np.inf)
-            fac[at] = factor
-            rad[at] = radius
+            chunk = max(1, self._CHUNK // count)
+            every = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
+            # a few rows at a time: small temporaries stay in cache and in the allocator's pool
+            for start in range(0, len(every), chunk):
+                rows = every[start : start + chunk]
+                delta, valid, radius, factor = self._clearance(
+                    self._rows(k, phi[rows, None], angle[rows, None]),
+                    self.node_xy[0, k, :count],
+                    self.node_xy[1, k, :count],
+                    self.node_z[:, k, None, :count],
+                    (self.node_nxy[:, k, :count], self.node_nz[:, k, None, :count]),
+                )
+                if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
+                    at = (slice(rows[0], rows[-1] + 1), nodes)
+                else:
+                    at = (rows[:, None], nodes)
+                field_[at] = np.where(valid, delta, np.inf)
+                fac[at] = factor
+                rad[at] = radius
         shape = (n,) + self.shape
         field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
@@ -579,9 +622,13 @@ class _Engine:
         stands as it is, flagged as edge contact."""
         n = len(phi)
         inner = np.where(self.refine_nodes[side], field_.reshape(n, -1), np.inf)
-        k = min(candidates, inner.shape[1])
-        pick = np.argpartition(inner, k - 1, axis=1)[:, :k]
-        values = np.take_along_axis(inner, pick, 1)
+        pick = np.empty((n, min(candidates, inner.shape[1])), np.intp)
+        values = np.empty(pick.shape)
+        rows = np.arange(n)
+        for c in range(pick.shape[1]):  # the lowest, the next lowest, ...
+            pick[:, c] = inner.argmin(axis=1)
+            values[:, c] = inner[rows, pick[:, c]]
+            inner[rows, pick[:, c]] = np.inf
         ci, cj = np.unravel_index(pick, self.shape)
         ok = np.isfinite(values)
         best = np.full(n, np.inf)
@@ -634,11 +681,11 @@ class _Engine:
         edge = np.zeros(n, bool)
         tol = self.tol_rad[side]
         sh = np.stack([s, h])
-        sc, ph, an = side[:, None], phi[:, None], angle[:, None]
+        every = self._rows(side[:, None], phi[:, None], angle[:, None])
         # a small batch costs numpy's per-call overhead, not points: it evaluates the stencils
         # around every cut-back point with the step, so that no point needs a call of its own
         around = nf if n <= 32 else 1
-        f, ok0 = self.at(sc, sh[:, :, None] + quarter, ph, an)
+        f, ok0 = self._at(every, sh[:, :, None] + quarter)
         best = np.where(ok0[:, 0], f[:, 0], np.inf) if f0 is None else f0.copy()
         for it in range(iterations):
             d = f @ self._DIFFERENCES  # gradient and Hessian in cell units
@@ -657,7 +704,7 @@ class _Engine:
             parts = [ts, sh[:, :, None] + (curved * cell)[:, :, None]]
             if it < iterations - 1:
                 parts.append((ts[:, :, :around, None] + quarter[:, :, None, 1:]).reshape(2, n, -1))
-            fa, oka = self.at(sc, np.concatenate(parts, axis=2), ph, an)
+            fa, oka = self._at(every, np.concatenate(parts, axis=2))
             ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
             k = np.argmax(ok, axis=1)
@@ -677,7 +724,7 @@ class _Engine:
             f[known, 1:] = fa[:, nf + 1 :].reshape(n, around, -1)[known, k[known]]
             need = take & (k >= around)  # a point that stayed keeps its stencil
             if need.any():
-                f[need], _ = self.at(sc[need], sh[:, need, None] + quarter, ph[need], an[need])
+                f[need], _ = self._at(every.subset(need), sh[:, need, None] + quarter)
         return best, sh[0], sh[1], edge
 
 

@@ -619,7 +619,7 @@ def _handover_update(st, it, p1) -> None:
     if it == 0:
         x0 = ho["x"]
         ho["x0"], ho["d0"] = x0, d
-        a, b, c = np.polyfit(np.array([lo, x0, hi]) - x0, np.array([d_lo, d, d_hi]), 2)
+        a, b, c = _parabola(lo - x0, hi - x0, d_lo, d, d_hi)
         roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
         roots = np.real(roots[np.isreal(roots)]) + x0
         ho["bracket"] = (lo, x0) if d > 0.0 else (x0, hi)
@@ -633,6 +633,13 @@ def _handover_update(st, it, p1) -> None:
             if ho["bracket"][0] <= x2 <= ho["bracket"][1]:
                 st.v_star = float(x2)
         ho["done"] = True
+
+
+def _parabola(xa: float, xb: float, ya: float, y0: float, yb: float):
+    """``(a, b, c)`` of the parabola a x^2 + b x + c through (xa, ya), (0, y0), (xb, yb)."""
+    sa, sb = (ya - y0) / xa, (yb - y0) / xb
+    a = (sb - sa) / (xb - xa)
+    return a, sa - a * xa, y0
 
 
 def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> ToothContact:
