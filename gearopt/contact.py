@@ -754,10 +754,22 @@ def _pseudo_newton(g, hss, hsh, hhh, free: float = 2.0) -> tuple[NDArray, NDArra
     -H^+ g on the positive eigenvalues plus a descent of at most ``free`` cells along the others
     (a valley or a ridge keeps its slope), at most two cells per component; and the Newton part
     alone."""
-    mean = 0.5 * (hss + hhh)
-    root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
-    scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
-    if np.all(mean - root > 1e-6 * scale):
+    n = hss.shape[0]
+    mean = hss + hhh
+    mean *= 0.5
+    half = hss - hhh
+    half *= 0.5
+    root = half * half
+    root += hsh * hsh
+    np.sqrt(root, out=root)
+    scale = np.abs(hss)
+    scale += np.abs(hhh)
+    np.maximum(scale, 1e-300, out=scale)
+    lam = np.empty((2, n))
+    np.add(mean, root, out=lam[0])
+    np.subtract(mean, root, out=lam[1])
+    tiny = 1e-6 * scale
+    if np.all(lam[1] > tiny):
         # both curvatures positive everywhere: the Newton step -H^-1 g, which is the same
         # when it is within ``free`` cells along both eigenvectors (shorter than ``free``)
         det = hss * hhh - hsh * hsh
@@ -766,21 +778,36 @@ def _pseudo_newton(g, hss, hsh, hhh, free: float = 2.0) -> tuple[NDArray, NDArra
         np.divide(hsh * g[0] - hss * g[1], det, out=step[1])
         if np.all(np.einsum("ij,ij->j", step, step) <= free * free):
             return step, step
+    # unit eigenvectors (ex, ey) of lam[0] and (-ey, ex) of lam[1]
     diagonal = np.abs(hsh) <= 1e-12 * scale
-    lam = np.stack([mean + root, mean - root])
     larger = hss >= hhh
-    ex = np.where(diagonal, larger, hsh)
-    ey = np.where(diagonal, ~larger, lam[0] - hss)
-    norm = np.hypot(ex, ey)
-    norm = np.where(norm > 0.0, norm, 1.0)
-    ex, ey = ex / norm, ey / norm
-    vectors = np.stack([np.stack([ex, ey]), np.stack([-ey, ex])])  # (eigenpair, component, n)
-    slope = vectors[:, 0] * g[0] + vectors[:, 1] * g[1]
-    use = lam > 1e-6 * scale
-    newton = -slope / np.where(use, lam, 1.0)
+    v = np.empty((2, 2, n))  # (eigenpair, component, row)
+    np.copyto(v[0, 0], hsh)
+    np.subtract(lam[0], hss, out=v[0, 1])
+    v[0, 0, diagonal] = larger[diagonal]
+    v[0, 1, diagonal] = ~larger[diagonal]
+    norm = np.hypot(v[0, 0], v[0, 1])
+    norm[~(norm > 0.0)] = 1.0
+    v[0] /= norm
+    np.negative(v[0, 1], out=v[1, 0])
+    v[1, 1] = v[0, 0]
+    slope = v[:, 0] * g[0]
+    slope += v[:, 1] * g[1]
+    use = lam > tiny
+    along = -slope / np.where(use, lam, 1.0)
+    np.minimum(along, free, out=along)
+    np.maximum(along, -free, out=along)
     steep = np.abs(slope) > 1e-9 * np.maximum(np.hypot(g[0], g[1]), 1e-300)
-    descent = np.where(steep, -np.sign(slope) * free, 0.0)
-    along = np.where(use, np.clip(newton, -free, free), descent)
-    step = (along[:, None] * vectors).sum(axis=0)
-    curved = (np.where(use, along, 0.0)[:, None] * vectors).sum(axis=0)
-    return np.clip(step, -2.0, 2.0), np.clip(curved, -2.0, 2.0)
+    descent = np.sign(slope)
+    descent *= -free
+    descent *= steep
+    along = np.where(use, along, descent)
+    step = along[0] * v[0]
+    step += along[1] * v[1]
+    along *= use
+    curved = along[0] * v[0]
+    curved += along[1] * v[1]
+    for a in (step, curved):
+        np.minimum(a, 2.0, out=a)
+        np.maximum(a, -2.0, out=a)
+    return step, curved
