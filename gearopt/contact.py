@@ -296,7 +296,6 @@ class _Engine:
     (the fields must share them).
     """
 
-    _CHUNK = 8192  # points per node-field evaluation
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
@@ -555,25 +554,21 @@ class _Engine:
         for k in np.unique(side):
             count = int(self.node_real[k].sum())
             nodes = self.node_index[k, :count]
-            chunk = max(1, self._CHUNK // count)
-            every = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
-            # a few rows at a time: small temporaries stay in cache and in the allocator's pool
-            for start in range(0, len(every), chunk):
-                rows = every[start : start + chunk]
-                delta, valid, radius, factor = self._clearance(
-                    self._rows(k, phi[rows, None], angle[rows, None]),
-                    self.node_xy[0, k, :count],
-                    self.node_xy[1, k, :count],
-                    self.node_z[:, k, None, :count],
-                    (self.node_nxy[:, k, :count], self.node_nz[:, k, None, :count]),
-                )
-                if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
-                    at = (slice(rows[0], rows[-1] + 1), nodes)
-                else:
-                    at = (rows[:, None], nodes)
-                field_[at] = np.where(valid, delta, np.inf)
-                fac[at] = factor
-                rad[at] = radius
+            rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
+            delta, valid, radius, factor = self._clearance(
+                self._rows(k, phi[rows, None], angle[rows, None]),
+                self.node_xy[0, k, :count],
+                self.node_xy[1, k, :count],
+                self.node_z[:, k, None, :count],
+                (self.node_nxy[:, k, :count], self.node_nz[:, k, None, :count]),
+            )
+            if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
+                at = (slice(rows[0], rows[-1] + 1), nodes)
+            else:
+                at = (rows[:, None], nodes)
+            field_[at] = np.where(valid, delta, np.inf)
+            fac[at] = factor
+            rad[at] = radius
         shape = (n,) + self.shape
         field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
