@@ -251,9 +251,19 @@ class JointField:
         self.fields = list(fields)
         self._engine = _Engine(self.fields)
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True) -> FieldSample:
-        """As :meth:`ClearanceField.sample`, row k on field ``side[k]``."""
-        return self._engine.sample(np.asarray(side, np.intp), phi_rad, gear_angle_rad, refine)
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None):
+        """As :meth:`ClearanceField.sample`, row k on field ``side[k]``. With ``near`` =
+        ``(side, phi_rad, face_mm, profile_mm)``, also :meth:`minimum_near` of those rows in
+        the same refinement (the same results, fewer calls): returns ``(sample, near)``."""
+        side = np.asarray(side, np.intp)
+        if near is None:
+            return self._engine.sample(side, phi_rad, gear_angle_rad, refine)
+        return self._engine.sample(side, phi_rad, gear_angle_rad, refine, self._near_rows(near))
+
+    @staticmethod
+    def _near_rows(near):
+        side, phi, s, h = (np.atleast_1d(np.asarray(a)) for a in near)
+        return side.astype(np.intp), phi.astype(float), s.astype(float), h.astype(float)
 
     def minimum_near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
         """Refined minima at pinion angles ``phi_rad`` (row k on field ``side[k]``) started from
@@ -539,9 +549,10 @@ class _Engine:
         valid &= self.refine_cells[cell]
         return delta, valid
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True) -> FieldSample:
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
-        on the rows ``refine`` selects."""
+        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
+        also :meth:`near` of those rows in the same refinement: ``(sample, near)``."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
@@ -578,9 +589,10 @@ class _Engine:
         h = self.pinion_grid.profile_mm[j]
         edge = np.zeros(len(phi), bool)
         rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
-        if rows.size:
+        near_out = None
+        if rows.size or near is not None:
             f0, s, h = f0.copy(), s.copy(), h.copy()
-            f0[rows], s[rows], h[rows], edge[rows] = self._refined(
+            f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
                 side[rows],
                 field_[rows],
                 fac[rows],
@@ -589,8 +601,9 @@ class _Engine:
                 f0[rows],
                 s[rows],
                 h[rows],
+                near=near,
             )
-        return FieldSample(
+        out = FieldSample(
             phi_rad=phi,
             clearance_rad=field_,
             normal_factor_mm=fac,
@@ -600,6 +613,7 @@ class _Engine:
             contact_profile_mm=h,
             edge=edge,
         )
+        return out if near is None else (out, near_out)
 
     def near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
         """Refined minima started from known nearby contact points (no node field)."""
@@ -610,11 +624,12 @@ class _Engine:
         h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
         return self.refine(side, phi, angle, s, h, None, iterations=3)
 
-    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2):
+    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None):
         """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
         Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
         region (the pinion's lowest cells) lower than that by more than the edge tolerance
-        stands as it is, flagged as edge contact."""
+        stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
+        refined alongside (as :meth:`near`); their results come last (None without)."""
         n = len(phi)
         inner = np.where(self.refine_nodes[side], field_.reshape(n, -1), np.inf)
         pick = np.empty((n, min(candidates, inner.shape[1])), np.intp)
@@ -629,9 +644,10 @@ class _Engine:
         best = np.full(n, np.inf)
         s_best, h_best = s.copy(), h.copy()
         e_best = np.zeros(n, bool)
-        if ok.any():
+        near_out = None
+        if ok.any() or near is not None:
             rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
-            v, s_r, h_r, e_r = self.refine(
+            starts = (
                 side[rows],
                 phi[rows],
                 angle[rows],
@@ -639,6 +655,16 @@ class _Engine:
                 self.pinion_grid.profile_mm[cj[ok]],
                 values[ok],
             )
+            if near is None:
+                v, s_r, h_r, e_r = self.refine(*starts)
+            else:  # the near rows: a second group, started from their points
+                m = len(near[0])
+                extra = (near[0], near[1], np.zeros(m), near[2], near[3], np.full(m, np.nan))
+                group = np.repeat([0, 1], [rows.size, m])
+                joined = [np.concatenate(pair) for pair in zip(starts, extra, strict=True)]
+                out = self.refine(*joined, iterations=(4, 3), group=group)
+                near_out = tuple(a[rows.size :] for a in out)
+                v, s_r, h_r, e_r = (a[: rows.size] for a in out)
             order = np.lexsort((v, rows))
             rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
             first = np.r_[True, rows[1:] != rows[:-1]]
@@ -651,9 +677,10 @@ class _Engine:
         with np.errstate(invalid="ignore"):
             low = np.isfinite(f0) & ~(best - f0 <= tol)
         value = np.where(low, f0, best)
-        return value, np.where(low, s, s_best), np.where(low, h, h_best), low | e_best
+        s_best, h_best = np.where(low, s, s_best), np.where(low, h, h_best)
+        return value, s_best, h_best, low | e_best, near_out
 
-    def refine(self, side, phi, angle, s, h, f0, iterations: int = 4):
+    def refine(self, side, phi, angle, s, h, f0, iterations=4, group=None):
         """Constrained Newton steps on the clearance between the node grid's lines.
 
         Gradient and Hessian by central differences (a quarter cell) of the interpolated
@@ -663,6 +690,11 @@ class _Engine:
         evaluated at once with the next stencil) to the last valid point: repeated, this slides
         the point along the boundary to the least clearance on it, second order for straight
         edges.
+
+        ``f0``: the start values (None or NaN: the interpolated value there). ``iterations``:
+        the most steps, or one count per group of rows (``group``: each row's group); each
+        group stops on its own, its rows then left as they are, so a group's results are those
+        of a refinement of its rows alone.
 
         Returns ``(value, s, h, edge)``: edge where the Newton part of the last step would take
         the point off the flanks to a clearance lower by more than the edge tolerance.
@@ -681,8 +713,13 @@ class _Engine:
         # around every cut-back point with the step, so that no point needs a call of its own
         around = nf if n <= 32 else 1
         f, ok0 = self._at(every, sh[:, :, None] + quarter)
-        best = np.where(ok0[:, 0], f[:, 0], np.inf) if f0 is None else f0.copy()
-        for it in range(iterations):
+        start = np.where(ok0[:, 0], f[:, 0], np.inf)
+        best = start if f0 is None else np.where(np.isnan(f0), start, f0)
+        caps = np.atleast_1d(iterations)
+        groups = [np.ones(n, bool)] if group is None else [group == g for g in range(len(caps))]
+        active = np.ones(n, bool)
+        small = 1e-3 * min(self.ds, self.dh)
+        for it in range(int(caps.max())):
             d = f @ self._DIFFERENCES  # gradient and Hessian in cell units
             g2, h2 = d[:, :2].T, (d[:, 2], d[:, 3], d[:, 4])
             step, curved = _pseudo_newton(g2, *h2)
@@ -697,23 +734,30 @@ class _Engine:
             # full step (not after the last step), at once
             ts = sh[:, :, None] + fr * (step * cell)[:, :, None]
             parts = [ts, sh[:, :, None] + (curved * cell)[:, :, None]]
-            if it < iterations - 1:
+            if it < max(c for c, g in zip(caps, groups, strict=True) if (g & active).any()) - 1:
                 parts.append((ts[:, :, :around, None] + quarter[:, :, None, 1:]).reshape(2, n, -1))
             fa, oka = self._at(every, np.concatenate(parts, axis=2))
             ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
             k = np.argmax(ok, axis=1)
             take = ok[rows, k]
+            take &= active
             # edge: the Newton part would take the point off the flanks, where the clearance
             # falls on by more than the tolerance (the minimum is pressed against the boundary)
-            edge = ~oka[:, nf] & (fall > tol)
+            edge = np.where(active, ~oka[:, nf] & (fall > tol), edge)
             new = ts[:, rows, k]
             moved = np.abs(new - sh).sum(axis=0)
             sh = np.where(take, new, sh)
             best = np.where(take, ft[rows, k], best)
-            # converged: no row moved more than a thousandth of a cell
-            if it == iterations - 1 or not np.any(take & (moved > 1e-3 * min(self.ds, self.dh))):
+            # a group stops at its last step or converged: none of its rows moved more than a
+            # thousandth of a cell
+            moving = take & (moved > small)
+            for cap, g in zip(caps, groups, strict=True):
+                if it == cap - 1 or not (moving & g).any():
+                    active &= ~g
+            if not active.any():
                 break
+            take &= active
             known = np.flatnonzero(take & (k < around))
             f[known, 0] = ft[known, k[known]]
             f[known, 1:] = fa[:, nf + 1 :].reshape(n, around, -1)[known, k[known]]

@@ -420,12 +420,64 @@ def tooth_contacts(
                 req += [(st.index, x) for x in beyond[~known]]
         return req
 
+    def near_batch(states, it):
+        """The contact-interval and hand-over evaluations of step ``it``, all sides:
+        ``((side, phi, s, h), owners)``, or None when there are none."""
+        rows, owners = [], []
+        for st in states:
+            for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
+                rows.append((st.index, v, s, h))
+                owners.append((st, tag))
+        if not rows:
+            return None
+        side_arr = np.array([r[0] for r in rows], np.intp)
+        v, s, h = (np.array([r[k] for r in rows]) for k in (1, 2, 3))
+        return (side_arr, sense[side_arr] * v, s, h), owners
+
+    def extra_rows(states):
+        """The extra positions of each side: hand-over (both pairs), TE peak, mean point M and
+        its neighbours for the path direction."""
+        extra_v = []
+        for st in states:
+            start, end = st.interval
+            if st.v_star is None:  # flat TE (line contact): centred on the contact interval
+                st.v_star = 0.5 * (start + end) + 0.5 * p1
+                st.g_hand = float(np.max(st.g.min(axis=1)))
+            v_mid = st.v_star - 0.5 * p1
+            dv = 0.25 * step
+            extra_v.append(
+                [
+                    st.v_star,
+                    st.v_star - p1,
+                    _peak_guess(st, t, p1, step),
+                    v_mid,
+                    v_mid - dv,
+                    v_mid + dv,
+                ]
+            )
+        extra_v = np.array(extra_v)
+        ex_side = np.repeat(np.arange(n_sides), extra_v.shape[1])
+        return ex_side, sense[ex_side] * extra_v.ravel()
+
+    def begin(states):
+        for st in states:
+            _start_interval(st)
+            _start_handover(st, t, p1)
+
     states = main_sample(np.zeros(n_sides))
+    begin(states)
     req = beyond_requests(states)
-    more = None
+    more = answers = None
     if req:
+        # the first contact-interval and hand-over evaluations go along (their answers stand
+        # unless a window is recentred below)
         ext_side = np.array([r[0] for r in req], np.intp)
-        more = joint.sample(ext_side, sense[ext_side] * np.array([r[1] for r in req]))
+        ext_phi = sense[ext_side] * np.array([r[1] for r in req])
+        batch = near_batch(states, 0)
+        if batch is None:
+            more = joint.sample(ext_side, ext_phi)
+        else:
+            more, answers = joint.sample(ext_side, ext_phi, near=batch[0])
     # the mesh centre of each side: the relative angle of least lag over everything sampled;
     # a window not centred on it (the contact moved by misalignment) is centred and resampled
     centres = np.zeros(n_sides)
@@ -444,49 +496,30 @@ def tooth_contacts(
             centres[st.index] = float(v[best])
     if np.any(centres != 0.0):
         states = main_sample(centres)
+        begin(states)
+        answers = None
 
     # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
-    # all sides batched into shared calls
-    for st in states:
-        _start_interval(st)
-        _start_handover(st, t, p1)
+    # all sides batched into shared calls; the last step's go along with the extra positions
+    # once the hand-overs are solved
+    extras = None
     for it in range(3):
-        rows_side, rows_v, rows_s, rows_h, owners = [], [], [], [], []
-        for st in states:
-            for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
-                rows_side.append(st.index)
-                rows_v.append(v)
-                rows_s.append(s)
-                rows_h.append(h)
-                owners.append((st, tag))
-        if not rows_v:
+        batch = near_batch(states, it)
+        if batch is None:
             break
-        side_arr = np.array(rows_side, np.intp)
-        value, s1, h1, e1 = joint.minimum_near(
-            side_arr, sense[side_arr] * np.array(rows_v), np.array(rows_s), np.array(rows_h)
-        )
-        for k, (st, tag) in enumerate(owners):
-            st.answers[tag] = (value[k], s1[k], h1[k], e1[k])
+        if it == 0 and answers is not None:
+            pass
+        elif it == 2 and all(st.v_star is not None for st in states):
+            extras, answers = joint.sample(*extra_rows(states), near=batch[0])
+        else:
+            answers = joint.minimum_near(*batch[0])
+        for k, (st, tag) in enumerate(batch[1]):
+            st.answers[tag] = tuple(a[k] for a in answers)
         for st in states:
             _interval_update(st)
             _handover_update(st, it, p1)
-
-    # the extra positions of each side: hand-over (both pairs), TE peak, mean point M and
-    # its neighbours for the path direction
-    extra_v = []
-    for st in states:
-        start, end = st.interval
-        if st.v_star is None:  # flat TE (line contact): centred on the contact interval
-            st.v_star = 0.5 * (start + end) + 0.5 * p1
-            st.g_hand = float(np.max(st.g.min(axis=1)))
-        v_mid = st.v_star - 0.5 * p1
-        dv = 0.25 * step
-        extra_v.append(
-            [st.v_star, st.v_star - p1, _peak_guess(st, t, p1, step), v_mid, v_mid - dv, v_mid + dv]
-        )
-    extra_v = np.array(extra_v)
-    ex_side = np.repeat(np.arange(n_sides), extra_v.shape[1])
-    extras = joint.sample(ex_side, sense[ex_side] * extra_v.ravel())
+    if extras is None:
+        extras = joint.sample(*extra_rows(states))
     out = []
     for st, name in zip(states, sides, strict=True):
         ex = _slice(extras, slice(st.index * 6, st.index * 6 + 6))
