@@ -428,10 +428,10 @@ class _Engine:
         ``coef``, ``offset`` cells in): ``(Theta, cell index, within the grid)``. Beyond the
         grid the edge cell's polynomial goes on (unit coordinates outside [0, 1])."""
         limit, n_cols = table
-        index = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
-        np.fmin(index, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=index)
-        index = index.astype(np.intp)
-        uv = xy - index
+        uv = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
+        np.fmin(uv, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=uv)
+        index = uv.astype(np.intp)
+        np.subtract(xy, index, out=uv)
         inside = uv >= 0.0
         inside &= uv <= 1.0
         cell = index[0] * n_cols
@@ -465,8 +465,8 @@ class _Engine:
         out = rows.kx * x
         out += rows.ky * y
         out += z
-        sq = out[:2] * out[:2]
-        radius = sq[0] + sq[1]
+        radius = out[0] * out[0]
+        radius += np.square(out[1])
         np.sqrt(radius, out=radius)
         theta = np.arctan2(out[1], out[0])
         xy = out[2:]
