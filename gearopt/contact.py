@@ -306,6 +306,7 @@ class _Engine:
     (the fields must share them).
     """
 
+    _AROUND_ROWS = 8  # batches up to this many rows evaluate the stencils of all cut-backs
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
@@ -711,7 +712,7 @@ class _Engine:
         every = self._rows(side[:, None], phi[:, None], angle[:, None])
         # a small batch costs numpy's per-call overhead, not points: it evaluates the stencils
         # around every cut-back point with the step, so that no point needs a call of its own
-        around = nf if n <= 32 else 1
+        around = nf if n <= self._AROUND_ROWS else 1
         f, ok0 = self._at(every, sh[:, :, None] + quarter)
         start = np.where(ok0[:, 0], f[:, 0], np.inf)
         best = start if f0 is None else np.where(np.isnan(f0), start, f0)
