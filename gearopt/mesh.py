@@ -219,13 +219,18 @@ class _PairCurve:
         return self.sample(u).minimum_rad
 
 
-def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str) -> NDArray:
+def _separation_mm(
+    sample: FieldSample, reference_rad: NDArray, separation: str, rows=slice(None)
+) -> NDArray:
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
-    (one per row)."""
+    (one per row), on the sample's rows ``rows``."""
     factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
     with np.errstate(invalid="ignore"):  # inf - inf: a row with nothing on the flanks
-        extra = sample.clearance_rad - reference_rad.reshape(-1, 1, 1)
-        return np.where(np.isfinite(extra), extra * factor, np.inf)
+        extra = sample.clearance_rad[rows] - reference_rad.reshape(-1, 1, 1)
+        finite = np.isfinite(extra)
+        extra *= factor[rows]
+        extra[~finite] = np.inf
+        return extra
 
 
 def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
@@ -692,7 +697,7 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     # separations at the contact gear angle of each position (same lag for every pair)
     compound_mm = compound_um * 1e-3
     main = st.sample
-    sep = _separation_mm(_slice(main, st.inv), np.repeat(lag, pairs), separation)
+    sep = _separation_mm(main, np.repeat(lag, pairs), separation, st.inv)
     sep = sep.reshape((positions, pairs) + field.pinion.shape)
     pattern = sep.min(axis=(0, 1)) * 1e3
     face = field.pinion.face_mm - frame.toe_mm
