@@ -271,39 +271,58 @@ def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
 
 def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
     """Extent of {separation < compound} along the line through ``point`` perpendicular to
-    ``direction``, by bilinear interpolation of the node field."""
+    ``direction``, by bilinear interpolation of the node field (sampled at 2001 points; from
+    the middle outward, the first sample out of the zone on each side bounds it)."""
     perp = np.array([-direction[1], direction[0]])
     reach = float(face_mm[-1] - face_mm[0] + profile_mm[-1] - profile_mm[0])
     tau = np.linspace(-reach, reach, 2001)
-    s = point[0] + tau * perp[0]
-    h = point[1] + tau * perp[1]
-    inside = (s >= face_mm[0]) & (s <= face_mm[-1]) & (h >= profile_mm[0]) & (h <= profile_mm[-1])
-    i = np.clip(np.searchsorted(face_mm, s) - 1, 0, len(face_mm) - 2)
-    j = np.clip(np.searchsorted(profile_mm, h) - 1, 0, len(profile_mm) - 2)
-    u = np.clip((s - face_mm[i]) / (face_mm[i + 1] - face_mm[i]), 0.0, 1.0)
-    v = np.clip((h - profile_mm[j]) / (profile_mm[j + 1] - profile_mm[j]), 0.0, 1.0)
     big = 10.0 * compound_mm
     f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
-    val = (
-        (1 - u) * (1 - v) * f[i, j]
-        + u * (1 - v) * f[i + 1, j]
-        + (1 - u) * v * f[i, j + 1]
-        + u * v * f[i + 1, j + 1]
-    )
-    val = np.where(inside, val, big) - compound_mm
-    centre = len(tau) // 2
-    if val[centre] >= 0.0:
-        return 0.0
-    out = val >= 0.0
-    right = np.flatnonzero(out[centre:])
-    left = np.flatnonzero(out[:centre][::-1])
 
-    def crossing(k_in, k_out):
-        a, b = val[k_in], val[k_out]
+    def value(k):
+        """The interpolated separation minus the compound at the samples ``k``."""
+        s = point[0] + tau[k] * perp[0]
+        h = point[1] + tau[k] * perp[1]
+        inside = (s >= face_mm[0]) & (s <= face_mm[-1])
+        inside &= (h >= profile_mm[0]) & (h <= profile_mm[-1])
+        i = np.minimum(np.maximum(np.searchsorted(face_mm, s) - 1, 0), len(face_mm) - 2)
+        j = np.minimum(np.maximum(np.searchsorted(profile_mm, h) - 1, 0), len(profile_mm) - 2)
+        u = np.minimum(np.maximum((s - face_mm[i]) / (face_mm[i + 1] - face_mm[i]), 0.0), 1.0)
+        v = np.minimum(
+            np.maximum((h - profile_mm[j]) / (profile_mm[j + 1] - profile_mm[j]), 0.0), 1.0
+        )
+        val = (
+            (1 - u) * (1 - v) * f[i, j]
+            + u * (1 - v) * f[i + 1, j]
+            + (1 - u) * v * f[i, j + 1]
+            + u * v * f[i + 1, j + 1]
+        )
+        return np.where(inside, val, big) - compound_mm
+
+    centre = len(tau) // 2
+    if value(np.array([centre]))[0] >= 0.0:
+        return 0.0
+
+    def first_out(sign):
+        """The first sample out of the zone from the middle toward ``sign`` and its inner
+        neighbour's value, or None: every 25th sample first, then all up to the first out."""
+        ends = np.arange(centre, -1, -1) if sign < 0 else np.arange(centre, len(tau))
+        coarse = ends[::25]
+        hit = np.flatnonzero(value(coarse) >= 0.0)
+        span = ends if not hit.size else ends[: 25 * hit[0] + 1]
+        val = value(span)
+        out = np.flatnonzero(val >= 0.0)
+        if not out.size:
+            return None
+        return span[out[0] - 1], span[out[0]], val[out[0] - 1], val[out[0]]
+
+    def crossing(found):
+        k_in, k_out, a, b = found
         return tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b)
 
-    t_hi = crossing(centre + right[0] - 1, centre + right[0]) if right.size else tau[-1]
-    t_lo = crossing(centre - left[0], centre - left[0] - 1) if left.size else tau[0]
+    hi, lo = first_out(1.0), first_out(-1.0)
+    t_hi = crossing(hi) if hi is not None else tau[-1]
+    t_lo = crossing(lo) if lo is not None else tau[0]
     return float(t_hi - t_lo)
 
 
