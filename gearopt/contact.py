@@ -320,8 +320,8 @@ class _Engine:
                 and np.array_equal(f.pinion.profile_mm, first.pinion.profile_mm)
                 and np.array_equal(f.gear.face_mm, first.gear.face_mm)
                 and np.array_equal(f.gear.profile_mm, first.gear.profile_mm)
-                and np.allclose(f.b, first.b)
-                and np.allclose(f.c, first.c)
+                and np.all(np.abs(f.b - first.b) <= 1e-8 + 1e-5 * np.abs(first.b))
+                and np.all(np.abs(f.c - first.c) <= 1e-8 + 1e-5 * np.abs(first.c))
                 and f.ratio == first.ratio
             )
             if not same:
