@@ -250,10 +250,12 @@ def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
 
 
 def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
-    """Unit vector of the zone's minor axis (weighted second moments), in (face, profile)."""
+    """Unit vector of the zone's minor axis (weighted second moments), in (face, profile);
+    along the face for a zone without extent (no node, or one: its moments are rounding
+    noise, whose eigenvectors would point anywhere)."""
     w = np.clip(compound_mm - sep_mm, 0.0, None)
     w = np.where(np.isfinite(w), w, 0.0)
-    if w.sum() <= 0.0:
+    if np.count_nonzero(w) <= 1:
         return np.array([1.0, 0.0])
     s = np.broadcast_to(face_mm[:, None], w.shape)
     h = np.broadcast_to(profile_mm[None, :], w.shape)
