@@ -36,6 +36,7 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -274,6 +275,23 @@ class JointField:
         return self._engine.near(side, phi_rad, face_mm, profile_mm, gear_angle_rad)
 
 
+_WORK = threading.local()
+
+
+def _work(name: str, shape, dtype=float) -> NDArray:
+    """A scratch array kept between calls (per thread, grown as needed): the node fields'
+    temporaries, so that they are neither allocated nor page-faulted in again at each
+    evaluation (glibc returns freed heap tops to the system and maps them anew)."""
+    size = math.prod(shape)
+    store = getattr(_WORK, "arrays", None)
+    if store is None:
+        store = _WORK.arrays = {}
+    buf = store.get(name)
+    if buf is None or buf.size < size or buf.dtype != dtype:
+        buf = store[name] = np.empty(size, dtype)
+    return buf[:size].reshape(shape)
+
+
 class _Rows:
     """Per-row constants of the clearance (:meth:`_Engine._rows`): the coefficients of x and y
     in the four linear outputs (``kx``, ``ky``, each ``(4, ...)``), the gear's ideal turn, the
@@ -491,6 +509,62 @@ class _Engine:
         factor -= m[0] * out[1]
         return gap, valid, radius, np.abs(factor, out=factor)
 
+    def _node_clearance(self, rows: _Rows, side: int, count: int):
+        """:meth:`_clearance` of the first ``count`` node-table points of ``side`` (with the
+        normal factor) on ``rows`` (``(m, 1)``), every array in scratch space (:func:`_work`):
+        the results are overwritten by the next call."""
+        shape = (rows.turn.shape[0], count)
+        x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+        out, tmp = _work("out", (4,) + shape), _work("tmp", (4,) + shape)
+        np.multiply(rows.kx, x, out=out)
+        np.multiply(rows.ky, y, out=tmp)
+        out += tmp
+        out += self.node_z[:, side, None, :count]
+        radius = _work("radius", shape)
+        np.multiply(out[0], out[0], out=radius)
+        np.multiply(out[1], out[1], out=tmp[0])
+        radius += tmp[0]
+        np.sqrt(radius, out=radius)
+        theta = np.arctan2(out[1], out[0], out=_work("theta", shape))
+        # the normal factor |m x q| with m the turned normal
+        m = tmp[:2]
+        np.multiply(rows.kx[:2], self.node_nxy[0, side, :count], out=m)
+        np.multiply(rows.ky[:2], self.node_nxy[1, side, :count], out=tmp[2:])
+        m += tmp[2:]
+        m += self.node_nz[:, side, None, :count]
+        factor = np.multiply(m[1], out[0], out=_work("factor", shape))
+        np.multiply(m[0], out[1], out=tmp[2])
+        factor -= tmp[2]
+        np.abs(factor, out=factor)
+        xy = out[2:]
+        np.multiply(self._rho_coef[:, None, None], radius, out=tmp[:2])
+        xy += tmp[:2]
+        # the gear's cells (as _cells)
+        limit, n_cols = self._gear_table
+        uv = np.fmax(xy, 0.0, out=tmp[:2])
+        np.fmin(uv, limit[:, None, None], out=uv)
+        index = _work("index", (2,) + shape, np.intp)
+        np.copyto(index, uv, casting="unsafe")
+        np.subtract(xy, index, out=uv)
+        inside = np.greater_equal(uv, 0.0, out=_work("inside", (2,) + shape, bool))
+        inside &= np.less_equal(uv, 1.0, out=_work("inside2", (2,) + shape, bool))
+        cell = np.multiply(index[0], n_cols, out=_work("cell", shape, np.intp))
+        cell += index[1]
+        cell += rows.gear_offset
+        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape))
+        gap = hermite_cells(c, None, uv[0], uv[1])
+        valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool))
+        valid &= inside[0]
+        valid &= inside[1]
+        gap -= theta
+        gap += rows.turn
+        turns = np.multiply(gap, 0.5 / math.pi, out=theta)
+        np.rint(turns, out=turns)
+        turns *= 2.0 * math.pi
+        gap -= turns
+        gap *= rows.sense
+        return gap, valid, radius, factor
+
     def gap(self, side, p, n, phi, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles
         ``phi`` on fields ``side`` (all broadcast): ``(delta, normal factor, R2, valid)``."""
@@ -567,12 +641,8 @@ class _Engine:
             count = int(self.node_real[k].sum())
             nodes = self.node_index[k, :count]
             rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
-            delta, valid, radius, factor = self._clearance(
-                self._rows(k, phi[rows, None], angle[rows, None]),
-                self.node_xy[0, k, :count],
-                self.node_xy[1, k, :count],
-                self.node_z[:, k, None, :count],
-                (self.node_nxy[:, k, :count], self.node_nz[:, k, None, :count]),
+            delta, valid, radius, factor = self._node_clearance(
+                self._rows(k, phi[rows, None], angle[rows, None]), k, count
             )
             if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
                 at = (slice(rows[0], rows[-1] + 1), nodes)

@@ -400,7 +400,7 @@ def hermite_cells(coef: NDArray, k: NDArray, u: NDArray, v: NDArray) -> NDArray:
     """Bicubic polynomials sum_ab c_ab u^a v^b of cells ``k`` at unit coordinates ``(u, v)``:
     ``coef`` is ``(16, n)``, row ``4 a + b`` holding c_ab of every cell (one gather, then Horner
     on whole arrays: the fastest numpy form measured)."""
-    c = np.take(coef, k, axis=1)
+    c = coef if k is None else np.take(coef, k, axis=1)
     w = c[3::4]
     w *= v
     w += c[2::4]
