@@ -302,30 +302,27 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
         return np.where(inside, val, big) - compound_mm
 
     centre = len(tau) // 2
-    if value(np.array([centre]))[0] >= 0.0:
+    # from the middle outward on each side: every 25th sample, then all of them up to the
+    # first coarse one out of the zone (or to the end), each side's first sample out bounds it
+    ways = (np.arange(centre, len(tau)), np.arange(centre, -1, -1))
+    coarse = [w[::25] for w in ways]
+    val = value(np.concatenate(coarse))
+    if val[0] >= 0.0:
         return 0.0
-
-    def first_out(sign):
-        """The first sample out of the zone from the middle toward ``sign`` and its inner
-        neighbour's value, or None: every 25th sample first, then all up to the first out."""
-        ends = np.arange(centre, -1, -1) if sign < 0 else np.arange(centre, len(tau))
-        coarse = ends[::25]
-        hit = np.flatnonzero(value(coarse) >= 0.0)
-        span = ends if not hit.size else ends[: 25 * hit[0] + 1]
-        val = value(span)
-        out = np.flatnonzero(val >= 0.0)
+    hits = np.split(val >= 0.0, [len(coarse[0])])
+    spans = [
+        w if not h.any() else w[: 25 * np.argmax(h) + 1] for w, h in zip(ways, hits, strict=True)
+    ]
+    fine = np.split(value(np.concatenate(spans)), [len(spans[0])])
+    ends = []
+    for span, v, edge in zip(spans, fine, (tau[-1], tau[0]), strict=True):
+        out = np.flatnonzero(v >= 0.0)
         if not out.size:
-            return None
-        return span[out[0] - 1], span[out[0]], val[out[0] - 1], val[out[0]]
-
-    def crossing(found):
-        k_in, k_out, a, b = found
-        return tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b)
-
-    hi, lo = first_out(1.0), first_out(-1.0)
-    t_hi = crossing(hi) if hi is not None else tau[-1]
-    t_lo = crossing(lo) if lo is not None else tau[0]
-    return float(t_hi - t_lo)
+            ends.append(edge)
+            continue
+        k_in, k_out, a, b = span[out[0] - 1], span[out[0]], v[out[0] - 1], v[out[0]]
+        ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
+    return float(ends[0] - ends[1])
 
 
 def _slice(sample: FieldSample, rows) -> FieldSample:
