@@ -281,25 +281,30 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
     big = 10.0 * compound_mm
     f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
 
+    flat, n_p = f.ravel(), f.shape[1]
+
     def value(k):
         """The interpolated separation minus the compound at the samples ``k``."""
-        s = point[0] + tau[k] * perp[0]
-        h = point[1] + tau[k] * perp[1]
+        tk = tau[k]
+        s = point[0] + tk * perp[0]
+        h = point[1] + tk * perp[1]
         inside = (s >= face_mm[0]) & (s <= face_mm[-1])
         inside &= (h >= profile_mm[0]) & (h <= profile_mm[-1])
         i = np.minimum(np.maximum(np.searchsorted(face_mm, s) - 1, 0), len(face_mm) - 2)
         j = np.minimum(np.maximum(np.searchsorted(profile_mm, h) - 1, 0), len(profile_mm) - 2)
-        u = np.minimum(np.maximum((s - face_mm[i]) / (face_mm[i + 1] - face_mm[i]), 0.0), 1.0)
-        v = np.minimum(
-            np.maximum((h - profile_mm[j]) / (profile_mm[j + 1] - profile_mm[j]), 0.0), 1.0
-        )
+        s0, h0 = face_mm[i], profile_mm[j]
+        u = np.minimum(np.maximum((s - s0) / (face_mm[i + 1] - s0), 0.0), 1.0)
+        v = np.minimum(np.maximum((h - h0) / (profile_mm[j + 1] - h0), 0.0), 1.0)
+        at = i * n_p + j
         val = (
-            (1 - u) * (1 - v) * f[i, j]
-            + u * (1 - v) * f[i + 1, j]
-            + (1 - u) * v * f[i, j + 1]
-            + u * v * f[i + 1, j + 1]
+            (1 - u) * (1 - v) * flat[at]
+            + u * (1 - v) * flat[at + n_p]
+            + (1 - u) * v * flat[at + 1]
+            + u * v * flat[at + n_p + 1]
         )
-        return np.where(inside, val, big) - compound_mm
+        val[~inside] = big
+        val -= compound_mm
+        return val
 
     centre = len(tau) // 2
     # from the middle outward on each side: every 25th sample, then all of them up to the
