@@ -324,7 +324,7 @@ class _Engine:
     (the fields must share them).
     """
 
-    _AROUND_ROWS = 8  # batches up to this many rows evaluate the stencils of all cut-backs
+    _AROUND_ROWS = 32  # batches up to this many rows evaluate the stencils of all cut-backs
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
