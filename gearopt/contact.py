@@ -36,6 +36,7 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -222,8 +223,9 @@ class ClearanceField:
 
     def _at(self, s, h, phi, gear_angle_rad):
         """``(delta, valid)`` at pinion grid coordinates off the nodes (see ``_Engine.at``)."""
-        side = np.zeros(np.broadcast(s, h, phi).shape, np.intp)
-        return self._engine.at(side, s, h, phi, gear_angle_rad)
+        s, h = np.broadcast_arrays(np.asarray(s, float), np.asarray(h, float))
+        side = np.zeros(np.broadcast(s, phi).shape, np.intp)
+        return self._engine.at(side, np.stack([s, h]), phi, gear_angle_rad)
 
     def sample(
         self,
@@ -250,9 +252,19 @@ class JointField:
         self.fields = list(fields)
         self._engine = _Engine(self.fields)
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True) -> FieldSample:
-        """As :meth:`ClearanceField.sample`, row k on field ``side[k]``."""
-        return self._engine.sample(np.asarray(side, np.intp), phi_rad, gear_angle_rad, refine)
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None):
+        """As :meth:`ClearanceField.sample`, row k on field ``side[k]``. With ``near`` =
+        ``(side, phi_rad, face_mm, profile_mm)``, also :meth:`minimum_near` of those rows in
+        the same refinement (the same results, fewer calls): returns ``(sample, near)``."""
+        side = np.asarray(side, np.intp)
+        if near is None:
+            return self._engine.sample(side, phi_rad, gear_angle_rad, refine)
+        return self._engine.sample(side, phi_rad, gear_angle_rad, refine, self._near_rows(near))
+
+    @staticmethod
+    def _near_rows(near):
+        side, phi, s, h = (np.atleast_1d(np.asarray(a)) for a in near)
+        return side.astype(np.intp), phi.astype(float), s.astype(float), h.astype(float)
 
     def minimum_near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
         """Refined minima at pinion angles ``phi_rad`` (row k on field ``side[k]``) started from
@@ -261,6 +273,46 @@ class JointField:
         ``(value, s, h, edge)``; value +inf where the start is off the flanks."""
         side = np.asarray(side, np.intp)
         return self._engine.near(side, phi_rad, face_mm, profile_mm, gear_angle_rad)
+
+
+_WORK = threading.local()
+
+
+def _work(name: str, shape, dtype=float) -> NDArray:
+    """A scratch array kept between calls (per thread, grown as needed): the node fields'
+    temporaries, so that they are neither allocated nor page-faulted in again at each
+    evaluation (glibc returns freed heap tops to the system and maps them anew)."""
+    size = math.prod(shape)
+    store = getattr(_WORK, "arrays", None)
+    if store is None:
+        store = _WORK.arrays = {}
+    buf = store.get(name)
+    if buf is None or buf.size < size or buf.dtype != dtype:
+        buf = store[name] = np.empty(size, dtype)
+    return buf[:size].reshape(shape)
+
+
+class _Rows:
+    """Per-row constants of the clearance (:meth:`_Engine._rows`): the coefficients of x and y
+    in the four linear outputs (``kx``, ``ky``, each ``(4, ...)``), the gear's ideal turn, the
+    gear's sense and the sides' offsets into the gear and pinion cell tables."""
+
+    __slots__ = ("kx", "ky", "turn", "sense", "gear_offset", "pinion_offset")
+
+    def __init__(self, kx, ky, turn, sense, gear_offset, pinion_offset) -> None:
+        self.kx, self.ky, self.turn, self.sense = kx, ky, turn, sense
+        self.gear_offset, self.pinion_offset = gear_offset, pinion_offset
+
+    def subset(self, rows) -> _Rows:
+        """The rows ``rows`` (an index or mask of the first axis)."""
+        return _Rows(
+            self.kx[:, rows],
+            self.ky[:, rows],
+            self.turn[rows],
+            self.sense[rows],
+            self.gear_offset[rows],
+            self.pinion_offset[rows],
+        )
 
 
 class _Engine:
@@ -272,6 +324,7 @@ class _Engine:
     (the fields must share them).
     """
 
+    _AROUND_ROWS = 32  # batches up to this many rows evaluate the stencils of all cut-backs
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
@@ -285,8 +338,8 @@ class _Engine:
                 and np.array_equal(f.pinion.profile_mm, first.pinion.profile_mm)
                 and np.array_equal(f.gear.face_mm, first.gear.face_mm)
                 and np.array_equal(f.gear.profile_mm, first.gear.profile_mm)
-                and np.allclose(f.b, first.b)
-                and np.allclose(f.c, first.c)
+                and np.all(np.abs(f.b - first.b) <= 1e-8 + 1e-5 * np.abs(first.b))
+                and np.all(np.abs(f.c - first.c) <= 1e-8 + 1e-5 * np.abs(first.c))
                 and f.ratio == first.ratio
             )
             if not same:
@@ -340,90 +393,266 @@ class _Engine:
         cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
         self.refine_cells = np.concatenate([c.ravel() for c in cells])
         self.pinion_cells = cells[0].size
-        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields])
+        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
         self.gear_cells = first.gear._lookup[8].size
-        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields])
+        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
         self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
+        self._linear_maps(fields)
+
+    def _linear_maps(self, fields) -> None:
+        """The affine maps of the evaluations, folded into a few tables.
+
+        With the pinion turned by phi, ``q = B Rz(phi) p + c``; the gear's unit grid coordinates
+        are ``x2 = (s2 - s0) / ds2``, ``y2 = (h2 - h0) / dh2`` with ``s2 = qz cos g + R2 sin g``,
+        ``h2 = -qz sin g + R2 cos g``. Four outputs are linear in p: qx, qy and the qz parts of
+        x2, y2 (``lin @ p + const``); x2, y2 add ``rho_coef * R2``. Turned by phi, output o is
+        ``kx_o x + ky_o y + (lin_o2 z + const_o)`` with ``kx_o = lin_o0 cos + lin_o1 sin`` and
+        ``ky_o = lin_o1 cos - lin_o0 sin``: ``rotation @ (cos, sin)`` gives (kx, ky).
+        """
+        first = fields[0]
+        b, c = first.b, first.c
+        s0, ia, imax, h0, ib, jmax, n_cols = first.gear._lookup[:7]
+        g = math.radians(first.gear.pitch_angle_deg)
+        cg, sg = math.cos(g), math.sin(g)
+        lin = np.array([b[0], b[1], ia * cg * b[2], -ib * sg * b[2]])
+        const = np.array([c[0], c[1], ia * (cg * c[2] - s0), -ib * (sg * c[2] + h0)])
+        self._rotation = np.concatenate(
+            [np.stack([lin[:, 0], lin[:, 1]], 1), np.stack([lin[:, 1], -lin[:, 0]], 1)]
+        )
+        self._rho_coef = np.array([ia * sg, ib * cg])
+        self._gear_table = (np.array([imax, jmax]), n_cols)
+        self._lin_z, self._const = lin[:, 2], const
+        # the node tables: x, y and the z terms (with the constants) of every side's nodes;
+        # the normals' x, y and z terms of qx, qy (no constants)
+        self.node_xy = np.stack([self.points[0], self.points[1]])
+        self.node_z = lin[:, 2, None, None] * self.points[2] + const[:, None, None]
+        self.node_nxy = np.stack([self.normals[0], self.normals[1]])
+        self.node_nz = lin[:2, 2, None, None] * self.normals[2]
+        # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
+        # z terms (z = L1 = s cos g1 - h sin g1)
+        p0, pia, pimax, ph0, pib, pjmax, p_cols = first.pinion._lookup[:7]
+        cg1, sg1 = self.cos_sin_pitch
+        self._pinion_unit = (np.array([[p0], [ph0]]), np.array([[pia], [pib]]))
+        self._pinion_table = (np.array([pimax, pjmax]), p_cols)
+        self._pinion_map = np.concatenate(
+            [np.array([[sg1, cg1]]), np.stack([lin[:, 2] * cg1, -lin[:, 2] * sg1], 1)]
+        )
+        self._pinion_const = np.concatenate([[0.0], const])[:, None]
 
     # --- evaluation ---------------------------------------------------------------------
 
     @staticmethod
-    def _hermite(fm: FlankMap, coef_t, s, h, offset):
-        """The local interpolant of ``fm``'s grid with the cell tables ``coef_t`` (one table
-        per side, ``offset`` cells into them): ``(Theta, cell index, within the grid)``."""
-        i, j, u, v, within = fm._cell_of(s, h)
-        k = i * fm._lookup[6] + j + offset
-        return hermite_cells(coef_t, k, u, v), k, within
+    def _cells(coef, xy, table, offset):
+        """The local interpolant at unit grid coordinates ``xy`` (``(2, ...)``; cell tables
+        ``coef``, ``offset`` cells in): ``(Theta, cell index, within the grid)``. Beyond the
+        grid the edge cell's polynomial goes on (unit coordinates outside [0, 1])."""
+        limit, n_cols = table
+        uv = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
+        np.fmin(uv, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=uv)
+        index = uv.astype(np.intp)
+        np.subtract(xy, index, out=uv)
+        inside = uv >= 0.0
+        inside &= uv <= 1.0
+        cell = index[0] * n_cols
+        cell += index[1]
+        cell += offset
+        return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
+
+    def _rows(self, side, phi, angle) -> _Rows:
+        """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one
+        shape; the rows' points broadcast against it."""
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), angle)
+        flat = phi.reshape(-1)
+        cs = np.empty((2, flat.size))
+        np.cos(flat, out=cs[0])
+        np.sin(flat, out=cs[1])
+        k = (self._rotation @ cs).reshape((2, 4) + phi.shape)
+        turn = (angle + self.turn0[side]) - self.ratio * phi
+        return _Rows(
+            k[0],
+            k[1],
+            turn,
+            self.gear_sense[side],
+            side * self.gear_cells,
+            side * self.pinion_cells,
+        )
+
+    def _clearance(self, rows: _Rows, x, y, z, normals=None):
+        """Angular clearance of pinion points with coordinates ``x``, ``y`` and z terms ``z``
+        (``(4, ...)``, :meth:`_linear_maps`) on ``rows``:
+        ``(delta, valid, R2, normal factor or None)``."""
+        out = rows.kx * x
+        out += rows.ky * y
+        out += z
+        radius = out[0] * out[0]
+        radius += np.square(out[1])
+        np.sqrt(radius, out=radius)
+        theta = np.arctan2(out[1], out[0])
+        xy = out[2:]
+        xy += self._rho_coef.reshape((2,) + (1,) * radius.ndim) * radius
+        flank, cell, within = self._cells(self.gear_coef, xy, self._gear_table, rows.gear_offset)
+        valid = self.gear_ok[cell]
+        valid &= within
+        gap = flank - theta
+        gap += rows.turn
+        turns = np.rint(gap * (0.5 / math.pi))
+        turns *= 2.0 * math.pi
+        gap -= turns
+        gap *= rows.sense
+        if normals is None:
+            return gap, valid, radius, None
+        nxy, nz = normals
+        m = rows.kx[:2] * nxy[0]
+        m += rows.ky[:2] * nxy[1]
+        m += nz
+        factor = m[1] * out[0]
+        factor -= m[0] * out[1]
+        return gap, valid, radius, np.abs(factor, out=factor)
+
+    def _node_clearance(self, rows: _Rows, side: int, count: int):
+        """:meth:`_clearance` of the first ``count`` node-table points of ``side`` (with the
+        normal factor) on ``rows`` (``(m, 1)``), every array in scratch space (:func:`_work`):
+        the results are overwritten by the next call."""
+        shape = (rows.turn.shape[0], count)
+        x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+        out, tmp = _work("out", (4,) + shape), _work("tmp", (4,) + shape)
+        np.multiply(rows.kx, x, out=out)
+        np.multiply(rows.ky, y, out=tmp)
+        out += tmp
+        out += self.node_z[:, side, None, :count]
+        radius = _work("radius", shape)
+        np.multiply(out[0], out[0], out=radius)
+        np.multiply(out[1], out[1], out=tmp[0])
+        radius += tmp[0]
+        np.sqrt(radius, out=radius)
+        theta = np.arctan2(out[1], out[0], out=_work("theta", shape))
+        # the normal factor |m x q| with m the turned normal
+        m = tmp[:2]
+        np.multiply(rows.kx[:2], self.node_nxy[0, side, :count], out=m)
+        np.multiply(rows.ky[:2], self.node_nxy[1, side, :count], out=tmp[2:])
+        m += tmp[2:]
+        m += self.node_nz[:, side, None, :count]
+        factor = np.multiply(m[1], out[0], out=_work("factor", shape))
+        np.multiply(m[0], out[1], out=tmp[2])
+        factor -= tmp[2]
+        np.abs(factor, out=factor)
+        xy = out[2:]
+        np.multiply(self._rho_coef[:, None, None], radius, out=tmp[:2])
+        xy += tmp[:2]
+        # the gear's cells (as _cells)
+        limit, n_cols = self._gear_table
+        uv = np.fmax(xy, 0.0, out=tmp[:2])
+        np.fmin(uv, limit[:, None, None], out=uv)
+        index = _work("index", (2,) + shape, np.intp)
+        np.copyto(index, uv, casting="unsafe")
+        np.subtract(xy, index, out=uv)
+        inside = np.greater_equal(uv, 0.0, out=_work("inside", (2,) + shape, bool))
+        inside &= np.less_equal(uv, 1.0, out=_work("inside2", (2,) + shape, bool))
+        cell = np.multiply(index[0], n_cols, out=_work("cell", shape, np.intp))
+        cell += index[1]
+        cell += rows.gear_offset
+        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape))
+        gap = hermite_cells(c, None, uv[0], uv[1])
+        valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool))
+        valid &= inside[0]
+        valid &= inside[1]
+        gap -= theta
+        gap += rows.turn
+        turns = np.multiply(gap, 0.5 / math.pi, out=theta)
+        np.rint(turns, out=turns)
+        turns *= 2.0 * math.pi
+        gap -= turns
+        gap *= rows.sense
+        return gap, valid, radius, factor
 
     def gap(self, side, p, n, phi, gear_angle_rad=0.0):
         """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles
         ``phi`` on fields ``side`` (all broadcast): ``(delta, normal factor, R2, valid)``."""
-        c, s = np.cos(phi), np.sin(phi)
-        b, off = self.b, self.c
-        x, y, z = p
-        xt, yt = c * x - s * y, s * x + c * y
-        qx = b[0, 0] * xt + b[0, 1] * yt + (b[0, 2] * z + off[0])
-        qy = b[1, 0] * xt + b[1, 1] * yt + (b[1, 2] * z + off[1])
-        qz = b[2, 0] * xt + b[2, 1] * yt + (b[2, 2] * z + off[2])
-        radius = np.hypot(qx, qy)
-        theta = np.arctan2(qy, qx)
-        s2, h2 = self.gear_grid.to_grid(qz, radius)
-        flank, k, within = self._hermite(
-            self.gear_grid, self.gear_coef, s2, h2, side * self.gear_cells
-        )
-        valid = self.gear_ok[k] & within
-        turn = -self.ratio * phi + (gear_angle_rad + self.turn0[side])
-        gap = flank - theta + turn
-        delta = self.gear_sense[side] * ((gap + math.pi) % (2.0 * math.pi) - math.pi)
-        if n is None:
-            return delta, None, radius, valid
-        nx, ny, nz = n
-        nxt, nyt = c * nx - s * ny, s * nx + c * ny
-        mx = b[0, 0] * nxt + b[0, 1] * nyt + b[0, 2] * nz
-        my = b[1, 0] * nxt + b[1, 1] * nyt + b[1, 2] * nz
-        factor = np.abs(my * qx - mx * qy)
+        x, y, z = (np.asarray(a, float) for a in p)
+        shape = np.broadcast_shapes(x.shape, y.shape, z.shape, np.shape(phi), np.shape(side))
+        if not shape:  # a single point: as a one-element array
+            one = self.gap(
+                np.reshape(side, 1),
+                [np.reshape(a, 1) for a in p],
+                n and [np.reshape(a, 1) for a in n],
+                np.reshape(phi, 1),
+                np.reshape(gear_angle_rad, 1),
+            )
+            return tuple(None if a is None else a[0] for a in one)
+        x, y, z = (np.broadcast_to(a, shape) for a in (x, y, z))
+        rows = self._rows(*(np.broadcast_to(a, shape) for a in (side, phi, gear_angle_rad)))
+        zt = self._lin_z.reshape((4,) + (1,) * len(shape)) * z
+        zt += self._const.reshape((4,) + (1,) * len(shape))
+        normals = None
+        if n is not None:
+            nx, ny, nz = (np.broadcast_to(np.asarray(a, float), shape) for a in n)
+            normals = (np.stack([nx, ny]), self._lin_z[:2].reshape((2,) + (1,) * len(shape)) * nz)
+        delta, valid, radius, factor = self._clearance(rows, x, y, zt, normals)
         return delta, factor, radius, valid
 
-    def at(self, side, s, h, phi, gear_angle_rad):
-        """Clearance at pinion grid coordinates (s, h) off the nodes by the local Hermite
-        interpolants: ``(delta, valid)``. ``delta`` is the smooth extension beyond the flanks
-        (finite everywhere); ``valid`` is False outside either flank and in the pinion's lowest
-        generated cells, where the envelope's fold spoils any interpolant."""
-        cg, sg = self.cos_sin_pitch
-        big_r = s * sg + h * cg
-        theta, k, within = self._hermite(
-            self.pinion_grid, self.pinion_coef, s, h, side * self.pinion_cells
-        )
-        p = (big_r * np.cos(theta), big_r * np.sin(theta), s * cg - h * sg)
-        delta, _, _, valid = self.gap(side, p, None, phi, gear_angle_rad)
-        return delta, self.refine_cells[k] & within & valid
+    def at(self, side, sh, phi, gear_angle_rad):
+        """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
+        the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
+        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
+        the pinion's lowest generated cells, where the envelope's fold spoils any
+        interpolant."""
+        shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
+        if not shape:  # a single point: as a one-element array
+            one = self.at(side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad)
+            return one[0][0], one[1][0]
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), gear_angle_rad)
+        lead = (1,) * (len(shape) - phi.ndim)
+        rows = self._rows(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
+        return self._at(rows, np.broadcast_to(sh, (2,) + shape))
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True) -> FieldSample:
+    def _at(self, rows: _Rows, sh):
+        """:meth:`at` on known rows."""
+        origin, scale = self._pinion_unit
+        xy = sh - origin.reshape((2,) + (1,) * (sh.ndim - 1))
+        xy *= scale.reshape((2,) + (1,) * (sh.ndim - 1))
+        theta, cell, within = self._cells(
+            self.pinion_coef, xy, self._pinion_table, rows.pinion_offset
+        )
+        lin = self._pinion_map @ sh.reshape(2, -1)
+        lin += self._pinion_const
+        lin = lin.reshape((5,) + sh.shape[1:])
+        big_r = lin[0]
+        delta, valid, _, _ = self._clearance(
+            rows, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:]
+        )
+        valid &= within
+        valid &= self.refine_cells[cell]
+        return delta, valid
+
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
-        on the rows ``refine`` selects."""
+        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
+        also :meth:`near` of those rows in the same refinement: ``(sample, near)``."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
-        delta, factor, radius, valid = self.gap(
-            side[:, None],
-            tuple(c[side] for c in self.points),
-            tuple(c[side] for c in self.normals),
-            phi[:, None],
-            angle[:, None],
-        )
-        # scatter back onto the grid (off-mask nodes +inf; padding dropped)
         n, size = len(phi), self.shape[0] * self.shape[1]
-        real = self.node_real[side]
-        rows_idx = np.broadcast_to(np.arange(n)[:, None], real.shape)[real]
-        cols_idx = self.node_index[side][real]
-        full = np.full((n, size), np.inf)
+        field_ = np.full((n, size), np.inf)
         fac = np.zeros((n, size))
         rad = np.zeros((n, size))
-        full[rows_idx, cols_idx] = np.where(valid, delta, np.inf)[real]
-        fac[rows_idx, cols_idx] = factor[real]
-        rad[rows_idx, cols_idx] = radius[real]
+        # each side's rows on its own generated nodes (its node tables broadcast over rows),
+        # put back onto the grid (off-mask nodes +inf)
+        for k in np.unique(side):
+            count = int(self.node_real[k].sum())
+            nodes = self.node_index[k, :count]
+            rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
+            delta, valid, radius, factor = self._node_clearance(
+                self._rows(k, phi[rows, None], angle[rows, None]), k, count
+            )
+            if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
+                at = (slice(rows[0], rows[-1] + 1), nodes)
+            else:
+                at = (rows[:, None], nodes)
+            field_[at] = np.where(valid, delta, np.inf)
+            fac[at] = factor
+            rad[at] = radius
         shape = (n,) + self.shape
-        field_, fac, rad = full.reshape(shape), fac.reshape(shape), rad.reshape(shape)
+        field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
         rows = np.arange(len(phi))
         f0 = field_[rows, i, j]
@@ -431,9 +660,10 @@ class _Engine:
         h = self.pinion_grid.profile_mm[j]
         edge = np.zeros(len(phi), bool)
         rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
-        if rows.size:
+        near_out = None
+        if rows.size or near is not None:
             f0, s, h = f0.copy(), s.copy(), h.copy()
-            f0[rows], s[rows], h[rows], edge[rows] = self._refined(
+            f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
                 side[rows],
                 field_[rows],
                 fac[rows],
@@ -442,8 +672,9 @@ class _Engine:
                 f0[rows],
                 s[rows],
                 h[rows],
+                near=near,
             )
-        return FieldSample(
+        out = FieldSample(
             phi_rad=phi,
             clearance_rad=field_,
             normal_factor_mm=fac,
@@ -453,6 +684,7 @@ class _Engine:
             contact_profile_mm=h,
             edge=edge,
         )
+        return out if near is None else (out, near_out)
 
     def near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
         """Refined minima started from known nearby contact points (no node field)."""
@@ -463,24 +695,30 @@ class _Engine:
         h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
         return self.refine(side, phi, angle, s, h, None, iterations=3)
 
-    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2):
+    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None):
         """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
         Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
         region (the pinion's lowest cells) lower than that by more than the edge tolerance
-        stands as it is, flagged as edge contact."""
+        stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
+        refined alongside (as :meth:`near`); their results come last (None without)."""
         n = len(phi)
         inner = np.where(self.refine_nodes[side], field_.reshape(n, -1), np.inf)
-        k = min(candidates, inner.shape[1])
-        pick = np.argpartition(inner, k - 1, axis=1)[:, :k]
-        values = np.take_along_axis(inner, pick, 1)
+        pick = np.empty((n, min(candidates, inner.shape[1])), np.intp)
+        values = np.empty(pick.shape)
+        rows = np.arange(n)
+        for c in range(pick.shape[1]):  # the lowest, the next lowest, ...
+            pick[:, c] = inner.argmin(axis=1)
+            values[:, c] = inner[rows, pick[:, c]]
+            inner[rows, pick[:, c]] = np.inf
         ci, cj = np.unravel_index(pick, self.shape)
         ok = np.isfinite(values)
         best = np.full(n, np.inf)
         s_best, h_best = s.copy(), h.copy()
         e_best = np.zeros(n, bool)
-        if ok.any():
+        near_out = None
+        if ok.any() or near is not None:
             rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
-            v, s_r, h_r, e_r = self.refine(
+            starts = (
                 side[rows],
                 phi[rows],
                 angle[rows],
@@ -488,6 +726,16 @@ class _Engine:
                 self.pinion_grid.profile_mm[cj[ok]],
                 values[ok],
             )
+            if near is None:
+                v, s_r, h_r, e_r = self.refine(*starts)
+            else:  # the near rows: a second group, started from their points
+                m = len(near[0])
+                extra = (near[0], near[1], np.zeros(m), near[2], near[3], np.full(m, np.nan))
+                group = np.repeat([0, 1], [rows.size, m])
+                joined = [np.concatenate(pair) for pair in zip(starts, extra, strict=True)]
+                out = self.refine(*joined, iterations=(4, 3), group=group)
+                near_out = tuple(a[rows.size :] for a in out)
+                v, s_r, h_r, e_r = (a[: rows.size] for a in out)
             order = np.lexsort((v, rows))
             rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
             first = np.r_[True, rows[1:] != rows[:-1]]
@@ -500,9 +748,10 @@ class _Engine:
         with np.errstate(invalid="ignore"):
             low = np.isfinite(f0) & ~(best - f0 <= tol)
         value = np.where(low, f0, best)
-        return value, np.where(low, s, s_best), np.where(low, h, h_best), low | e_best
+        s_best, h_best = np.where(low, s, s_best), np.where(low, h, h_best)
+        return value, s_best, h_best, low | e_best, near_out
 
-    def refine(self, side, phi, angle, s, h, f0, iterations: int = 4):
+    def refine(self, side, phi, angle, s, h, f0, iterations=4, group=None):
         """Constrained Newton steps on the clearance between the node grid's lines.
 
         Gradient and Hessian by central differences (a quarter cell) of the interpolated
@@ -513,78 +762,95 @@ class _Engine:
         the point along the boundary to the least clearance on it, second order for straight
         edges.
 
+        ``f0``: the start values (None or NaN: the interpolated value there). ``iterations``:
+        the most steps, or one count per group of rows (``group``: each row's group); each
+        group stops on its own, its rows then left as they are, so a group's results are those
+        of a refinement of its rows alone.
+
         Returns ``(value, s, h, edge)``: edge where the Newton part of the last step would take
         the point off the flanks to a clearance lower by more than the edge tolerance.
         """
-        ds, dh = self.ds, self.dh
-        es, eh = 0.25 * ds, 0.25 * dh
-        st = self._STENCIL
+        cell = np.array([[self.ds], [self.dh]])
+        quarter = self._STENCIL.T[:, None, :] * (0.25 * cell[:, :, None])  # (2, 1, 9) mm
         fr = self._FRACTIONS
+        nf = len(fr)
         n = len(s)
         rows = np.arange(n)
         edge = np.zeros(n, bool)
         tol = self.tol_rad[side]
-        f = np.empty((n, len(st)))
-        need = np.ones(n, bool)
-        sc = side[:, None]
-        best = None if f0 is None else f0.copy()
-        for _ in range(iterations):
-            if need.any():  # stencils not already evaluated with the last step
-                f[need], ok0 = self.at(
-                    sc[need],
-                    s[need, None] + st[:, 0] * es,
-                    h[need, None] + st[:, 1] * eh,
-                    phi[need, None],
-                    angle[need, None],
-                )
-                if best is None:  # the start's own value: the stencil's centre
-                    best = np.where(ok0[:, 0], f[:, 0], np.inf)
-            gs, gh = 0.5 * (f[:, 1] - f[:, 2]) / es, 0.5 * (f[:, 3] - f[:, 4]) / eh
-            hss = (f[:, 1] - 2.0 * f[:, 0] + f[:, 2]) / es**2
-            hhh = (f[:, 3] - 2.0 * f[:, 0] + f[:, 4]) / eh**2
-            hsh = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8]) / (es * eh)
-            # in cell units, so that both directions weigh alike
-            g2 = (gs * ds, gh * dh)
-            h2 = (hss * ds * ds, hsh * ds * dh, hhh * dh * dh)
-            step, curved = _pseudo_newton(*g2, *h2)
+        sh = np.stack([s, h])
+        every = self._rows(side[:, None], phi[:, None], angle[:, None])
+        # a small batch costs numpy's per-call overhead, not points: it evaluates the stencils
+        # around every cut-back point with the step, so that no point needs a call of its own
+        around = nf if n <= self._AROUND_ROWS else 1
+        f, ok0 = self._at(every, sh[:, :, None] + quarter)
+        start = np.where(ok0[:, 0], f[:, 0], np.inf)
+        best = start if f0 is None else np.where(np.isnan(f0), start, f0)
+        caps = np.atleast_1d(iterations)
+        groups = [np.ones(n, bool)] if group is None else [group == g for g in range(len(caps))]
+        active = np.ones(n, bool)
+        small = 1e-3 * min(self.ds, self.dh)
+        for it in range(int(caps.max())):
+            d = f @ self._DIFFERENCES  # gradient and Hessian in cell units
+            g2, h2 = d[:, :2].T, (d[:, 2], d[:, 3], d[:, 4])
+            step, curved = _pseudo_newton(g2, *h2)
             # the Newton part's predicted fall (a valley's slope along itself is not edge)
             fall = -(
-                g2[0] * curved[:, 0]
-                + g2[1] * curved[:, 1]
-                + 0.5 * (h2[0] * curved[:, 0] ** 2 + 2 * h2[1] * curved[:, 0] * curved[:, 1])
-                + 0.5 * h2[2] * curved[:, 1] ** 2
+                g2[0] * curved[0]
+                + g2[1] * curved[1]
+                + 0.5 * (h2[0] * curved[0] ** 2 + 2 * h2[1] * curved[0] * curved[1])
+                + 0.5 * h2[2] * curved[1] ** 2
             )
             # the step cut back by halvings, the Newton part's end, and the stencil around the
-            # full step, at once
-            ts = s[:, None] + fr * (step[:, :1] * ds)
-            th = h[:, None] + fr * (step[:, 1:] * dh)
-            pts_s = np.concatenate(
-                [ts, s[:, None] + curved[:, :1] * ds, ts[:, :1] + st[1:, 0] * es], axis=1
-            )
-            pts_h = np.concatenate(
-                [th, h[:, None] + curved[:, 1:] * dh, th[:, :1] + st[1:, 1] * eh], axis=1
-            )
-            fa, oka = self.at(sc, pts_s, pts_h, phi[:, None], angle[:, None])
-            nf = len(fr)
+            # full step (not after the last step), at once
+            ts = sh[:, :, None] + fr * (step * cell)[:, :, None]
+            parts = [ts, sh[:, :, None] + (curved * cell)[:, :, None]]
+            if it < max(c for c, g in zip(caps, groups, strict=True) if (g & active).any()) - 1:
+                parts.append((ts[:, :, :around, None] + quarter[:, :, None, 1:]).reshape(2, n, -1))
+            fa, oka = self._at(every, np.concatenate(parts, axis=2))
             ft, ok = fa[:, :nf], oka[:, :nf]
             ok &= ft <= best[:, None] + 1e-13 * np.abs(best[:, None])
             k = np.argmax(ok, axis=1)
             take = ok[rows, k]
+            take &= active
             # edge: the Newton part would take the point off the flanks, where the clearance
             # falls on by more than the tolerance (the minimum is pressed against the boundary)
-            edge = ~oka[:, nf] & (fall > tol)
-            moved = np.abs(ts[rows, k] - s) + np.abs(th[rows, k] - h)
-            s = np.where(take, ts[rows, k], s)
-            h = np.where(take, th[rows, k], h)
+            edge = np.where(active, ~oka[:, nf] & (fall > tol), edge)
+            new = ts[:, rows, k]
+            moved = np.abs(new - sh).sum(axis=0)
+            sh = np.where(take, new, sh)
             best = np.where(take, ft[rows, k], best)
-            full = take & (k == 0)
-            f[full, 0] = fa[full, 0]
-            f[full, 1:] = fa[full, nf + 1 :]
-            need = ~full
-            # converged: no row moved more than a thousandth of a cell
-            if not np.any(take & (moved > 1e-3 * min(ds, dh))):
+            # a group stops at its last step or converged: none of its rows moved more than a
+            # thousandth of a cell
+            moving = take & (moved > small)
+            for cap, g in zip(caps, groups, strict=True):
+                if it == cap - 1 or not (moving & g).any():
+                    active &= ~g
+            if not active.any():
                 break
-        return best, s, h, edge
+            take &= active
+            known = np.flatnonzero(take & (k < around))
+            f[known, 0] = ft[known, k[known]]
+            f[known, 1:] = fa[:, nf + 1 :].reshape(n, around, -1)[known, k[known]]
+            need = take & (k >= around)  # a point that stayed keeps its stencil
+            if need.any():
+                f[need], _ = self._at(every.subset(need), sh[:, need, None] + quarter)
+        return best, sh[0], sh[1], edge
+
+
+def _differences() -> NDArray:
+    """``(9, 5)``: stencil values (``_Engine._STENCIL``, a quarter cell) to the gradient and
+    the Hessian (ss, sh, hh) in cell units by central differences."""
+    d = np.zeros((9, 5))
+    d[1, 0], d[2, 0] = 2.0, -2.0
+    d[3, 1], d[4, 1] = 2.0, -2.0
+    d[[1, 2], 2], d[0, 2] = 16.0, -32.0
+    d[[5, 8], 3], d[[6, 7], 3] = 4.0, -4.0
+    d[[3, 4], 4], d[0, 4] = 16.0, -32.0
+    return d
+
+
+_Engine._DIFFERENCES = _differences()
 
 
 def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
@@ -593,30 +859,65 @@ def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
     return np.unravel_index(flat, field_.shape[1:])
 
 
-def _pseudo_newton(gs, gh, hss, hsh, hhh, free: float = 2.0) -> NDArray:
-    """``(n, 2)`` steps of 2 x 2 symmetric systems: Newton's -H^+ g on the positive
-    eigenvalues plus a descent of at most ``free`` cells along the others (a valley or a ridge
-    keeps its slope), at most two cells per component; and the Newton part alone."""
-    mean = 0.5 * (hss + hhh)
-    root = np.sqrt((0.5 * (hss - hhh)) ** 2 + hsh**2)
-    scale = np.maximum(np.abs(hss) + np.abs(hhh), 1e-300)
+def _pseudo_newton(g, hss, hsh, hhh, free: float = 2.0) -> tuple[NDArray, NDArray]:
+    """``(2, n)`` steps of 2 x 2 symmetric systems (gradient ``g``, ``(2, n)``): Newton's
+    -H^+ g on the positive eigenvalues plus a descent of at most ``free`` cells along the others
+    (a valley or a ridge keeps its slope), at most two cells per component; and the Newton part
+    alone."""
+    n = hss.shape[0]
+    mean = hss + hhh
+    mean *= 0.5
+    half = hss - hhh
+    half *= 0.5
+    root = half * half
+    root += hsh * hsh
+    np.sqrt(root, out=root)
+    scale = np.abs(hss)
+    scale += np.abs(hhh)
+    np.maximum(scale, 1e-300, out=scale)
+    lam = np.empty((2, n))
+    np.add(mean, root, out=lam[0])
+    np.subtract(mean, root, out=lam[1])
+    tiny = 1e-6 * scale
+    if np.all(lam[1] > tiny):
+        # both curvatures positive everywhere: the Newton step -H^-1 g, which is the same
+        # when it is within ``free`` cells along both eigenvectors (shorter than ``free``)
+        det = hss * hhh - hsh * hsh
+        step = np.empty_like(g)
+        np.divide(hsh * g[1] - hhh * g[0], det, out=step[0])
+        np.divide(hsh * g[0] - hss * g[1], det, out=step[1])
+        if np.all(np.einsum("ij,ij->j", step, step) <= free * free):
+            return step, step
+    # unit eigenvectors (ex, ey) of lam[0] and (-ey, ex) of lam[1]
     diagonal = np.abs(hsh) <= 1e-12 * scale
-    lam1, lam2 = mean + root, mean - root
-    ex = np.where(diagonal, np.where(hss >= hhh, 1.0, 0.0), hsh)
-    ey = np.where(diagonal, np.where(hss >= hhh, 0.0, 1.0), lam1 - hss)
-    norm = np.hypot(ex, ey)
-    norm = np.where(norm > 0.0, norm, 1.0)
-    ex, ey = ex / norm, ey / norm
-    gnorm = np.hypot(gs, gh)
-    step = np.zeros((len(gs), 2))
-    curved = np.zeros((len(gs), 2))
-    for lam, vx, vy in ((lam1, ex, ey), (lam2, -ey, ex)):
-        slope = vx * gs + vy * gh
-        use = lam > 1e-6 * scale
-        newton = -slope / np.where(use, lam, 1.0)
-        steep = np.abs(slope) > 1e-9 * np.maximum(gnorm, 1e-300)
-        descent = np.where(steep, -np.sign(slope) * free, 0.0)
-        along = np.where(use, np.clip(newton, -free, free), descent)
-        step += along[:, None] * np.stack([vx, vy], axis=1)
-        curved += np.where(use, along, 0.0)[:, None] * np.stack([vx, vy], axis=1)
-    return np.clip(step, -2.0, 2.0), np.clip(curved, -2.0, 2.0)
+    larger = hss >= hhh
+    v = np.empty((2, 2, n))  # (eigenpair, component, row)
+    np.copyto(v[0, 0], hsh)
+    np.subtract(lam[0], hss, out=v[0, 1])
+    v[0, 0, diagonal] = larger[diagonal]
+    v[0, 1, diagonal] = ~larger[diagonal]
+    norm = np.hypot(v[0, 0], v[0, 1])
+    norm[~(norm > 0.0)] = 1.0
+    v[0] /= norm
+    np.negative(v[0, 1], out=v[1, 0])
+    v[1, 1] = v[0, 0]
+    slope = v[:, 0] * g[0]
+    slope += v[:, 1] * g[1]
+    use = lam > tiny
+    along = -slope / np.where(use, lam, 1.0)
+    np.minimum(along, free, out=along)
+    np.maximum(along, -free, out=along)
+    steep = np.abs(slope) > 1e-9 * np.maximum(np.hypot(g[0], g[1]), 1e-300)
+    descent = np.sign(slope)
+    descent *= -free
+    descent *= steep
+    along = np.where(use, along, descent)
+    step = along[0] * v[0]
+    step += along[1] * v[1]
+    along *= use
+    curved = along[0] * v[0]
+    curved += along[1] * v[1]
+    for a in (step, curved):
+        np.minimum(a, 2.0, out=a)
+        np.maximum(a, -2.0, out=a)
+    return step, curved

@@ -250,7 +250,7 @@ class FlankMap:
             (len(fp) - 1) / float(fp[-1] - fp[0]),
             float(len(fp) - 2),
             len(fp) - 1,
-            np.ascontiguousarray(coef.reshape(-1, 4, 4)),
+            np.ascontiguousarray(coef.reshape(-1, 16).T),
             ok.ravel(),
         )
 
@@ -397,13 +397,24 @@ class FlankMap:
 
 
 def hermite_cells(coef: NDArray, k: NDArray, u: NDArray, v: NDArray) -> NDArray:
-    """Bicubic polynomials sum_ab coef[k, a, b] u^a v^b: cell ``k`` of the ``(n, 4, 4)``
-    coefficient tables at unit coordinates ``(u, v)`` (row gathers and one einsum: the fastest
-    numpy form measured)."""
-    c = np.take(coef, k, axis=0)
-    vv = np.stack([np.ones_like(v), v, v * v, v * v * v], axis=-1)
-    w = np.einsum("...ab,...b->...a", c, vv)
-    return ((w[..., 3] * u + w[..., 2]) * u + w[..., 1]) * u + w[..., 0]
+    """Bicubic polynomials sum_ab c_ab u^a v^b of cells ``k`` at unit coordinates ``(u, v)``:
+    ``coef`` is ``(16, n)``, row ``4 a + b`` holding c_ab of every cell (one gather, then Horner
+    on whole arrays: the fastest numpy form measured)."""
+    c = coef if k is None else np.take(coef, k, axis=1)
+    w = c[3::4]
+    w *= v
+    w += c[2::4]
+    w *= v
+    w += c[1::4]
+    w *= v
+    w += c[0::4]
+    out = w[3] * u
+    out += w[2]
+    out *= u
+    out += w[1]
+    out *= u
+    out += w[0]
+    return out
 
 
 def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> NDArray:

@@ -219,13 +219,18 @@ class _PairCurve:
         return self.sample(u).minimum_rad
 
 
-def _separation_mm(sample: FieldSample, reference_rad: NDArray, separation: str) -> NDArray:
+def _separation_mm(
+    sample: FieldSample, reference_rad: NDArray, separation: str, rows=slice(None)
+) -> NDArray:
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
-    (one per row)."""
+    (one per row), on the sample's rows ``rows``."""
     factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
     with np.errstate(invalid="ignore"):  # inf - inf: a row with nothing on the flanks
-        extra = sample.clearance_rad - reference_rad.reshape(-1, 1, 1)
-        return np.where(np.isfinite(extra), extra * factor, np.inf)
+        extra = sample.clearance_rad[rows] - reference_rad.reshape(-1, 1, 1)
+        finite = np.isfinite(extra)
+        extra *= factor[rows]
+        extra[~finite] = np.inf
+        return extra
 
 
 def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
@@ -245,10 +250,12 @@ def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
 
 
 def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
-    """Unit vector of the zone's minor axis (weighted second moments), in (face, profile)."""
+    """Unit vector of the zone's minor axis (weighted second moments), in (face, profile);
+    along the face for a zone without extent (no node, or one: its moments are rounding
+    noise, whose eigenvectors would point anywhere)."""
     w = np.clip(compound_mm - sep_mm, 0.0, None)
     w = np.where(np.isfinite(w), w, 0.0)
-    if w.sum() <= 0.0:
+    if np.count_nonzero(w) <= 1:
         return np.array([1.0, 0.0])
     s = np.broadcast_to(face_mm[:, None], w.shape)
     h = np.broadcast_to(profile_mm[None, :], w.shape)
@@ -266,40 +273,61 @@ def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
 
 def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
     """Extent of {separation < compound} along the line through ``point`` perpendicular to
-    ``direction``, by bilinear interpolation of the node field."""
+    ``direction``, by bilinear interpolation of the node field (sampled at 2001 points; from
+    the middle outward, the first sample out of the zone on each side bounds it)."""
     perp = np.array([-direction[1], direction[0]])
     reach = float(face_mm[-1] - face_mm[0] + profile_mm[-1] - profile_mm[0])
     tau = np.linspace(-reach, reach, 2001)
-    s = point[0] + tau * perp[0]
-    h = point[1] + tau * perp[1]
-    inside = (s >= face_mm[0]) & (s <= face_mm[-1]) & (h >= profile_mm[0]) & (h <= profile_mm[-1])
-    i = np.clip(np.searchsorted(face_mm, s) - 1, 0, len(face_mm) - 2)
-    j = np.clip(np.searchsorted(profile_mm, h) - 1, 0, len(profile_mm) - 2)
-    u = np.clip((s - face_mm[i]) / (face_mm[i + 1] - face_mm[i]), 0.0, 1.0)
-    v = np.clip((h - profile_mm[j]) / (profile_mm[j + 1] - profile_mm[j]), 0.0, 1.0)
     big = 10.0 * compound_mm
     f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
-    val = (
-        (1 - u) * (1 - v) * f[i, j]
-        + u * (1 - v) * f[i + 1, j]
-        + (1 - u) * v * f[i, j + 1]
-        + u * v * f[i + 1, j + 1]
-    )
-    val = np.where(inside, val, big) - compound_mm
+
+    flat, n_p = f.ravel(), f.shape[1]
+
+    def value(k):
+        """The interpolated separation minus the compound at the samples ``k``."""
+        tk = tau[k]
+        s = point[0] + tk * perp[0]
+        h = point[1] + tk * perp[1]
+        inside = (s >= face_mm[0]) & (s <= face_mm[-1])
+        inside &= (h >= profile_mm[0]) & (h <= profile_mm[-1])
+        i = np.minimum(np.maximum(np.searchsorted(face_mm, s) - 1, 0), len(face_mm) - 2)
+        j = np.minimum(np.maximum(np.searchsorted(profile_mm, h) - 1, 0), len(profile_mm) - 2)
+        s0, h0 = face_mm[i], profile_mm[j]
+        u = np.minimum(np.maximum((s - s0) / (face_mm[i + 1] - s0), 0.0), 1.0)
+        v = np.minimum(np.maximum((h - h0) / (profile_mm[j + 1] - h0), 0.0), 1.0)
+        at = i * n_p + j
+        val = (
+            (1 - u) * (1 - v) * flat[at]
+            + u * (1 - v) * flat[at + n_p]
+            + (1 - u) * v * flat[at + 1]
+            + u * v * flat[at + n_p + 1]
+        )
+        val[~inside] = big
+        val -= compound_mm
+        return val
+
     centre = len(tau) // 2
-    if val[centre] >= 0.0:
+    # from the middle outward on each side: every 25th sample, then all of them up to the
+    # first coarse one out of the zone (or to the end), each side's first sample out bounds it
+    ways = (np.arange(centre, len(tau)), np.arange(centre, -1, -1))
+    coarse = [w[::25] for w in ways]
+    val = value(np.concatenate(coarse))
+    if val[0] >= 0.0:
         return 0.0
-    out = val >= 0.0
-    right = np.flatnonzero(out[centre:])
-    left = np.flatnonzero(out[:centre][::-1])
-
-    def crossing(k_in, k_out):
-        a, b = val[k_in], val[k_out]
-        return tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b)
-
-    t_hi = crossing(centre + right[0] - 1, centre + right[0]) if right.size else tau[-1]
-    t_lo = crossing(centre - left[0], centre - left[0] - 1) if left.size else tau[0]
-    return float(t_hi - t_lo)
+    hits = np.split(val >= 0.0, [len(coarse[0])])
+    spans = [
+        w if not h.any() else w[: 25 * np.argmax(h) + 1] for w, h in zip(ways, hits, strict=True)
+    ]
+    fine = np.split(value(np.concatenate(spans)), [len(spans[0])])
+    ends = []
+    for span, v, edge in zip(spans, fine, (tau[-1], tau[0]), strict=True):
+        out = np.flatnonzero(v >= 0.0)
+        if not out.size:
+            ends.append(edge)
+            continue
+        k_in, k_out, a, b = span[out[0] - 1], span[out[0]], v[out[0] - 1], v[out[0]]
+        ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
+    return float(ends[0] - ends[1])
 
 
 def _slice(sample: FieldSample, rows) -> FieldSample:
@@ -420,12 +448,64 @@ def tooth_contacts(
                 req += [(st.index, x) for x in beyond[~known]]
         return req
 
+    def near_batch(states, it):
+        """The contact-interval and hand-over evaluations of step ``it``, all sides:
+        ``((side, phi, s, h), owners)``, or None when there are none."""
+        rows, owners = [], []
+        for st in states:
+            for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
+                rows.append((st.index, v, s, h))
+                owners.append((st, tag))
+        if not rows:
+            return None
+        side_arr = np.array([r[0] for r in rows], np.intp)
+        v, s, h = (np.array([r[k] for r in rows]) for k in (1, 2, 3))
+        return (side_arr, sense[side_arr] * v, s, h), owners
+
+    def extra_rows(states):
+        """The extra positions of each side: hand-over (both pairs), TE peak, mean point M and
+        its neighbours for the path direction."""
+        extra_v = []
+        for st in states:
+            start, end = st.interval
+            if st.v_star is None:  # flat TE (line contact): centred on the contact interval
+                st.v_star = 0.5 * (start + end) + 0.5 * p1
+                st.g_hand = float(np.max(st.g.min(axis=1)))
+            v_mid = st.v_star - 0.5 * p1
+            dv = 0.25 * step
+            extra_v.append(
+                [
+                    st.v_star,
+                    st.v_star - p1,
+                    _peak_guess(st, t, p1, step),
+                    v_mid,
+                    v_mid - dv,
+                    v_mid + dv,
+                ]
+            )
+        extra_v = np.array(extra_v)
+        ex_side = np.repeat(np.arange(n_sides), extra_v.shape[1])
+        return ex_side, sense[ex_side] * extra_v.ravel()
+
+    def begin(states):
+        for st in states:
+            _start_interval(st)
+            _start_handover(st, t, p1)
+
     states = main_sample(np.zeros(n_sides))
+    begin(states)
     req = beyond_requests(states)
-    more = None
+    more = answers = None
     if req:
+        # the first contact-interval and hand-over evaluations go along (their answers stand
+        # unless a window is recentred below)
         ext_side = np.array([r[0] for r in req], np.intp)
-        more = joint.sample(ext_side, sense[ext_side] * np.array([r[1] for r in req]))
+        ext_phi = sense[ext_side] * np.array([r[1] for r in req])
+        batch = near_batch(states, 0)
+        if batch is None:
+            more = joint.sample(ext_side, ext_phi)
+        else:
+            more, answers = joint.sample(ext_side, ext_phi, near=batch[0])
     # the mesh centre of each side: the relative angle of least lag over everything sampled;
     # a window not centred on it (the contact moved by misalignment) is centred and resampled
     centres = np.zeros(n_sides)
@@ -444,49 +524,30 @@ def tooth_contacts(
             centres[st.index] = float(v[best])
     if np.any(centres != 0.0):
         states = main_sample(centres)
+        begin(states)
+        answers = None
 
     # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
-    # all sides batched into shared calls
-    for st in states:
-        _start_interval(st)
-        _start_handover(st, t, p1)
+    # all sides batched into shared calls; the last step's go along with the extra positions
+    # once the hand-overs are solved
+    extras = None
     for it in range(3):
-        rows_side, rows_v, rows_s, rows_h, owners = [], [], [], [], []
-        for st in states:
-            for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
-                rows_side.append(st.index)
-                rows_v.append(v)
-                rows_s.append(s)
-                rows_h.append(h)
-                owners.append((st, tag))
-        if not rows_v:
+        batch = near_batch(states, it)
+        if batch is None:
             break
-        side_arr = np.array(rows_side, np.intp)
-        value, s1, h1, e1 = joint.minimum_near(
-            side_arr, sense[side_arr] * np.array(rows_v), np.array(rows_s), np.array(rows_h)
-        )
-        for k, (st, tag) in enumerate(owners):
-            st.answers[tag] = (value[k], s1[k], h1[k], e1[k])
+        if it == 0 and answers is not None:
+            pass
+        elif it == 2 and all(st.v_star is not None for st in states):
+            extras, answers = joint.sample(*extra_rows(states), near=batch[0])
+        else:
+            answers = joint.minimum_near(*batch[0])
+        for k, (st, tag) in enumerate(batch[1]):
+            st.answers[tag] = tuple(a[k] for a in answers)
         for st in states:
             _interval_update(st)
             _handover_update(st, it, p1)
-
-    # the extra positions of each side: hand-over (both pairs), TE peak, mean point M and
-    # its neighbours for the path direction
-    extra_v = []
-    for st in states:
-        start, end = st.interval
-        if st.v_star is None:  # flat TE (line contact): centred on the contact interval
-            st.v_star = 0.5 * (start + end) + 0.5 * p1
-            st.g_hand = float(np.max(st.g.min(axis=1)))
-        v_mid = st.v_star - 0.5 * p1
-        dv = 0.25 * step
-        extra_v.append(
-            [st.v_star, st.v_star - p1, _peak_guess(st, t, p1, step), v_mid, v_mid - dv, v_mid + dv]
-        )
-    extra_v = np.array(extra_v)
-    ex_side = np.repeat(np.arange(n_sides), extra_v.shape[1])
-    extras = joint.sample(ex_side, sense[ex_side] * extra_v.ravel())
+    if extras is None:
+        extras = joint.sample(*extra_rows(states))
     out = []
     for st, name in zip(states, sides, strict=True):
         ex = _slice(extras, slice(st.index * 6, st.index * 6 + 6))
@@ -619,7 +680,7 @@ def _handover_update(st, it, p1) -> None:
     if it == 0:
         x0 = ho["x"]
         ho["x0"], ho["d0"] = x0, d
-        a, b, c = np.polyfit(np.array([lo, x0, hi]) - x0, np.array([d_lo, d, d_hi]), 2)
+        a, b, c = _parabola(lo - x0, hi - x0, d_lo, d, d_hi)
         roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
         roots = np.real(roots[np.isreal(roots)]) + x0
         ho["bracket"] = (lo, x0) if d > 0.0 else (x0, hi)
@@ -633,6 +694,13 @@ def _handover_update(st, it, p1) -> None:
             if ho["bracket"][0] <= x2 <= ho["bracket"][1]:
                 st.v_star = float(x2)
         ho["done"] = True
+
+
+def _parabola(xa: float, xb: float, ya: float, y0: float, yb: float):
+    """``(a, b, c)`` of the parabola a x^2 + b x + c through (xa, ya), (0, y0), (xb, yb)."""
+    sa, sb = (ya - y0) / xa, (yb - y0) / xb
+    a = (sb - sa) / (xb - xa)
+    return a, sa - a * xa, y0
 
 
 def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> ToothContact:
@@ -652,7 +720,7 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     # separations at the contact gear angle of each position (same lag for every pair)
     compound_mm = compound_um * 1e-3
     main = st.sample
-    sep = _separation_mm(_slice(main, st.inv), np.repeat(lag, pairs), separation)
+    sep = _separation_mm(main, np.repeat(lag, pairs), separation, st.inv)
     sep = sep.reshape((positions, pairs) + field.pinion.shape)
     pattern = sep.min(axis=(0, 1)) * 1e3
     face = field.pinion.face_mm - frame.toe_mm

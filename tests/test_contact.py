@@ -16,7 +16,7 @@ import pytest
 
 import gearopt
 from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_backlash
-from gearopt.contact import ContactError
+from gearopt.contact import ContactError, JointField
 from gearopt.design import Misalignment
 from gearopt.errors import GearoptError
 from gearopt.mesh import ease_off
@@ -446,3 +446,50 @@ def test_a_cycle_too_short_to_bracket_hand_overs_is_refused(section53, options, 
     with pytest.raises(GearoptError) as info:
         run(section53, **options)
     assert info.value.parameter == parameter
+
+
+# --- the engine's fast paths agree with its general evaluation ------------------------------
+
+
+def test_node_fields_agree_with_the_general_clearance(aligned53):
+    # the node fields are evaluated in scratch space by a path of their own; the same
+    # clearance, normal factor and radius as the general evaluation at the nodes
+    pair = aligned53["pair"]
+    joint = JointField([pair.drive, pair.coast])
+    side = np.repeat([0, 1], 5)
+    phi = np.linspace(-0.4, 0.4, 10) * np.array([pair.drive.sense, pair.coast.sense])[side]
+    sample = joint.sample(side, phi, refine=False)
+    for k, field in enumerate((pair.drive, pair.coast)):
+        rows = side == k
+        mask = field.pinion.mask
+        p, n = field.pinion.points_mm[mask], field.pinion.normals[mask]
+        comps = tuple(np.broadcast_to(p[:, a], (rows.sum(), len(p))) for a in range(3))
+        normals = tuple(np.broadcast_to(n[:, a], comps[0].shape) for a in range(3))
+        delta, factor, radius, valid = joint._engine.gap(
+            np.full(comps[0].shape, k), comps, normals, phi[rows, None]
+        )
+        expected = np.where(valid, delta, np.inf)
+        assert np.array_equal(np.isinf(expected), np.isinf(sample.clearance_rad[rows][:, mask]))
+        on = np.isfinite(expected)
+        assert np.allclose(
+            sample.clearance_rad[rows][:, mask][on], expected[on], rtol=0, atol=1e-13
+        )
+        assert np.allclose(sample.normal_factor_mm[rows][:, mask], factor, rtol=1e-12)
+        assert np.allclose(sample.radius_mm[rows][:, mask], radius, rtol=1e-12)
+
+
+def test_near_rows_refined_alongside_a_sample_get_the_same_answers(aligned53):
+    # sample(..., near=...) refines the near rows in the same loop as the sample's candidates,
+    # each group stopping on its own: the same answers as minimum_near alone
+    pair = aligned53["pair"]
+    joint = JointField([pair.drive, pair.coast])
+    senses = np.array([pair.drive.sense, pair.coast.sense])
+    side = np.array([0, 1, 0, 1])
+    phi = np.array([-0.3, -0.1, 0.05, 0.2]) * senses[side]
+    alone = joint.sample(side, phi)
+    near = (side, phi + 0.01 * senses[side], alone.contact_face_mm, alone.contact_profile_mm)
+    expected = joint.minimum_near(*near)
+    sample, answers = joint.sample(side[:2], phi[:2], near=near)
+    for got, want in zip(answers, expected, strict=True):
+        assert np.array_equal(got, want)
+    assert np.array_equal(sample.minimum_rad, alone.minimum_rad[:2])
