@@ -225,8 +225,11 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _params(trial: optuna.trial.FrozenTrial) -> dict:
-    return dict(trial.params) or dict(trial.system_attrs.get("fixed_params", {}))
+def _params(trial: optuna.trial.FrozenTrial, spec: StudySpec) -> dict:
+    """The trial's parameters (a given design's, or those suggested), or {} when a coordinator
+    died before suggesting them all: such a trial never reached a worker."""
+    params = {**trial.system_attrs.get("fixed_params", {}), **trial.params}
+    return params if set(params) >= set(spec.dimensions) else {}
 
 
 def _retry(study, results, spec: StudySpec, trial, reason: str) -> bool:
@@ -240,7 +243,7 @@ def _retry(study, results, spec: StudySpec, trial, reason: str) -> bool:
         return False
     results.forget(spec.name, [number])
     attempt = int(trial.user_attrs.get(_ATTEMPT, 1))
-    params = _params(trial)
+    params = _params(trial, spec)
     if params and attempt < MAX_ATTEMPTS:
         study.enqueue_trial(params, user_attrs={_ATTEMPT: attempt + 1, "gearopt_retry_of": number})
     return True
@@ -248,24 +251,22 @@ def _retry(study, results, spec: StudySpec, trial, reason: str) -> bool:
 
 def recover(study, results, spec: StudySpec, me: str) -> list[int]:
     """Fail and re-enqueue the RUNNING trials whose coordinator is gone; their numbers."""
-    coords = results.coordinators()
     host = socket.gethostname()
     now = dt.datetime.now(dt.UTC).replace(tzinfo=None)
+
+    def alive(known) -> bool:
+        o_host, o_pid, beat = known
+        fresh = (now - beat).total_seconds() < STALE_AFTER_S
+        return fresh and (o_host != host or _alive(o_pid))
+
+    living = {c for c, known in results.coordinators().items() if c != me and alive(known)}
     done = []
     for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         owner = trial.user_attrs.get(_COORD)
-        if owner == me:
+        if owner == me or owner in living:
             continue
-        known = coords.get(owner)
-        if known is not None:
-            o_host, o_pid, beat = known
-            if o_host == host:
-                if _alive(o_pid) and (now - beat).total_seconds() < STALE_AFTER_S:
-                    continue
-            elif (now - beat).total_seconds() < STALE_AFTER_S:
-                continue
-        elif (now - trial.datetime_start).total_seconds() < STALE_AFTER_S:
-            continue  # asked a moment ago, its coordinator not yet recorded
+        if owner is None and living and (now - trial.datetime_start).total_seconds() < 60:
+            continue  # asked a moment ago by a live coordinator, not yet marked as its own
         if _retry(study, results, spec, trial, f"coordinator {owner} died"):
             done.append(trial.number)
     return done

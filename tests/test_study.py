@@ -376,7 +376,9 @@ def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
     before = _trials(db)
     running = [t for t in before if t.state == TrialState.RUNNING]
     assert running
-    killed = {t.number: t.params["machine.tool_tip_width_mm"] for t in running}
+    # a trial asked but not yet given its parameters never reached a worker
+    killed = {t.number: t.params["machine.tool_tip_width_mm"] for t in running if t.params}
+    unsampled = {t.number for t in running if not t.params}
     _gearopt(["study", "run", study, "--trials", 10, "--jobs", 2, "--no-progress"], toy_site)
     after = _trials(db)
     states = _states(after)
@@ -389,6 +391,9 @@ def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
         again = [t for t in retries if t.user_attrs["gearopt_retry_of"] == number]
         assert len(again) == 1 and again[0].params["machine.tool_tip_width_mm"] == width
         assert again[0].state == TrialState.COMPLETE
+    for number in unsampled:
+        assert by_number[number].state == TrialState.FAIL
+        assert not [t for t in retries if t.user_attrs["gearopt_retry_of"] == number]
 
 
 def test_export_writes_the_trials_and_tables(tmp_path, toy_site):
