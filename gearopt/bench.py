@@ -29,6 +29,7 @@ BENCHMARKS: dict[str, str] = {
     "tca_ms": "gearopt.bench:bench_tca",
     "backlash_ms": "gearopt.bench:bench_backlash",
     "tca_newton_ms": "gearopt.bench:bench_tca_newton",
+    "study_trial_ms": "gearopt.bench:bench_study_trial",
 }
 
 ONE_THREAD = {
@@ -171,6 +172,33 @@ def bench_tca_newton() -> tuple[float, dict]:
     info = _tca_info(options)
     info["tca_newton_positions"] = 2 * (len(u) + 1)
     return time_call_ms(run, number=3), info
+
+
+def bench_study_trial() -> tuple[float, dict]:
+    """One trial of the example study as a worker evaluates it (the design with the trial's
+    keys, both members generated, TCA aligned and misaligned, backlash, objectives, table rows),
+    a different design each time so that nothing is cached; one warm-up trial first."""
+    from pathlib import Path
+
+    from gearopt.studyfile import load_study_spec
+    from gearopt.trial import evaluate_trial
+
+    path = Path(__file__).resolve().parents[1] / "studies" / "cyclo_palloid_contact.toml"
+    _study_text(path.name)  # a clear error without a source checkout
+    spec = load_study_spec(path)
+    params = dict(spec.enqueue[0])
+    key = "machine.pinion.inner_cutter_radius_mm"
+    radii = iter([74.5, 74.6, 74.7, 74.8, 74.9, 75.1])
+
+    def run():
+        outcome = evaluate_trial(spec, 0, {**params, key: next(radii)})
+        if outcome.failed:
+            raise RuntimeError(outcome.error)
+
+    run()
+    return time_call_ms(run, number=5), {
+        "study_trial_case": "studies/cyclo_palloid_contact.toml, grid 25 x 21, 3 evaluations"
+    }
 
 
 def _study_text(name: str) -> str:
