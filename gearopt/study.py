@@ -232,9 +232,10 @@ def _params(trial: optuna.trial.FrozenTrial, spec: StudySpec) -> dict:
     return params if set(params) >= set(spec.dimensions) else {}
 
 
-def _retry(study, results, spec: StudySpec, trial, reason: str) -> bool:
-    """Fail ``trial`` (a FrozenTrial or the number of one) and re-enqueue its parameters when
-    attempts remain; False when another coordinator finished it first."""
+def _retry(study, results, spec: StudySpec, trial, reason: str, *, charge: bool = True) -> bool:
+    """Fail ``trial`` (a FrozenTrial) and re-enqueue its parameters when attempts remain (an
+    attempt is charged unless ``charge`` is False: the trial was not to blame); False when
+    another coordinator finished it first."""
     number = trial.number
     try:
         study._storage.set_trial_user_attr(trial._trial_id, "gearopt_error", reason[:500])
@@ -242,10 +243,10 @@ def _retry(study, results, spec: StudySpec, trial, reason: str) -> bool:
     except (RuntimeError, ValueError):
         return False
     results.forget(spec.name, [number])
-    attempt = int(trial.user_attrs.get(_ATTEMPT, 1))
+    attempt = int(trial.user_attrs.get(_ATTEMPT, 1)) + int(charge)
     params = _params(trial, spec)
-    if params and attempt < MAX_ATTEMPTS:
-        study.enqueue_trial(params, user_attrs={_ATTEMPT: attempt + 1, "gearopt_retry_of": number})
+    if params and attempt <= MAX_ATTEMPTS:
+        study.enqueue_trial(params, user_attrs={_ATTEMPT: attempt, "gearopt_retry_of": number})
     return True
 
 
@@ -550,8 +551,18 @@ def run_study(
                     tell(number, outcome)
             if broken:
                 worker_died()
+    except BaseException as exc:
+        # stopping (an error, Ctrl-C): the trials in hand go back to the queue as they are,
+        # and the workers are stopped; only a killed coordinator leaves RUNNING trials
+        if backend == "loky":
+            executor.shutdown(wait=False, kill_workers=True)
+        mine = [p[0] for p in pending.values()] + [h[0] for h in held + suspects]
+        reason = f"the coordinator stopped: {type(exc).__name__}: {exc}"
+        for trial in mine:
+            frozen = study._storage.get_trial(trial._trial_id)
+            _retry(study, results, spec, frozen, reason, charge=False)
+        raise
     finally:
-        # a coordinator interrupted here leaves RUNNING trials for the next run to recover
         if bar is not None:
             bar.close()
         if isinstance(executor, _JoblibBatches):

@@ -560,3 +560,11 @@ def test_given_designs_added_to_the_file_later_are_enqueued_once(tmp_path, toy_s
         for t in sorted(_trials(tmp_path / "toy_probe.db"), key=lambda t: t.number)
     ]
     assert widths[0] == 0.9 and widths[2] == 1.3 and widths.count(0.9) == 1
+
+
+def test_a_study_that_only_fails_stops_with_a_clear_error_and_no_running_trial(tmp_path, toy_site):
+    study = _toy_study(tmp_path, conditions="{refuse_above_mm = 0.0, sleep_s = 0.05}")
+    run = _gearopt(["study", "run", study, "--trials", 3, "--no-progress"], toy_site, check=False)
+    assert run.returncode == 2 and "trials failed in this run" in run.stderr
+    states = _states(_trials(tmp_path / "toy_probe.db"))
+    assert set(states) <= {"FAIL", "WAITING"} and states["FAIL"] >= 11
