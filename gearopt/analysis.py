@@ -21,6 +21,7 @@ from gearopt.mesh import (
     EaseOff,
     MeshedPair,
     ToothContact,
+    _check_options,
     backlash,
     ease_off,
     mesh_pair,
@@ -71,25 +72,34 @@ class AnalysisOptions:
 
     KEYS = ("positions", "pairs", "cycles", "compound_um", "separation", "grid", "misalignment")
 
+    def __post_init__(self) -> None:
+        _check_options(self.positions, self.pairs, self.cycles, self.compound_um, self.separation)
+
     @classmethod
-    def from_conditions(cls, conditions: Mapping[str, Any] | None) -> AnalysisOptions:
+    def from_conditions(
+        cls, conditions: Mapping[str, Any] | None, *, design=None, where: str = "conditions"
+    ) -> AnalysisOptions:
         """Options from an evaluator's conditions: the keys of this class; ``grid`` as
-        ``[n_face, n_profile]``, ``misalignment`` as a table of the ``[misalignment]`` keys."""
-        conditions = dict(conditions or {})
+        ``[n_face, n_profile]``, ``misalignment`` as a table of the ``[misalignment]`` keys.
+        A ``design``'s ``[analysis]`` table gives the defaults the conditions override."""
+        conditions = {**(design.analysis if design is not None else {}), **(conditions or {})}
         unknown = sorted(set(conditions) - set(cls.KEYS))
         if unknown:
-            raise GearoptError("conditions", unknown[0], f"unknown; known: {list(cls.KEYS)}")
+            raise GearoptError(where, unknown[0], f"unknown; known: {list(cls.KEYS)}")
         if "grid" in conditions and not isinstance(conditions["grid"], FlankGrid):
             grid = conditions["grid"]
             if not (isinstance(grid, list | tuple) and len(grid) == 2):
-                raise GearoptError("conditions.grid", grid, "must be [n_face, n_profile]")
+                raise GearoptError(f"{where}.grid", grid, "must be [n_face, n_profile]")
             conditions["grid"] = FlankGrid(n_face=grid[0], n_profile=grid[1])
         mis = conditions.get("misalignment")
         if mis is not None and not isinstance(mis, Misalignment):
             if not isinstance(mis, Mapping):
-                raise GearoptError("conditions.misalignment", mis, "must be a table")
+                raise GearoptError(f"{where}.misalignment", mis, "must be a table")
             conditions["misalignment"] = Misalignment.from_table(mis, "misalignment")
-        return cls(**conditions)
+        try:
+            return cls(**conditions)
+        except TypeError as exc:
+            raise GearoptError(where, conditions, f"invalid: {exc}") from None
 
     def as_dict(self) -> dict:
         """JSON-ready form (the ``conditions`` of an evaluation)."""

@@ -324,13 +324,18 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from gearopt.plugins import evaluators
 
     design = load_design(args.design)
+    # the options given on the command line override the design's [analysis] table
     conditions: dict[str, Any] = {
-        "separation": args.separation,
-        "compound_um": args.compound_um,
-        "positions": args.positions,
-        "grid": list(_parse_grid(args.grid).shape),
+        key: value
+        for key, value in (
+            ("separation", args.separation),
+            ("compound_um", args.compound_um),
+            ("positions", args.positions),
+            ("grid", None if args.grid is None else list(_parse_grid(args.grid).shape)),
+        )
+        if value is not None
     }
-    options = AnalysisOptions.from_conditions(conditions)
+    options = AnalysisOptions.from_conditions(conditions, design=design)
     registry = evaluators()
     out: dict[str, Any] = {"design": design.name, "model": design.model}
     out["conditions"] = options.as_dict()
@@ -440,12 +445,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--separation",
         choices=("normal", "circumferential"),
-        default="normal",
         help="how the pattern's separation is measured (default normal; seed 003: circumferential)",
     )
-    p.add_argument("--compound-um", type=float, default=6.5, help="marking-compound thickness (um)")
-    p.add_argument("--positions", type=int, default=21, help="contact positions (two cycles)")
-    p.add_argument("--grid", default="25,21", help="FlankMap grid n_face,n_profile")
+    p.add_argument("--compound-um", type=float, help="marking-compound thickness (um; 6.5)")
+    p.add_argument("--positions", type=int, help="contact positions over two cycles (21)")
+    p.add_argument("--grid", help="FlankMap grid n_face,n_profile (25,21)")
+    # defaults: the design's [analysis] table, else gearopt.analysis.AnalysisOptions
     p.set_defaults(func=_cmd_analyze)
 
     p = sub.add_parser("bench", help="time the kernels (medians over fresh one-thread processes)")

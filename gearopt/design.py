@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from gearopt.blank import Blank, compute_blank, cone_distance_from_module_mm, pitch_angles_rad
-from gearopt.errors import DesignError
+from gearopt.errors import DesignError, GearoptError
 from gearopt.validate import (
     check_integer,
     check_keys,
@@ -57,7 +57,7 @@ __all__ = [
 ]
 
 MEMBERS = ("pinion", "gear")
-SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation")
+SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation", "analysis")
 MODULE_TOLERANCE = 1e-3  # module and cone distance, when both are given, agree within 0.1 %
 
 _PAIR_KEYS = (
@@ -300,6 +300,7 @@ class Design:
     misalignment: Misalignment = field(default_factory=Misalignment)
     compensation: Misalignment = field(default_factory=Misalignment)
     meta: Meta = field(default_factory=Meta)
+    analysis: Mapping[str, Any] = field(default_factory=dict)
     source: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
     path: str | None = field(default=None, compare=False)
 
@@ -324,6 +325,23 @@ def _pair_from_table(table: Mapping[str, Any]) -> PairData:
         if key not in table:
             raise DesignError(f"pair.{key}", rule="required key is missing")
     return PairData(**table)
+
+
+def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``[analysis]`` table: default conditions of the contact evaluators for this design
+    (the keys of :class:`gearopt.analysis.AnalysisOptions`), checked now."""
+    from gearopt.analysis import AnalysisOptions
+
+    try:
+        AnalysisOptions.from_conditions(table, where="analysis")
+    except DesignError:
+        raise
+    except GearoptError as exc:
+        name = (
+            exc.parameter if exc.parameter.startswith("analysis") else f"analysis.{exc.parameter}"
+        )
+        raise DesignError(name, exc.value, exc.rule) from None
+    return dict(table)
 
 
 def parse_design(
@@ -366,6 +384,7 @@ def parse_design(
         misalignment=Misalignment.from_table(tables["misalignment"], "misalignment"),
         compensation=Misalignment.from_table(tables["compensation"], "compensation"),
         meta=Meta(**meta_table),
+        analysis=_analysis_table(tables["analysis"]),
         source=copy.deepcopy(dict(data)),
         path=path,
     )

@@ -33,6 +33,9 @@ A study file::
 
     [grid]                              # a sweep: every combination is enqueued
     "machine.pinion.blade_parabola_coefficient_per_mm" = [0.0, 0.0015]
+
+    [analysis]                          # contact-analysis options of every trial (they
+    compound_um = 6.5                   # override the base design's [analysis] table)
 """
 
 from __future__ import annotations
@@ -62,7 +65,16 @@ __all__ = [
 
 SAMPLERS = ("tpe", "random", "nsga2", "qmc")
 _STUDY_KEYS = ("name", "design", "sampler", "seed", "pick", "artifacts")
-_TABLES = ("study", "search", "evaluations", "objectives", "constraints", "enqueue", "grid")
+_TABLES = (
+    "study",
+    "search",
+    "evaluations",
+    "objectives",
+    "constraints",
+    "enqueue",
+    "grid",
+    "analysis",
+)
 
 
 #: a searched design key is a machine model's kind of search dimension
@@ -276,6 +288,14 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         raise StudyError("study.design", rule="name the base design file")
     base = Path(path).resolve().parent if path else Path.cwd()
     design = load_design(base / study["design"])
+    analysis = data.get("analysis", {})
+    if not isinstance(analysis, Mapping):
+        raise StudyError("analysis", analysis, "must be a table of contact-analysis options")
+    if analysis:  # the study's [analysis] overrides the base design's
+        try:
+            design = with_overrides(design, {f"analysis.{k}": v for k, v in analysis.items()})
+        except GearoptError as exc:
+            raise StudyError(exc.parameter, exc.value, exc.rule) from None
     search = data.get("search", {})
     if not isinstance(search, Mapping):
         raise StudyError("search", search, "must be a table of design keys")

@@ -28,7 +28,7 @@ class BacklashEvaluator(BaseEvaluator):
     description = "circumferential backlash along the mesh, interference flagged"
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
-        options = AnalysisOptions.from_conditions(conditions)
+        options = AnalysisOptions.from_conditions(conditions, design=design)
         result = pair_backlash(meshed_pair(design, options), options)
         report = result.as_dict()
         return Evaluation(

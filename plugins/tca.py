@@ -66,7 +66,7 @@ class TcaEvaluator(BaseEvaluator):
     description = "unloaded TCA of drive and coast sides: TE, contact path, pattern"
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
-        options = AnalysisOptions.from_conditions(conditions)
+        options = AnalysisOptions.from_conditions(conditions, design=design)
         pair = meshed_pair(design, options)
         sides = contact_sides(pair, options)
         drive, coast = sides["drive"], sides["coast"]
@@ -94,7 +94,7 @@ class EaseOffEvaluator(BaseEvaluator):
     description = "pinion ease-off of drive and coast flanks against the conjugate surfaces"
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
-        options = AnalysisOptions.from_conditions(conditions)
+        options = AnalysisOptions.from_conditions(conditions, design=design)
         # the deviation from the conjugate surface is a property of the flanks: nominal assembly
         options = replace(options, misalignment=Misalignment())
         result = pair_ease_off(meshed_pair(design, options))

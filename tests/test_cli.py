@@ -161,3 +161,21 @@ def test_analyze_bad_option_is_one_line(capsys):
     assert main(args) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "compound_um" in err[0]
+
+
+def test_analysis_table_of_the_design_gives_defaults_the_options_override(capsys, tmp_path):
+    text = (STUDIES / "seed001_section5_3.toml").read_text()
+    design = tmp_path / "design.toml"
+    design.write_text(text + '\n[analysis]\nseparation = "circumferential"\ncompound_um = 10.0\n')
+    assert main(["analyze", str(design), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["conditions"]["separation"] == "circumferential"
+    assert out["tca"]["pattern"]["compound_um"] == 10.0
+    assert main(["analyze", str(design), "--json", "--compound-um", "6.5"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["tca"]["pattern"]["compound_um"] == 6.5
+    assert out["tca"]["pattern"]["separation"] == "circumferential"
+    design.write_text(text + "\n[analysis]\npositions = 2\n")
+    assert main(["analyze", str(design)]) == 2
+    err = capsys.readouterr().err
+    assert "analysis.positions = 2" in err

@@ -134,6 +134,23 @@ def test_bad_study_files_name_the_parameter(tmp_path, edit, parameter):
     assert info.value.parameter.startswith(parameter)
 
 
+def test_the_study_analysis_table_overrides_the_base_design(tmp_path):
+    text = EXAMPLE.read_text() + '\n[analysis]\nseparation = "circumferential"\npositions = 11\n'
+    path = tmp_path / "study.toml"
+    path.write_text(text)
+    shutil.copy(STUDIES / "seed001_section5_3.toml", tmp_path)
+    spec = load_study_spec(path)
+    assert spec.design.analysis == {"separation": "circumferential", "positions": 11}
+    trial = spec.design_for(dict(spec.enqueue[0]))
+    evaluation = gearopt.evaluators()["tca"].evaluate(trial, {})
+    assert evaluation.conditions["separation"] == "circumferential"
+    assert len(evaluation.arrays["te_arcsec"]) == 11
+    path.write_text(text.replace("positions = 11", "positions = 1"))
+    with pytest.raises(StudyError) as info:
+        load_study_spec(path)
+    assert info.value.parameter == "analysis.positions"
+
+
 def test_grid_sweeps_are_enqueued_as_every_combination():
     data = {
         "study": {"design": str(STUDIES / "seed001_section5_3.toml")},
