@@ -127,7 +127,8 @@ class EpicycloidFlank:
     @property
     def profile_curvature_per_mm(self) -> float:
         """1 / R_b (0 for a straight blade)."""
-        return 0.0 if math.isinf(self.blade_profile_radius_mm) else 1.0 / self.blade_profile_radius_mm
+        rb = self.blade_profile_radius_mm
+        return 0.0 if math.isinf(rb) else 1.0 / rb
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -394,7 +395,13 @@ class Epicycloid(BaseMachineModel):
                 f"{spec.cutter_head_radius_mm:g} mm, R_b = {spec.blade_profile_radius_mm:g} mm",
             )
         return generate_from_blade_systems(
-            design, member, systems, turns, grid=grid or FlankGrid(), tool_pass=tool_pass, notes=notes
+            design,
+            member,
+            systems,
+            turns,
+            grid=grid or FlankGrid(),
+            tool_pass=tool_pass,
+            notes=notes,
         )
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
