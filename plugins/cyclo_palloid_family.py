@@ -34,6 +34,7 @@ __all__ = [
     "BladeSystem",
     "components",
     "edge",
+    "edge_second",
     "family",
     "meshing_jacobian",
     "pitch_line_start",
@@ -65,6 +66,9 @@ class BladeSystem:
     #: the blade's lag behind the paper's blade: it is where that blade is at theta - phase
     #: (k 2 pi / N_b for the k-th blade group)
     phase_rad: float = 0.0
+    #: 1 / R_b of a circular-arc edge (seed 003), 0 for the straight edge of seed 001 eq 2; the
+    #: arc is tangent to the straight edge at u = 0 and bends toward the tooth material
+    profile_curvature_per_mm: float = 0.0
 
     @classmethod
     def stack(cls, systems) -> BladeSystem:
@@ -105,12 +109,57 @@ def _sincos(x):
 
 
 def edge(b: BladeSystem, u):
-    """Cutting edge in the blade frame S_a (eq 2): x_a, y_a and their u-derivatives."""
+    """Cutting edge in the blade frame S_a (eq 2): x_a, y_a and their u-derivatives.
+
+    With a profile curvature k = 1 / R_b (seed 003's cutter edge radius) the straight part of
+    the edge becomes the exact circular arc of radius R_b tangent to it at u = 0, u its arc
+    length: along the straight edge sin(k u) / k, toward the tooth material (the direction of
+    a positive parabola, eq 2) (1 - cos(k u)) / k, so the arc's centre lies on the material
+    side (profile crowning). The parabola of eq 2 is added on top, along the same normal.
+    """
     sa, ca = np.sin(b.pressure_angle_rad), np.cos(b.pressure_angle_rad)
     w = u - b.parabola_apex_mm
     q = b.parabola_per_mm * w * w
     dq = 2.0 * b.parabola_per_mm * w
-    return b.side * (-u * sa - q * ca), u * ca - q * sa, b.side * (-sa - dq * ca), ca - dq * sa
+    if not np.any(b.profile_curvature_per_mm):
+        return b.side * (-u * sa - q * ca), u * ca - q * sa, b.side * (-sa - dq * ca), ca - dq * sa
+    along, off, d_along, d_off = _arc(b.profile_curvature_per_mm, u)
+    off, d_off = off + q, d_off + dq
+    return (
+        b.side * (-along * sa - off * ca),
+        along * ca - off * sa,
+        b.side * (-d_along * sa - d_off * ca),
+        d_along * ca - d_off * sa,
+    )
+
+
+def _arc(k, u):
+    """The arc of curvature ``k`` (array; 0 = straight) tangent to the u axis at u = 0, by arc
+    length u: ``(along, off, d along / du, d off / du)`` with along = sin(k u) / k and
+    off = (1 - cos(k u)) / k = 2 sin^2(k u / 2) / k (no cancellation for small k u)."""
+    k = np.asarray(k, dtype=float)
+    straight = k == 0.0
+    kk = np.where(straight, 1.0, k)
+    s, c = _sincos(k * u)
+    sh, _ = _sincos(0.5 * k * u)
+    along = np.where(straight, u, s / kk)
+    off = np.where(straight, 0.0 * u, 2.0 * sh * sh / kk)
+    return along, off, np.where(straight, 1.0 + 0.0 * u, c), s
+
+
+def edge_second(b: BladeSystem, u):
+    """Second u-derivatives of the edge (x_a'', y_a'')."""
+    sa, ca = np.sin(b.pressure_angle_rad), np.cos(b.pressure_angle_rad)
+    if not np.any(b.profile_curvature_per_mm):
+        return (
+            b.side * (-2.0 * b.parabola_per_mm * np.cos(b.pressure_angle_rad)) + 0.0 * u,
+            -2.0 * b.parabola_per_mm * np.sin(b.pressure_angle_rad) + 0.0 * u,
+        )
+    k = np.asarray(b.profile_curvature_per_mm, dtype=float)
+    s, c = _sincos(k * u)
+    dd_along = -k * s
+    dd_off = k * c + 2.0 * b.parabola_per_mm
+    return b.side * (-dd_along * sa - dd_off * ca), dd_along * ca - dd_off * sa
 
 
 def components(b: BladeSystem, u, theta, psi) -> dict[str, tuple]:
@@ -189,8 +238,7 @@ def meshing_jacobian(b: BladeSystem, u, theta, psi, scale_mm: float):
     """
     f = components(b, u, theta, psi)
     xa, ya, dxa, dya = edge(b, u)
-    d2xa = b.side * (-2.0 * b.parabola_per_mm * np.cos(b.pressure_angle_rad)) + 0.0 * u
-    d2ya = -2.0 * b.parabola_per_mm * np.sin(b.pressure_angle_rad) + 0.0 * u
+    d2xa, d2ya = edge_second(b, u)
     ca, sa = f["work_axis"]
     zero = 0.0 * u
 

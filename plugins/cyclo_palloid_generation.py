@@ -64,6 +64,7 @@ __all__ = [
     "ThicknessSolution",
     "blade_systems",
     "generate_flanks",
+    "generate_from_blade_systems",
     "outer_phase_rad",
     "solve_additional_slope_angle",
     "tooth_turn_rad",
@@ -215,10 +216,36 @@ def generate_flanks(
     those of tooth 0, or those cut by blade group ``tool_pass`` (tooth ``tool_pass`` of a
     right-hand member, ``-tool_pass`` of a left-hand one, when the work indexes exactly:
     dnu = 0 and m_b the mean normal module, so that m_gb = N_b / N)."""
+    systems = blade_systems(design, member, settings, tool_pass=tool_pass)
+    return generate_from_blade_systems(
+        design,
+        member,
+        {f: systems[BLADE_OF_FLANK[f]] for f in flanks},
+        {f: tooth_turn_rad(design, member, f, systems) for f in flanks},
+        grid=grid,
+        tool_pass=tool_pass,
+        notes={f: (f"{BLADE_OF_FLANK[f]} blades (cyclo-palloid)",) for f in flanks},
+    )
+
+
+def generate_from_blade_systems(
+    design: Design,
+    member: str,
+    systems: dict[str, BladeSystem],
+    turns_rad: dict[str, float],
+    *,
+    grid: FlankGrid,
+    tool_pass: int = 0,
+    notes: dict[str, tuple[str, ...]] | None = None,
+) -> dict[str, FlankMap]:
+    """FlankMaps of ``member``'s flanks, one per entry of ``systems`` (flank name -> the blade
+    system that cuts it), solved in one batch; each is turned by ``turns_rad[flank]`` about the
+    work axis onto tooth 0 (or the tooth of blade group ``tool_pass``). The machine models that
+    share this face-hobbing chain (cyclo-palloid, epicycloid) differ only in their systems."""
     index = MEMBERS.index(member)
     blank = design.blank
-    systems = blade_systems(design, member, settings, tool_pass=tool_pass)
-    family_ = _family(design, member, [systems[BLADE_OF_FLANK[f]] for f in flanks])
+    flanks = tuple(systems)
+    family_ = _family(design, member, [systems[f] for f in flanks])
     solution = solve_envelope(
         family_,
         cone_distances_mm=(blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
@@ -243,8 +270,8 @@ def generate_flanks(
                 flank=flank,
                 hand=blank.hand[index],
                 teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
-                turn_rad=tooth_turn_rad(design, member, flank, systems),
-                notes=(f"{BLADE_OF_FLANK[flank]} blades (cyclo-palloid)",),
+                turn_rad=turns_rad[flank],
+                notes=(notes or {}).get(flank, ()),
             ),
             tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
         )
