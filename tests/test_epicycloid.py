@@ -384,3 +384,42 @@ def test_table6_maximum_kinematic_error_against_the_head_radius(case_a, seed_cas
         }
         ours = _max_kinematic_error_arcsec(case_a, overrides)
         assert ours == pytest.approx(row["max_kinematic_error_arcsec"], abs=0.05), row
+
+
+def _drive(design, overrides):
+    """The drive side's TCA with seed 003's pattern measure."""
+    from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair
+
+    trial = gearopt.with_overrides(design, overrides)
+    options = AnalysisOptions.from_conditions(SEED003_ANALYSIS, design=trial)
+    return contact_sides(meshed_pair(trial, options), options)["drive"]
+
+
+def test_correction_classes_of_section_7(case_a, seed_cases):
+    # seed 003 section 7 on its own pair: a length correction alone (case A: R_h 135 against
+    # 137.4, straight blades) and a height correction alone (case B: the gear's R_h with an arc
+    # blade) keep zero kinematic error; the first puts the contact across the tooth (no bias),
+    # the second along it (a longitudinal pattern); both together (case C) give a parabolic one
+    arc = seed_cases["epicycloid_seed003"]["pinion_convex_settings"]["case_C"]
+    rb = arc["cutter_edge_radius_mm"]
+    key = "machine.pinion.convex."
+    length = _drive(case_a, {})
+    height = _drive(
+        case_a, {key + "cutter_head_radius_mm": 137.4, key + "blade_profile_radius_mm": rb}
+    )
+    both = _drive(case_a, {key + "blade_profile_radius_mm": rb})
+    for side in (length, height):
+        assert side.te_peak_to_peak_arcsec < 0.05 and not side.edge_contact
+    spans = {
+        name: (np.ptp(side.path_face_mm), np.ptp(side.path_profile_mm))
+        for name, side in (("length", length), ("height", height))
+    }
+    assert spans["length"][1] > 3.0 * spans["length"][0] and abs(length.bias_mm) < 1.0
+    assert spans["height"][0] > 3.0 * spans["height"][1] and height.bias_mm > 20.0
+    amplitude = both.te_peak_to_peak_arcsec
+    assert amplitude > 5.0
+    h = both.handover_phi1_deg
+    on = (both.phi1_deg > h[0]) & (both.phi1_deg < h[1])
+    x, y = both.phi1_deg[on], both.te_arcsec[on]
+    c = np.polyfit(x, y, 2)
+    assert c[0] < 0.0 and np.max(np.abs(np.polyval(c, x) - y)) < 0.1 * amplitude
