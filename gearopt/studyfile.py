@@ -36,6 +36,9 @@ A study file::
 
     [analysis]                          # contact-analysis options of every trial (they
     compound_um = 6.5                   # override the base design's [analysis] table)
+
+    [fixed]                             # dotted design keys set for every trial
+    "machine.gear.blade_parabola_coefficient_per_mm" = 0.0
 """
 
 from __future__ import annotations
@@ -74,6 +77,7 @@ _TABLES = (
     "enqueue",
     "grid",
     "analysis",
+    "fixed",
 )
 
 
@@ -288,6 +292,14 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         raise StudyError("study.design", rule="name the base design file")
     base = Path(path).resolve().parent if path else Path.cwd()
     design = load_design(base / study["design"])
+    fixed = data.get("fixed", {})
+    if not isinstance(fixed, Mapping):
+        raise StudyError("fixed", fixed, "must be a table of dotted design keys and values")
+    if fixed:  # design keys every trial shares, set on the base design
+        try:
+            design = with_overrides(design, dict(fixed))
+        except GearoptError as exc:
+            raise StudyError(f"fixed.{exc.parameter}", exc.value, exc.rule) from None
     analysis = data.get("analysis", {})
     if not isinstance(analysis, Mapping):
         raise StudyError("analysis", analysis, "must be a table of contact-analysis options")

@@ -10,6 +10,9 @@ number. Options come from the study file's ``[[objectives]]`` / ``[[constraints]
 ``worst_te``
     The largest TE peak-to-peak (arcsec) over several TCAs, e.g. a set of misalignments.
     ``on`` (list of labels, required), ``side`` as above.
+``te_level``
+    How far (arcsec) the TE peak-to-peak of one TCA is from ``level_arcsec`` (required): the
+    design with a prescribed kinematic error (seed 003 Table 7). ``on``, ``side``.
 ``pattern_center_offset``
     The distance (mm) of the mean contact point M from the flank centre C, in the pattern
     coordinates (face, profile). ``on``, ``side``, ``component`` (``"both"``, ``"face"`` or
@@ -117,6 +120,26 @@ class WorstTe(_ContactObjective):
             for label in _labels(self.name, options["on"])
             for p in _side(self.name, options)
         )
+
+
+class TeLevel(_ContactObjective):
+    name = "te_level"
+    description = "distance of the TE peak-to-peak from a prescribed level (arcsec)"
+    options = ("on", "side", "level_arcsec")
+
+    def reads(self, **options):
+        level = options.get("level_arcsec")
+        if isinstance(level, bool) or not isinstance(level, int | float) or level < 0.0:
+            raise StudyError(f"objective {self.name}.level_arcsec", level, "needs a level >= 0")
+        return super().reads(**options)
+
+    def value(self, evaluations, **options):
+        (label,) = _labels(self.name, options.get("on", "tca"))[:1]
+        te = max(
+            _metric(evaluations, label, f"{p}te_peak_to_peak_arcsec")
+            for p in _side(self.name, options)
+        )
+        return abs(te - float(options["level_arcsec"]))
 
 
 class PatternCenterOffset(_ContactObjective):
@@ -238,6 +261,7 @@ def gearopt_objectives() -> list[BaseObjective]:
     return [
         TePeakToPeak(),
         WorstTe(),
+        TeLevel(),
         PatternCenterOffset(),
         PatternBias(),
         PatternMovement(),
