@@ -18,7 +18,7 @@ def test_every_study_design_loads():
     assert len(paths) >= 4
     for path in paths:
         design = gearopt.load_design(path)
-        assert design.model in ("cyclo-palloid", "epicycloid")
+        assert design.model in ("cyclo-palloid", "epicycloid", "face-milling")
         assert design.name == path.stem
 
 

@@ -1,0 +1,566 @@
+"""Gleason face milling with modified roll (Litvin's model of face-milled generation), seed 002.
+
+A head cutter whose blades sweep cones (surfaces of revolution about the cutter axis) is carried
+by the cradle; the cradle turns by phi_c while the work turns by phi_p, with the modified roll
+
+    phi_c = c1 phi_p + c2 phi_p^2 + c3 phi_p^3 + c4 phi_p^4 + c5 phi_p^5 + c6 phi_p^6
+
+(phi_p in rad from the centre-roll position, c1 = ``ratio_of_roll``). Each flank of each member
+has its own settings (a spread-blade gear cut in one pass simply repeats the radial setting,
+cradle angle... in both flank tables; a fixed-setting or modified-roll pinion differs per flank).
+The tooth flank is the envelope of the blade's cone in the work frame (Litvin, Gear Geometry and
+Applied Theory, ch. 21 (face milling); Litvin et al., NASA CR-4342), solved on the FlankMap grid
+by the shared solver (:mod:`gearopt.envelope`) with the family of
+:mod:`gearopt_plugins.face_milling_family`.
+
+Frames and sign conventions (every setting of a right-hand member; a left-hand member is cut on
+the mirror image of the machine, so its flanks are the mirror images of the right-hand member's
+cut with the same numbers, :meth:`gearopt.flank.FlankMap.mirrored`)::
+
+                      y_m (blank offset +)
+                       ^
+                       |         . C  cutter centre: radial setting s_r, cradle angle q
+                       |      .      (measured from x_m toward y_m, with the cradle)
+                       |   .  q
+     cradle axis z_m  (o)-------------------> x_m   the work's pitch generatrix nearest the
+     (out of the page, O_m machine centre          cradle at centre roll, apex -> heel
+      toward the work)
+
+     side view (x_m, z_m):        z_m ^  work axis a_w at the machine root angle gamma_m
+                                       |    /
+                                       |   /  work (apex -> heel along +a_w)
+                                       |  /
+                                       | / gamma_m
+     cutter tip plane  z_m = 0  ------O_m-----------------> x_m
+     cutter body and cradle:  z_m < 0 (the blades point toward +z_m, the work)
+
+* Machine frame S_m: origin O_m the machine centre on the cradle axis; z_m along the cradle axis,
+  from the cradle toward the work; the plane z_m = 0 holds the blades' tips (the cutter's tip
+  plane); x_m such that the work axis lies in the x_m-z_m plane, a_w = (cos gamma_m, 0,
+  sin gamma_m) pointing from the work's apex toward its heel; y_m = z_m x x_m.
+* Cutter: its axis parallel to z_m through C = s_r (cos(q + phi_c), sin(q + phi_c), 0). Blade
+  edge (arc length u from the tip): straight at the blade pressure angle alpha, radius
+  r_p +/- u sin(alpha) and height -u cos(alpha) (+ outside blade, - inside blade); with
+  ``blade_profile_radius_mm`` rho a circular arc tangent to that line at the tip, its centre on
+  the tooth material's side (profile relief growing from the tip). ``cutter_point_radius_mm``
+  r_p is the blade's radius at its tip (the point radius). The outside blade cuts the concave
+  flank, the inside blade the convex flank, on both members.
+* Cradle: turns by phi_c about +z_m; the cradle angle q is measured in the sense of the cradle's
+  rotation from x_m (the direction of the pitch generatrix toward the heel). With q > 0 the
+  cutter centre lies on the +y_m side and the member is right-hand (gearopt's convention: the
+  same sense of spiral as the cyclo-palloid and epicycloid right-hand members, checked by a
+  test).
+* Work: its pitch apex at O_m + dX_D a_w + dE_m y_m - dX_B z_m. ``machine_center_to_back_mm``
+  dX_D: along the work axis, positive withdrawing the work toward its back (shallower cut);
+  ``blank_offset_mm`` dE_m: along +y_m; ``sliding_base_mm`` dX_B: along the cradle axis,
+  positive moving the work toward the cradle (deeper cut). Uniform depth with the machine root
+  angle = pitch angle puts the root line in the tip plane with dX_B = the member's dedendum,
+  dX_D = dE_m = 0: the work axis then meets the cradle axis at the pitch apex and the plane
+  z_m = -dX_B is the generating crown gear's pitch plane.
+* Work rotation: phi_p about +a_w. With c1 > 0 cradle and work turn as in rolling (the
+  velocities of the crown gear and of the work agree along the pitch generatrix); c1 = sin
+  gamma for a crown gear generating a member of pitch angle gamma. ``ratio_of_roll`` must be
+  positive.
+* Member frame (FlankMap): origin at the pitch apex, z along a_w; at centre roll x lies in the
+  x_m-z_m plane, x = (sin gamma_m, 0, -cos gamma_m), so the pitch generatrix nearest the cradle
+  has polar angle 0 (the angular zero is tied to the machine at centre roll).
+
+Converting Gleason's printed modified-roll coefficients (a summary prints the ratio of roll
+R_a = 1 / c1 as work over cradle, or the cradle over work, and the higher terms as 2C, 6D, 24E,
+120F, i.e. the derivatives of the cradle angle in the work angle, or of the work angle in the
+cradle angle, depending on the machine): with the work angle as the free variable,
+c2 = 2C / 2, c3 = 6D / 6, c4 = 24E / 24, c5 = 120F / 120 (per rad^k). When the summary expands
+the work angle in the cradle angle instead, invert the series first. This slice reproduces no
+printed summary yet; the conversion is stated here for the next one.
+
+Tooth numbering: the convex flank (inside blade) is not turned; the concave flank (outside blade)
+is cut in the same tooth space, and tooth 0's concave flank is it turned by one pitch toward the
+tooth material of the convex flank (the sense read from the generated normal), so that tooth 0
+lies between them. ``tool_pass`` k: the work indexed by k pitches, the flank of tooth k of a
+right-hand member (-k of a left-hand one).
+
+Design keys (``[machine.<member>.<flank>]``; keys common to both flanks may sit in
+``[machine.<member>]``)::
+
+    [machine]
+    model = "face-milling"
+
+    [machine.gear]
+    blade_pressure_angle_deg = 20.0
+    radial_setting_mm = 77.8
+    cradle_angle_deg = 41.6
+    machine_root_angle_deg = 71.565
+    machine_center_to_back_mm = 0.0
+    sliding_base_mm = 4.857
+    blank_offset_mm = 0.0
+    ratio_of_roll = 0.94868            # c1
+    # roll_c2 ... roll_c6 = 0.0        # modified roll (default 0)
+    # blade_profile_radius_mm = "inf"  # or a radius in mm
+    # blade_tip_radius_mm = 0.0        # the blade's edge radius: not supported yet
+
+    [machine.gear.concave]             # outside blade
+    cutter_point_radius_mm = 64.8
+
+    [machine.gear.convex]              # inside blade
+    cutter_point_radius_mm = 62.2
+
+Not in this slice: tapered depth (``face_angle_deg``/``root_angle_deg``), a blade tip radius,
+settings from the blank (``basic_settings`` reports the settings as given), a published
+settings summary.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from gearopt import hookimpl
+from gearopt.design import MEMBERS, Design, PairData
+from gearopt.envelope import flank_map, solve_envelope
+from gearopt.errors import DesignError, NotAvailableError, SettingsError
+from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
+from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
+from gearopt.solve import newton
+from gearopt.validate import check_keys, read_number, read_table
+from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
+
+__all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
+
+ROLL_KEYS = ("roll_c2", "roll_c3", "roll_c4", "roll_c5", "roll_c6")
+FLANK_KEYS = (
+    "cutter_point_radius_mm",
+    "blade_pressure_angle_deg",
+    "blade_profile_radius_mm",
+    "blade_tip_radius_mm",
+    "radial_setting_mm",
+    "cradle_angle_deg",
+    "machine_root_angle_deg",
+    "machine_center_to_back_mm",
+    "sliding_base_mm",
+    "blank_offset_mm",
+    "ratio_of_roll",
+    *ROLL_KEYS,
+)
+MEMBER_KEYS = (*FLANK_KEYS, *FLANKS)
+MACHINE_KEYS = MEMBERS
+#: the outside blade cuts the concave flank (+1: material radially outside the edge)
+BLADE_SIDE = {"concave": 1.0, "convex": -1.0}
+BLADE_OF_FLANK = {"concave": "outside", "convex": "inside"}
+INFINITE = "inf"
+#: the profile radius must exceed this many whole depths (the arc must not turn far)
+MIN_PROFILE_RADIUS_DEPTHS = 2.0
+#: the blade's tip may stay this far above the root line (rounding of printed settings)
+ROOT_REACH_TOL_MM = 1e-6
+
+
+@dataclass(frozen=True, kw_only=True)
+class FaceMillingFlank:
+    """Settings of one flank (the key names of the design file)."""
+
+    cutter_point_radius_mm: float
+    blade_pressure_angle_deg: float
+    blade_profile_radius_mm: float
+    blade_tip_radius_mm: float
+    radial_setting_mm: float
+    cradle_angle_deg: float
+    machine_root_angle_deg: float
+    machine_center_to_back_mm: float
+    sliding_base_mm: float
+    blank_offset_mm: float
+    ratio_of_roll: float
+    roll_c2: float = 0.0
+    roll_c3: float = 0.0
+    roll_c4: float = 0.0
+    roll_c5: float = 0.0
+    roll_c6: float = 0.0
+
+    @property
+    def roll(self) -> tuple[float, ...]:
+        """(c1, ..., c6)."""
+        return (self.ratio_of_roll, *(getattr(self, k) for k in ROLL_KEYS))
+
+    @property
+    def profile_curvature_per_mm(self) -> float:
+        r = self.blade_profile_radius_mm
+        return 0.0 if math.isinf(r) else 1.0 / r
+
+    def cutter(self, flank: str, *, index_rad: float = 0.0) -> CutterFlank:
+        return CutterFlank(
+            side=BLADE_SIDE[flank],
+            point_radius_mm=self.cutter_point_radius_mm,
+            pressure_angle_rad=math.radians(self.blade_pressure_angle_deg),
+            curvature_per_mm=self.profile_curvature_per_mm,
+            radial_setting_mm=self.radial_setting_mm,
+            cradle_angle_rad=math.radians(self.cradle_angle_deg),
+            machine_root_angle_rad=math.radians(self.machine_root_angle_deg),
+            center_to_back_mm=self.machine_center_to_back_mm,
+            blank_offset_mm=self.blank_offset_mm,
+            sliding_base_mm=self.sliding_base_mm,
+            roll=self.roll,
+            index_rad=index_rad,
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class FaceMillingMember:
+    convex: FaceMillingFlank
+    concave: FaceMillingFlank
+
+    def flank(self, name: str) -> FaceMillingFlank:
+        return getattr(self, name)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FaceMillingMachine:
+    """The ``[machine]`` table of a face-milling design."""
+
+    pinion: FaceMillingMember
+    gear: FaceMillingMember
+
+    def member(self, name: str) -> FaceMillingMember:
+        return getattr(self, name)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FaceMillingSettings:
+    """The settings of one member as given (``basic_settings`` derives none in this slice);
+    ``*_blade_profile_curvature_per_mm`` = 1 / profile radius (0: straight blade)."""
+
+    concave_cutter_point_radius_mm: float
+    concave_blade_pressure_angle_deg: float
+    concave_blade_profile_curvature_per_mm: float
+    concave_radial_setting_mm: float
+    concave_cradle_angle_deg: float
+    concave_machine_root_angle_deg: float
+    concave_machine_center_to_back_mm: float
+    concave_sliding_base_mm: float
+    concave_blank_offset_mm: float
+    concave_ratio_of_roll: float
+    concave_roll_c2: float
+    concave_roll_c3: float
+    concave_roll_c4: float
+    concave_roll_c5: float
+    concave_roll_c6: float
+    convex_cutter_point_radius_mm: float
+    convex_blade_pressure_angle_deg: float
+    convex_blade_profile_curvature_per_mm: float
+    convex_radial_setting_mm: float
+    convex_cradle_angle_deg: float
+    convex_machine_root_angle_deg: float
+    convex_machine_center_to_back_mm: float
+    convex_sliding_base_mm: float
+    convex_blank_offset_mm: float
+    convex_ratio_of_roll: float
+    convex_roll_c2: float
+    convex_roll_c3: float
+    convex_roll_c4: float
+    convex_roll_c5: float
+    convex_roll_c6: float
+
+
+# --- parsing -------------------------------------------------------------------------------------
+
+
+def _read_profile_radius(table: Mapping[str, Any], where: str, min_mm: float) -> float:
+    value = table.get("blade_profile_radius_mm", INFINITE)
+    name = f"{where}.blade_profile_radius_mm"
+    if isinstance(value, str):
+        if value.strip().lower() not in ("inf", "infinity", "+inf"):
+            raise DesignError(name, value, 'must be a radius in mm or "inf" (a straight blade)')
+        return math.inf
+    radius = read_number(table, "blade_profile_radius_mm", where, gt=0.0)
+    if radius <= min_mm:
+        raise DesignError(
+            name,
+            radius,
+            f"must exceed {MIN_PROFILE_RADIUS_DEPTHS:g} whole depths = {min_mm:.3f} mm (the arc "
+            'must not turn far over the blade); "inf" for a straight blade',
+        )
+    return radius
+
+
+def _parse_flank(
+    merged: Mapping[str, Any], where: str, pair: PairData, member: str, flank: str
+) -> FaceMillingFlank:
+    index = MEMBERS.index(member)
+    blank = pair.blank
+    depth = blank.whole_depth_mm[index]
+    for key in FLANK_KEYS:
+        if key not in merged and key not in (
+            "blade_profile_radius_mm",
+            "blade_tip_radius_mm",
+            *ROLL_KEYS,
+        ):
+            raise DesignError(
+                f"{where}.{key}", rule="required (in this flank's table or its member's)"
+            )
+    tip = read_number(merged, "blade_tip_radius_mm", where, 0.0, ge=0.0)
+    if tip != 0.0:
+        raise NotAvailableError(
+            f"{where}.blade_tip_radius_mm", tip, "a blade tip (edge) radius is not supported yet"
+        )
+    alpha = read_number(merged, "blade_pressure_angle_deg", where, gt=0.0, lt=45.0)
+    rp = read_number(merged, "cutter_point_radius_mm", where, gt=0.0)
+    reach = depth * math.tan(math.radians(alpha))
+    if flank == "convex" and rp <= reach:
+        raise DesignError(
+            f"{where}.cutter_point_radius_mm",
+            rp,
+            f"the inside blade's radius r_p - h tan(alpha) must stay positive over the whole "
+            f"depth h = {depth:.3f} mm: r_p must exceed {reach:.3f} mm",
+        )
+    c1 = read_number(merged, "ratio_of_roll", where)
+    if c1 <= 0.0:
+        raise DesignError(
+            f"{where}.ratio_of_roll",
+            c1,
+            "must be > 0: c1 = cradle rotation / work rotation, both in the senses of the "
+            "rolling generation (module docstring); a reversed roll generates no flank",
+        )
+    values = dict(
+        cutter_point_radius_mm=rp,
+        blade_pressure_angle_deg=alpha,
+        blade_profile_radius_mm=_read_profile_radius(
+            merged, where, MIN_PROFILE_RADIUS_DEPTHS * max(blank.whole_depth_mm)
+        ),
+        blade_tip_radius_mm=tip,
+        radial_setting_mm=read_number(merged, "radial_setting_mm", where, gt=0.0),
+        cradle_angle_deg=read_number(merged, "cradle_angle_deg", where, ge=-360.0, le=360.0),
+        machine_root_angle_deg=read_number(
+            merged, "machine_root_angle_deg", where, gt=0.0, lt=90.0
+        ),
+        machine_center_to_back_mm=read_number(merged, "machine_center_to_back_mm", where),
+        sliding_base_mm=read_number(merged, "sliding_base_mm", where),
+        blank_offset_mm=read_number(merged, "blank_offset_mm", where),
+        ratio_of_roll=c1,
+        **{k: read_number(merged, k, where, 0.0) for k in ROLL_KEYS},
+    )
+    spec = FaceMillingFlank(**values)
+    # the blade's tip (the plane z_m = 0) must reach the root line at the mean cone distance
+    g = math.radians(spec.machine_root_angle_deg)
+    dg = g - math.radians(blank.pitch_angle_deg[index])
+    apex_z = spec.machine_center_to_back_mm * math.sin(g) - spec.sliding_base_mm
+    root_z = (
+        apex_z
+        + blank.mean_cone_distance_mm * math.sin(dg)
+        + blank.mean_dedendum_mm[index] * math.cos(dg)
+    )
+    if root_z > ROOT_REACH_TOL_MM:
+        raise DesignError(
+            f"{where}.sliding_base_mm",
+            spec.sliding_base_mm,
+            f"the blade cannot reach the root: its tip stays {root_z:.4f} mm above the root "
+            "line at the mean cone distance (sliding base, machine centre to back and machine "
+            "root angle place the work; module docstring)",
+        )
+    return spec
+
+
+# --- the model -----------------------------------------------------------------------------------
+
+
+def _family(design: Design, member: str, flanks, *, tool_pass: int = 0) -> FaceMillingFamily:
+    index = MEMBERS.index(member)
+    teeth = (design.pair.pinion_teeth, design.pair.gear_teeth)[index]
+    spec = design.machine.member(member)
+    index_rad = 2.0 * math.pi * tool_pass / teeth
+    return FaceMillingFamily(
+        cutters=tuple(spec.flank(f).cutter(f, index_rad=index_rad) for f in flanks),
+        scale_mm=design.blank.mean_cone_distance_mm,
+        pitch_angle_rad=math.radians(design.blank.pitch_angle_deg[index]),
+    )
+
+
+class FaceMilling(BaseMachineModel):
+    """Gleason face milling with modified roll (Litvin's model), generated pinion and gear."""
+
+    name = "face-milling"
+    description = (
+        "Gleason face milling (head cutter, cradle, modified roll; Litvin's model), generated "
+        "pinion and gear, uniform depth (seed 002)"
+    )
+
+    def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> FaceMillingMachine:
+        check_keys(table, MACHINE_KEYS, "machine")
+        members = {}
+        for member in MEMBERS:
+            sub = read_table(table, member, "machine")
+            check_keys(sub, MEMBER_KEYS, f"machine.{member}")
+            common = {k: v for k, v in sub.items() if k in FLANK_KEYS}
+            flanks = {}
+            for flank in FLANKS:
+                where = f"machine.{member}.{flank}"
+                own = read_table(sub, flank, f"machine.{member}")
+                check_keys(own, FLANK_KEYS, where)
+                flanks[flank] = _parse_flank({**common, **own}, where, pair, member, flank)
+            members[member] = FaceMillingMember(**flanks)
+        return FaceMillingMachine(**members)
+
+    def basic_settings(self, design: Design) -> MachineSettings:
+        if not design.compensation.is_zero:
+            raise NotAvailableError(
+                "compensation", rule="the face-milling model does not compensate errors yet"
+            )
+        out = {}
+        for member in MEMBERS:
+            values = {}
+            for flank in FLANKS:
+                spec = design.machine.member(member).flank(flank)
+                for key in FLANK_KEYS:
+                    if key in ("blade_profile_radius_mm", "blade_tip_radius_mm"):
+                        continue
+                    values[f"{flank}_{key}"] = getattr(spec, key)
+                values[f"{flank}_blade_profile_curvature_per_mm"] = spec.profile_curvature_per_mm
+            out[member] = FaceMillingSettings(**values)
+        return MachineSettings(
+            model=self.name,
+            notes=(
+                "the settings as given in [machine] (this model derives none from the blank yet)",
+                "blade_profile_curvature_per_mm = 0 means a straight blade",
+            ),
+            **out,
+        )
+
+    def generate_flank(
+        self,
+        design: Design,
+        *,
+        member: str,
+        flank: str,
+        grid: FlankGrid | None = None,
+        tool_pass: int = 0,
+    ) -> FlankMap:
+        """The member's convex (inside blade) or concave (outside blade) flank of tooth 0."""
+        check_member_and_flank(member, flank)
+        return self.generate_flanks(
+            design, member=member, grid=grid, flanks=(flank,), tool_pass=tool_pass
+        )[flank]
+
+    def generate_flanks(
+        self,
+        design: Design,
+        *,
+        member: str,
+        grid: FlankGrid | None = None,
+        flanks: tuple[str, ...] = ("convex", "concave"),
+        tool_pass: int = 0,
+    ) -> dict[str, FlankMap]:
+        """Both flanks (or ``flanks``) of tooth 0 (of tooth ``tool_pass`` when the work is
+        indexed by that many pitches) in one batch."""
+        for flank in flanks:
+            check_member_and_flank(member, flank)
+        index = MEMBERS.index(member)
+        blank = design.blank
+        teeth = (design.pair.pinion_teeth, design.pair.gear_teeth)[index]
+        family = _family(design, member, flanks, tool_pass=tool_pass)
+        gamma = math.radians(blank.pitch_angle_deg[index])
+        solution = solve_envelope(
+            family,
+            cone_distances_mm=(blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
+            heights_mm=(-blank.mean_dedendum_mm[index], blank.mean_addendum_mm[index]),
+            pitch_angle_rad=gamma,
+            grid=grid or FlankGrid(),
+            where=f"{member} flanks {', '.join(flanks)}",
+        )
+        hand = blank.hand[index]
+        out = {}
+        for k, flank in enumerate(flanks):
+            if solution.mask[k].sum() < 4:
+                raise SettingsError(
+                    f"{member} {flank} flank",
+                    rule="the settings generate (almost) nothing of this flank",
+                )
+            spec = design.machine.member(member).flank(flank)
+            out[flank] = flank_map(
+                family,
+                solution,
+                index=k,
+                member=member,
+                flank=flank,
+                hand=hand,
+                teeth=teeth,
+                turn_rad=_tooth_turn_rad(design, member, flank, teeth),
+                notes=(
+                    f"{BLADE_OF_FLANK[flank]} blade (face milling): r_p = "
+                    f"{spec.cutter_point_radius_mm:g} mm, c1 = {spec.ratio_of_roll:g}",
+                ),
+            )
+            if tool_pass:
+                out[flank] = replace(out[flank], tooth=tool_pass if hand == "right" else -tool_pass)
+        return out
+
+    def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
+        machine: FaceMillingMachine = design.machine
+        min_rb = MIN_PROFILE_RADIUS_DEPTHS * max(design.blank.whole_depth_mm)
+        dims = []
+        for member in MEMBERS:
+            for flank in FLANKS:
+                spec = machine.member(member).flank(flank)
+                prefix = f"machine.{member}.{flank}."
+                c1, rp = spec.ratio_of_roll, spec.cutter_point_radius_mm
+                dims += [
+                    SearchDimension(key=prefix + "ratio_of_roll", low=0.99 * c1, high=1.01 * c1),
+                    SearchDimension(key=prefix + "roll_c2", low=-0.05 * c1, high=0.05 * c1),
+                    SearchDimension(
+                        key=prefix + "cutter_point_radius_mm", low=0.99 * rp, high=1.01 * rp
+                    ),
+                    SearchDimension(
+                        key=prefix + "blade_profile_radius_mm",
+                        low=max(250.0, 1.01 * min_rb),
+                        high=20000.0,
+                        log=True,
+                    ),
+                ]
+        return tuple(dims)
+
+
+def _mean_pitch_point(design: Design, member: str, flank: str) -> tuple[float, float]:
+    """Polar angle and circumferential component of the normal (out of the material) of the
+    right-hand flank as generated (before any turn) at its point of cone distance A_m on the
+    pitch cone (solved by Newton from the pitch-line start)."""
+    family = _family(design, member, (flank,))
+    a = family.scale_mm
+    g = family.pitch_angle_rad
+    target = np.array([a * math.cos(g), a * math.sin(g)])
+
+    def residual(x, idx):
+        big_l, big_r, f = family.axial_radial_meshing(x, np.zeros(len(x), int))
+        return np.stack([(big_l - target[0]) / a, (big_r - target[1]) / a, f], axis=-1)
+
+    start = family.pitch_row(np.array([a]))[0]
+    sol = newton(residual, start, tol=1e-13, max_iter=30, max_step=family.max_step)
+    if not sol.all_converged:
+        raise SettingsError(
+            f"machine.{member}.{flank}",
+            rule="no envelope at the mean point of the pitch cone (Newton did not converge): "
+            "the settings do not generate this flank there",
+        )
+    geo = family.geometry(sol.x[0], np.array(0))
+    p, n = geo["point"], geo["normal"]
+    return float(math.atan2(p[1], p[0])), float(p[0] * n[1] - p[1] * n[0])
+
+
+def _tooth_turn_rad(design: Design, member: str, flank: str, teeth: int) -> float:
+    """0 for the convex flank. The concave flank of tooth 0 is the generated concave flank
+    turned by the whole pitches that put it on the material side of the convex flank, less
+    than a pitch away (at the mean point of the pitch cone). The generated convex and concave
+    flanks may bound a tooth space (one cutter with both blades) or a tooth (a pinion cut by
+    the gear's generating surface: its outside blade on the smaller cone)."""
+    if flank == "convex":
+        return 0.0
+    pitch = 2.0 * math.pi / teeth
+    theta_x, around_x = _mean_pitch_point(design, member, "convex")
+    theta_v, _ = _mean_pitch_point(design, member, "concave")
+    toward = -1.0 if around_x > 0.0 else 1.0  # the convex flank's material side
+    d0 = (theta_v - theta_x) * toward
+    return -toward * math.floor(d0 / pitch) * pitch
+
+
+@hookimpl
+def gearopt_machine_models() -> list[BaseMachineModel]:
+    """The face-milling machine model."""
+    return [FaceMilling()]

@@ -1,0 +1,217 @@
+"""The generating family of Gleason face milling (Litvin's model), for the shared envelope solver.
+
+Frames and conventions are those of :mod:`gearopt_plugins.face_milling` (read its docstring
+first). Parameters ``q = (u, theta, phi_p)``: ``u`` the arc length along the blade's edge from
+its tip (0) toward the cutter body, ``theta`` the angle of the edge point about the cutter axis
+in the cradle frame (the head cutter's own rotation does not change the cone its blades sweep),
+``phi_p`` the work rotation from centre roll (rad); the cradle turns by
+``phi_c = c1 phi_p + c2 phi_p^2 + ... + c6 phi_p^6``.
+
+Every flank of a family is described by the same arrays (one entry per flank), so that the
+batched solver can take the entries of each point with ``take(flank)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["CutterFlank", "FaceMillingFamily", "edge"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class CutterFlank:
+    """Blade and machine settings of one flank (angles in rad, lengths in mm); any field may be
+    an array (stacked flanks).
+
+    ``side`` = +1 for the outside blade (concave flank: the tooth material lies radially outside
+    the edge), -1 for the inside blade (convex flank). ``curvature_per_mm`` = 1 / profile radius
+    (0: straight edge). ``roll`` = (c1, ..., c6). ``index_rad`` turns the generated flank about
+    the work axis (the work indexed by whole pitches before the pass).
+    """
+
+    side: float
+    point_radius_mm: float
+    pressure_angle_rad: float
+    curvature_per_mm: float
+    radial_setting_mm: float
+    cradle_angle_rad: float
+    machine_root_angle_rad: float
+    center_to_back_mm: float
+    blank_offset_mm: float
+    sliding_base_mm: float
+    roll: tuple[float, ...]
+    index_rad: float = 0.0
+
+    @staticmethod
+    def stack(flanks: tuple[CutterFlank, ...]) -> CutterFlank:
+        values = {
+            f.name: np.array([getattr(c, f.name) for c in flanks], float)
+            for f in fields(CutterFlank)
+        }
+        return CutterFlank(**values)
+
+
+def edge(c: CutterFlank, u):
+    """Radius, height (along the cradle axis z_m, toward the work; the tip at 0) and their
+    derivatives in u of the edge point at arc length ``u`` from the tip: a straight line at the
+    blade pressure angle, or the circular arc of curvature kappa tangent to it at the tip, its
+    centre on the material side (complex-safe in ``u``)."""
+    sa, ca = np.sin(c.pressure_angle_rad), np.cos(c.pressure_angle_rad)
+    side = c.side
+    t_r, t_h = side * sa, -ca  # unit tangent, from the tip toward the cutter body
+    m_r, m_h = side * ca, sa  # unit normal toward the tooth material
+    k = np.asarray(c.curvature_per_mm)
+    straight = k == 0.0
+    ks = np.where(straight, 1.0, k)
+    ang = ks * u
+    sin_over = np.where(straight, u, np.sin(ang) / ks)
+    vers_over = np.where(straight, 0.0 * u, (1.0 - np.cos(ang)) / ks)
+    cos_k = np.where(straight, 1.0 + 0.0 * u, np.cos(ang))
+    sin_k = np.where(straight, 0.0 * u, np.sin(ang))
+    radius = c.point_radius_mm + sin_over * t_r + vers_over * m_r
+    height = sin_over * t_h + vers_over * m_h
+    d_radius = cos_k * t_r + sin_k * m_r
+    d_height = cos_k * t_h + sin_k * m_h
+    return radius, height, d_radius, d_height
+
+
+def _roll(c: CutterFlank, phi):
+    """Cradle angle phi_c(phi_p) and its derivative (Horner)."""
+    coef = c.roll
+    value = 0.0 * phi
+    slope = 0.0 * phi
+    for k in range(5, -1, -1):  # c6 ... c1
+        value = (value + coef[k]) * phi
+        slope = slope * phi + (k + 1) * coef[k]
+    return value, slope
+
+
+def _machine(c: CutterFlank, u, theta, phi):
+    """Tool point, unit normal (the edge's, not oriented to the material) and relative velocity
+    per unit phi_p, in the machine frame; the work's apex and axis."""
+    radius, height, dr, dh = edge(c, u)
+    ct, st = np.cos(theta), np.sin(theta)
+    sr, q = c.radial_setting_mm, c.cradle_angle_rad
+    xc = sr * np.cos(q) + radius * ct
+    yc = sr * np.sin(q) + radius * st
+    zc = height
+    # normal of the cone r = (rho cos t, rho sin t, h): (r_u x r_t) / rho, unit for arc length u
+    nx, ny, nz = -dh * ct, -dh * st, dr
+    phi_c, dphi_c = _roll(c, phi)
+    cc, sc = np.cos(phi_c), np.sin(phi_c)
+    x, y = cc * xc - sc * yc, sc * xc + cc * yc
+    n = (cc * nx - sc * ny, sc * nx + cc * ny, nz)
+    g = c.machine_root_angle_rad
+    cg, sg = np.cos(g), np.sin(g)
+    # the work's pitch apex: dX_D along the work axis, dE_m along y_m, dX_B toward the cradle
+    ax = c.center_to_back_mm * cg
+    ay = c.blank_offset_mm
+    az = c.center_to_back_mm * sg - c.sliding_base_mm
+    dx, dy, dz = x - ax, y - ay, zc - az
+    # relative velocity: cradle about z_m (rate phi_c'), minus work about a_w through the apex
+    v = (
+        -dphi_c * y + sg * dy,
+        dphi_c * x - (sg * dx - cg * dz),
+        -cg * dy,
+    )
+    return (dx, dy, dz), n, v, (cg, sg)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FaceMillingFamily:
+    """Face-milling cutters as a :class:`gearopt.envelope.GeneratingFamily`, q = (u, theta,
+    phi_p), one flank per entry of ``cutters``. ``pitch_angle_rad`` is the member's pitch angle
+    (for the start on the pitch line)."""
+
+    cutters: tuple[CutterFlank, ...]
+    scale_mm: float
+    pitch_angle_rad: float
+    max_step: tuple[float, float, float] = (1.0, 0.05, 0.05)
+
+    @property
+    def n_flanks(self) -> int:
+        return len(self.cutters)
+
+    @cached_property
+    def _stacked(self) -> CutterFlank:
+        return CutterFlank.stack(self.cutters)
+
+    def _take(self, flank) -> CutterFlank:
+        s = self._stacked
+        idx = np.asarray(flank)
+        values = {f.name: np.asarray(getattr(s, f.name))[idx] for f in fields(CutterFlank)}
+        values["roll"] = tuple(np.asarray(s.roll)[idx][..., k] for k in range(6))
+        return CutterFlank(**values)
+
+    def axial_radial_meshing(self, q, flank):
+        c = self._take(flank)
+        (dx, dy, dz), n, v, (cg, sg) = _machine(c, q[..., 0], q[..., 1], q[..., 2])
+        xw = sg * dx - cg * dz
+        axial = cg * dx + sg * dz
+        radius = np.sqrt(xw * xw + dy * dy)
+        meshing = n[0] * v[0] + n[1] * v[1] + n[2] * v[2]  # |n| = 1
+        return axial, radius, meshing / self.scale_mm
+
+    def geometry(self, q, flank) -> dict[str, NDArray]:
+        c = self._take(flank)
+        (dx, dy, dz), n, _, (cg, sg) = _machine(c, q[..., 0], q[..., 1], q[..., 2])
+        turn = c.index_rad - q[..., 2]  # the work turned by phi_p: material seen at -phi_p
+        ct, st = np.cos(turn), np.sin(turn)
+
+        def to_work(x, y, z):
+            xw, zw = sg * x - cg * z, cg * x + sg * z
+            return np.stack([ct * xw - st * y, st * xw + ct * y, zw], axis=-1)
+
+        normal = to_work(*n) * (-c.side)[..., None]  # out of the tooth material
+        normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+        return {"point": to_work(dx, dy, dz), "normal": normal}
+
+    def within_tool(self, q, flank):
+        return np.real(q[..., 0]) >= -1e-9  # the blade ends at its tip (u = 0)
+
+    def pitch_row(self, cone_distance_mm):
+        """Start on the pitch line: the point P(s) of the work's pitch generatrix nearest the
+        cradle at centre roll (the rolling's instantaneous axis when the roll is pure); the
+        cradle angle at which the cutter's cone at P's height passes through P; the work
+        rotation from the roll law."""
+        s = np.asarray(cone_distance_mm, float)
+        rows = []
+        for c in self.cutters:
+            g, gp = c.machine_root_angle_rad, self.pitch_angle_rad
+            apex = np.array(
+                [
+                    c.center_to_back_mm * math.cos(g),
+                    c.blank_offset_mm,
+                    c.center_to_back_mm * math.sin(g) - c.sliding_base_mm,
+                ]
+            )
+            px = apex[0] + s * math.cos(g - gp)
+            py = apex[1] + 0.0 * s
+            pz = apex[2] + s * math.sin(g - gp)
+            # blade point at P's height (Newton on the edge; exact at once for a straight edge)
+            u = -pz / math.cos(c.pressure_angle_rad)
+            for _ in range(4):
+                _, h, _, dh = edge(c, u)
+                u = u - (h - pz) / dh
+            rho = edge(c, u)[0]
+            sr, q = c.radial_setting_mm, c.cradle_angle_rad
+            dist = np.hypot(px, py)
+            k = np.clip((dist**2 + sr**2 - rho**2) / (2.0 * sr * dist), -1.0, 1.0)
+            base = np.arctan2(py, px) - q
+            cands = np.stack([base + np.arccos(k), base - np.arccos(k)])
+            cands = (cands + math.pi) % (2.0 * math.pi) - math.pi
+            phi_c = np.where(np.abs(cands[0]) <= np.abs(cands[1]), cands[0], cands[1])
+            cc, sc = np.cos(phi_c), np.sin(phi_c)
+            xr, yr = cc * px + sc * py, -sc * px + cc * py  # P in the cradle frame
+            theta = np.arctan2(yr - sr * math.sin(q), xr - sr * math.cos(q))
+            phi = phi_c / c.roll[0]
+            for _ in range(6):
+                value, slope = _roll(c, phi)
+                phi = phi - (value - phi_c) / slope
+            rows.append(np.stack([np.broadcast_to(u, s.shape), theta, phi], axis=-1))
+        return np.stack(rows)
