@@ -354,8 +354,8 @@ def _parse_flank(
             f"{where}.sliding_base_mm",
             spec.sliding_base_mm,
             f"the blade cannot reach the root: its tip stays {root_z:.4f} mm above the root "
-            "line at the mean cone distance (sliding base, machine centre to back and machine "
-            "root angle place the work; module docstring)",
+            "line at the mean cone distance (sliding_base_mm, machine_center_to_back_mm and "
+            "machine_root_angle_deg place the work; module docstring)",
         )
     return spec
 
