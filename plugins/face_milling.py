@@ -82,27 +82,27 @@ right-hand member (-k of a left-hand one).
 Design keys (``[machine.<member>.<flank>]``; keys common to both flanks may sit in
 ``[machine.<member>]``)::
 
-    [machine]
+    [machine]                          # studies/face_milling_conjugate.toml, its gear
     model = "face-milling"
 
     [machine.gear]
     blade_pressure_angle_deg = 20.0
-    radial_setting_mm = 77.8
-    cradle_angle_deg = 41.6
-    machine_root_angle_deg = 71.565
+    radial_setting_mm = 74.674435602
+    cradle_angle_deg = 44.152654237
+    machine_root_angle_deg = 71.565051177
     machine_center_to_back_mm = 0.0
-    sliding_base_mm = 4.857
+    sliding_base_mm = 4.856974144
     blank_offset_mm = 0.0
-    ratio_of_roll = 0.94868            # c1
+    ratio_of_roll = 0.948683298051     # c1
     # roll_c2 ... roll_c6 = 0.0        # modified roll (default 0)
     # blade_profile_radius_mm = "inf"  # or a radius in mm
     # blade_tip_radius_mm = 0.0        # the blade's edge radius: not supported yet
 
     [machine.gear.concave]             # outside blade
-    cutter_point_radius_mm = 64.8
+    cutter_point_radius_mm = 64.783932841
 
     [machine.gear.convex]              # inside blade
-    cutter_point_radius_mm = 62.2
+    cutter_point_radius_mm = 62.216067159
 
 Not in this slice: tapered depth (``face_angle_deg``/``root_angle_deg``), a blade tip radius,
 settings from the blank (``basic_settings`` reports the settings as given), a published
