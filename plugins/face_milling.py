@@ -41,10 +41,11 @@ cut with the same numbers, :meth:`gearopt.flank.FlankMap.mirrored`)::
 * Cutter: its axis parallel to z_m through C = s_r (cos(q + phi_c), sin(q + phi_c), 0). Blade
   edge (arc length u from the tip): straight at the blade pressure angle alpha, radius
   r_p +/- u sin(alpha) and height -u cos(alpha) (+ outside blade, - inside blade); with
-  ``blade_profile_radius_mm`` rho a circular arc tangent to that line at the tip, its centre on
-  the tooth material's side (profile relief growing from the tip). ``cutter_point_radius_mm``
-  r_p is the blade's radius at its tip (the point radius). The outside blade cuts the concave
-  flank, the inside blade the convex flank, on both members.
+  ``blade_profile_radius_mm`` rho a circular arc tangent to that line at the pitch-line point
+  (the blade point the member's mean dedendum above the tip, as in the epicycloid model), its
+  centre on the tooth material's side (profile crowning: relief growing both ways from there).
+  ``cutter_point_radius_mm`` r_p is the blade's radius at its tip (the point radius). The
+  outside blade cuts the concave flank, the inside blade the convex flank, on both members.
 * Cradle: turns by phi_c about +z_m; the cradle angle q is measured in the sense of the cradle's
   rotation from x_m (the direction of the pitch generatrix toward the heel). With q > 0 the
   cutter centre lies on the +y_m side and the member is right-hand (gearopt's convention: the
@@ -188,8 +189,14 @@ class FaceMillingFlank:
         r = self.blade_profile_radius_mm
         return 0.0 if math.isinf(r) else 1.0 / r
 
-    def cutter(self, flank: str, *, index_rad: float = 0.0) -> CutterFlank:
+    def cutter(
+        self, flank: str, *, index_rad: float = 0.0, pitch_depth_mm: float = 0.0
+    ) -> CutterFlank:
+        """The flank's cutter; a profile arc is tangent to the straight blade at its pitch-line
+        point, ``pitch_depth_mm`` (the member's mean dedendum) above the tip."""
+        alpha = math.radians(self.blade_pressure_angle_deg)
         return CutterFlank(
+            tangent_mm=pitch_depth_mm / math.cos(alpha),
             side=BLADE_SIDE[flank],
             point_radius_mm=self.cutter_point_radius_mm,
             pressure_angle_rad=math.radians(self.blade_pressure_angle_deg),
@@ -369,7 +376,12 @@ def _family(design: Design, member: str, flanks, *, tool_pass: int = 0) -> FaceM
     spec = design.machine.member(member)
     index_rad = 2.0 * math.pi * tool_pass / teeth
     return FaceMillingFamily(
-        cutters=tuple(spec.flank(f).cutter(f, index_rad=index_rad) for f in flanks),
+        cutters=tuple(
+            spec.flank(f).cutter(
+                f, index_rad=index_rad, pitch_depth_mm=design.blank.mean_dedendum_mm[index]
+            )
+            for f in flanks
+        ),
         scale_mm=design.blank.mean_cone_distance_mm,
         pitch_angle_rad=math.radians(design.blank.pitch_angle_deg[index]),
     )

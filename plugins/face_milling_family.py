@@ -30,8 +30,9 @@ class CutterFlank:
 
     ``side`` = +1 for the outside blade (concave flank: the tooth material lies radially outside
     the edge), -1 for the inside blade (convex flank). ``curvature_per_mm`` = 1 / profile radius
-    (0: straight edge). ``roll`` = (c1, ..., c6). ``index_rad`` turns the generated flank about
-    the work axis (the work indexed by whole pitches before the pass).
+    (0: straight edge), the arc tangent to the straight edge at arc length ``tangent_mm`` from
+    the tip (the pitch-line point). ``roll`` = (c1, ..., c6). ``index_rad`` turns the generated
+    flank about the work axis (the work indexed by whole pitches before the pass).
     """
 
     side: float
@@ -46,6 +47,7 @@ class CutterFlank:
     sliding_base_mm: float
     roll: tuple[float, ...]
     index_rad: float = 0.0
+    tangent_mm: float = 0.0
 
     @staticmethod
     def stack(flanks: tuple[CutterFlank, ...]) -> CutterFlank:
@@ -59,8 +61,9 @@ class CutterFlank:
 def edge(c: CutterFlank, u):
     """Radius, height (along the cradle axis z_m, toward the work; the tip at 0) and their
     derivatives in u of the edge point at arc length ``u`` from the tip: a straight line at the
-    blade pressure angle, or the circular arc of curvature kappa tangent to it at the tip, its
-    centre on the material side (complex-safe in ``u``)."""
+    blade pressure angle, or the circular arc of curvature kappa tangent to it at arc length
+    ``tangent_mm`` (the pitch-line point), its centre on the material side (complex-safe in
+    ``u``)."""
     sa, ca = np.sin(c.pressure_angle_rad), np.cos(c.pressure_angle_rad)
     side = c.side
     t_r, t_h = side * sa, -ca  # unit tangent, from the tip toward the cutter body
@@ -68,13 +71,15 @@ def edge(c: CutterFlank, u):
     k = np.asarray(c.curvature_per_mm)
     straight = k == 0.0
     ks = np.where(straight, 1.0, k)
-    ang = ks * u
-    sin_over = np.where(straight, u, np.sin(ang) / ks)
-    vers_over = np.where(straight, 0.0 * u, (1.0 - np.cos(ang)) / ks)
-    cos_k = np.where(straight, 1.0 + 0.0 * u, np.cos(ang))
-    sin_k = np.where(straight, 0.0 * u, np.sin(ang))
-    radius = c.point_radius_mm + sin_over * t_r + vers_over * m_r
-    height = sin_over * t_h + vers_over * m_h
+    u0 = np.asarray(c.tangent_mm)
+    w = u - u0  # from the tangency point
+    ang = ks * w
+    sin_over = np.where(straight, w, np.sin(ang) / ks)
+    vers_over = np.where(straight, 0.0 * w, (1.0 - np.cos(ang)) / ks)
+    cos_k = np.where(straight, 1.0 + 0.0 * w, np.cos(ang))
+    sin_k = np.where(straight, 0.0 * w, np.sin(ang))
+    radius = c.point_radius_mm + (u0 + sin_over) * t_r + vers_over * m_r
+    height = (u0 + sin_over) * t_h + vers_over * m_h
     d_radius = cos_k * t_r + sin_k * m_r
     d_height = cos_k * t_h + sin_k * m_h
     return radius, height, d_radius, d_height

@@ -305,3 +305,33 @@ def test_family_is_complex_step_safe(conjugate):
             - np.stack(family.axial_radial_meshing(q - h * dq, flank), -1)
         ) / (2 * h)
         assert_allclose(cs, fd, rtol=1e-6, atol=1e-8)
+
+
+def test_profile_arc_is_tangent_at_the_pitch_line_point_and_crowns_both_ways():
+    # the same meaning as the epicycloid model's blade_profile_radius_mm: the arc touches the
+    # straight blade at its pitch-line point and leaves it toward the material on both sides
+    from gearopt_plugins.face_milling_family import CutterFlank, edge
+
+    straight = CutterFlank(
+        side=1.0,
+        point_radius_mm=60.0,
+        pressure_angle_rad=np.radians(20.0),
+        curvature_per_mm=0.0,
+        radial_setting_mm=70.0,
+        cradle_angle_rad=0.7,
+        machine_root_angle_rad=0.3,
+        center_to_back_mm=0.0,
+        blank_offset_mm=0.0,
+        sliding_base_mm=5.0,
+        roll=(0.3, 0, 0, 0, 0, 0),
+        tangent_mm=5.0 / np.cos(np.radians(20.0)),
+    )
+    arc = replace(straight, curvature_per_mm=1.0 / 400.0)
+    u0 = straight.tangent_mm
+    np.testing.assert_allclose(edge(arc, u0), edge(straight, u0), atol=1e-12)
+    normal = np.array([np.cos(np.radians(20.0)), np.sin(np.radians(20.0))])  # toward material
+    for du in (-4.0, 4.0):
+        r_a, h_a, *_ = edge(arc, u0 + du)
+        r_s, h_s, *_ = edge(straight, u0 + du)
+        relief = np.dot([r_a - r_s, h_a - h_s], normal)
+        assert relief == pytest.approx(du**2 / (2 * 400.0), rel=1e-3)
