@@ -22,6 +22,7 @@ from typing import Any
 
 from gearopt.design import load_design
 from gearopt.errors import DesignError, GearoptError
+from gearopt.flank_cli import add_flank_parser
 from gearopt.plugins import get_machine_model, list_plugins
 from gearopt.study_cli import add_study_parser
 
@@ -482,6 +483,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--reserve", help="gears already in use, e.g. 48,45,60,60")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_change_gears)
+    add_flank_parser(sub)
     add_study_parser(sub)
     return parser
 
