@@ -399,6 +399,7 @@ def run_study(
     failed = evaluated = 0
     worker_s = 0.0
     bar = _progress(progress, trials, spec)
+    shown = [0.0]  # when the bar last showed the best value
     last_beat = time.monotonic()
 
     def counts() -> tuple[int, int]:
@@ -442,7 +443,9 @@ def run_study(
             study.tell(trial, list(outcome.values))
             if bar is not None:
                 bar.update(1)
-                _best_postfix(bar, study, spec)
+                if time.monotonic() - shown[0] > 1.0:  # reading every trial costs: once a second
+                    _best_postfix(bar, study, spec)
+                    shown[0] = time.monotonic()
         if on_told is not None:
             on_told(number)
 
@@ -487,11 +490,14 @@ def run_study(
                 alone.add(trial.number)
                 submit(trial, params, attempt)
             return
-        while held and len(pending) < jobs:
+        # busy workers: the pending trials not finished (finished ones are told after this)
+        busy = sum(not p[1].done() for p in pending.values())
+        while held and busy < jobs:
             submit(*held.pop(0))
+            busy += 1
         if batch and pending and not held:
             return
-        for _ in range(min(jobs - len(pending), max(free, 0))):
+        for _ in range(min(jobs - busy, max(free, 0))):
             ask()
 
     executor = _executor(jobs, backend, scheduler)
@@ -529,6 +535,11 @@ def run_study(
             ):
                 results.heartbeat(me, spec.name, host, pid)
             mark = time.perf_counter()
+            if not batch and not suspects:
+                # keep the workers busy first: the next trials are asked and sent before the
+                # finished ones are told (TPE's constant liar counts those as pending)
+                complete, running = counts()
+                refill(trials - complete - running)
             broken = False
             for number in sorted(pending):
                 future = pending[number][1]
@@ -564,6 +575,8 @@ def run_study(
         raise
     finally:
         if bar is not None:
+            if evaluated:
+                _best_postfix(bar, study, spec)
             bar.close()
         if isinstance(executor, _JoblibBatches):
             executor.client.close()

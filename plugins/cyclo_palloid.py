@@ -132,6 +132,34 @@ class CycloPalloidMember:
         return self.additional_slope_angle_deg == AUTO
 
 
+#: the last member settings whose additional slope angle was solved from the thickness, keyed by
+#: everything the solve reads (a study changing only the pinion solves the gear once per worker)
+_SOLVED: dict[tuple, Any] = {}
+
+
+def _solved_settings(design: Design, member: str):
+    """The member's settings with the additional slope angle solved from its tooth thickness
+    (seed 001 eqs 39-48), remembered for the same inputs."""
+    machine = design.machine
+    key = (
+        member,
+        design.pair,
+        machine.blade_groups,
+        machine.blade_module_mm,
+        machine.member(member),
+        design.compensation,
+    )
+    found = _SOLVED.pop(key, None)
+    if found is None:
+        found = solve_additional_slope_angle(
+            design, member, lambda dnu_deg: member_settings(design, member, dnu_deg)
+        ).settings
+    _SOLVED[key] = found  # the most recent last
+    while len(_SOLVED) > 16:
+        del _SOLVED[next(iter(_SOLVED))]
+    return found
+
+
 @dataclass(frozen=True, kw_only=True)
 class CycloPalloidMachine:
     """The ``[machine]`` table of a cyclo-palloid design."""
@@ -351,9 +379,7 @@ class CycloPalloid(BaseMachineModel):
         for member in MEMBERS:
             spec = design.machine.member(member)
             if spec.is_auto:
-                settings[member] = solve_additional_slope_angle(
-                    design, member, lambda dnu_deg, m=member: member_settings(design, m, dnu_deg)
-                ).settings
+                settings[member] = _solved_settings(design, member)
             else:
                 settings[member] = member_settings(design, member, spec.additional_slope_angle_deg)
         notes = []
