@@ -6,9 +6,11 @@ member axis, toward the heel) and a radius, solved on the envelope itself (the F
 ``point_mm``, unit ``normal`` (out of the tooth material) and ``polar_angle_deg`` in the member
 frame of :mod:`gearopt.flank` (origin at the pitch apex, z along the axis toward the heel). The
 flank is tooth 0's of the model (a tooth of the pinion, the flank pair around a space of the
-gear as the model documents it); the polar angle's zero is the model's, tied to its machine at
-centre roll (see each model's docstring). Works for every machine model whose FlankMaps carry
-their generated surface (all built-in ones do).
+gear as the model documents it); the polar angle's zero is the model's, tied to its machine
+(cyclo-palloid and epicycloid: tooth 0's convex flank passes through the pitch point M at polar
+angle 0 for a right-hand member at the machine's zero; face milling: the pitch generatrix
+nearest the cradle at centre roll; see each model's docstring). Works for every machine model
+whose FlankMaps carry their generated surface (all built-in ones do).
 """
 
 from __future__ import annotations
