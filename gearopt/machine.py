@@ -143,8 +143,13 @@ class BaseMachineModel(abc.ABC):
             Right- or left-hand as the pair says, its normals out of the tooth material, with
             a ``surface`` for exact points and the tool's positions when the model can.
 
-        Models without a generator raise :class:`~gearopt.errors.NotAvailableError`.
+        The default asks :meth:`generate_flanks` for the one flank when the model overrides
+        that; models without a generator raise :class:`~gearopt.errors.NotAvailableError`.
         """
+        if type(self).generate_flanks is not BaseMachineModel.generate_flanks:
+            return self.generate_flanks(
+                design, member=member, grid=grid, flanks=(flank,), tool_pass=tool_pass
+            )[flank]
         raise NotAvailableError(
             f"machine model {self.name!r}",
             rule="does not generate tooth flanks (no generate_flank implementation)",
@@ -162,7 +167,7 @@ class BaseMachineModel(abc.ABC):
         """``{flank: FlankMap}`` for the member's ``flanks`` (arguments as :meth:`generate_flank`).
 
         The default calls :meth:`generate_flank` once per flank; override it when the model can
-        solve several flanks in one batch.
+        solve several flanks in one batch (then :meth:`generate_flank` needs no override).
         """
         return {
             f: self.generate_flank(design, member=member, flank=f, grid=grid, tool_pass=tool_pass)

@@ -397,25 +397,6 @@ class CycloPalloid(BaseMachineModel):
             )
         return MachineSettings(model=self.name, notes=tuple(notes), **settings)
 
-    def generate_flank(
-        self,
-        design: Design,
-        *,
-        member: str,
-        flank: str,
-        grid: FlankGrid | None = None,
-        tool_pass: int = 0,
-    ) -> FlankMap:
-        """The member's convex (inner blades) or concave (outer blades) flank, tooth 0.
-
-        See :mod:`gearopt_plugins.cyclo_palloid_generation` for the phase of the outer blades,
-        the masks and the tooth numbering.
-        """
-        check_member_and_flank(member, flank)
-        return self.generate_flanks(
-            design, member=member, grid=grid, flanks=(flank,), tool_pass=tool_pass
-        )[flank]
-
     def generate_flanks(
         self,
         design: Design,
@@ -426,7 +407,9 @@ class CycloPalloid(BaseMachineModel):
         tool_pass: int = 0,
     ) -> dict[str, FlankMap]:
         """Both flanks (or ``flanks``) of the member's tooth 0, solved in one batch; with
-        ``tool_pass`` k, those cut by the k-th blade group."""
+        ``tool_pass`` k, those cut by the k-th blade group. Convex: inner blades; concave: outer
+        blades (see :mod:`gearopt_plugins.cyclo_palloid_generation` for the phase of the outer
+        blades, the masks and the tooth numbering)."""
         for flank in flanks:
             check_member_and_flank(member, flank)
         settings = self.basic_settings(design).member(member)

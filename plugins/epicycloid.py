@@ -72,6 +72,7 @@ from gearopt.errors import DesignError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.validate import check_keys, read_integer, read_number, read_table
+from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.cyclo_palloid import (
     CycloPalloidMachine,
     CycloPalloidMember,
@@ -102,13 +103,9 @@ FLANK_KEYS = (
 )
 MEMBER_KEYS = (*FLANK_KEYS, *FLANKS)
 MACHINE_KEYS = ("blade_groups", "blade_module_mm", *MEMBERS, *FLANK_KEYS)
-INFINITE = "inf"
 #: seed 003's drive side: pinion convex driving gear concave (DESIGN.md)
 DRIVE_FLANK = {"pinion": "convex", "gear": "concave"}
 COAST_FLANK = {"pinion": "concave", "gear": "convex"}
-#: R_b must exceed this many whole depths: the arc then turns by less than about 30 deg over
-#: the blade, far from the quarter turn where the edge would fold back
-MIN_PROFILE_RADIUS_DEPTHS = 2.0
 
 
 # --- data ----------------------------------------------------------------------------------------
@@ -209,24 +206,6 @@ class EpicycloidSettings:
 # --- parsing -------------------------------------------------------------------------------------
 
 
-def _read_profile_radius(table: Mapping[str, Any], where: str, min_mm: float) -> float:
-    value = table.get("blade_profile_radius_mm", INFINITE)
-    name = f"{where}.blade_profile_radius_mm"
-    if isinstance(value, str):
-        if value.strip().lower() not in ("inf", "infinity", "+inf"):
-            raise DesignError(name, value, 'must be a radius in mm or "inf" (a straight blade)')
-        return math.inf
-    radius = read_number(table, "blade_profile_radius_mm", where, gt=0.0)
-    if radius <= min_mm:
-        raise DesignError(
-            name,
-            radius,
-            f"must exceed {MIN_PROFILE_RADIUS_DEPTHS:g} whole depths = {min_mm:.3f} mm (the arc "
-            'must not turn far over the blade); "inf" for a straight blade',
-        )
-    return radius
-
-
 def _parse_flank(
     merged: Mapping[str, Any], where: str, pair: PairData, rho_mm: float
 ) -> EpicycloidFlank:
@@ -246,7 +225,7 @@ def _parse_flank(
     depth = max(pair.blank.whole_depth_mm)
     return EpicycloidFlank(
         cutter_head_radius_mm=rh,
-        blade_profile_radius_mm=_read_profile_radius(
+        blade_profile_radius_mm=read_profile_radius(
             merged, where, MIN_PROFILE_RADIUS_DEPTHS * depth
         ),
         rake_angle_deg=read_number(merged, "rake_angle_deg", where, 0.0, gt=-30.0, lt=30.0),
@@ -355,21 +334,6 @@ class Epicycloid(BaseMachineModel):
                 "section 4): machine root angles and roll ratios for Sigma + dGamma, dXD, dEm"
             )
         return MachineSettings(model=self.name, notes=tuple(notes), **out)
-
-    def generate_flank(
-        self,
-        design: Design,
-        *,
-        member: str,
-        flank: str,
-        grid: FlankGrid | None = None,
-        tool_pass: int = 0,
-    ) -> FlankMap:
-        """The member's convex (inner blades) or concave (outer blades) flank, tooth 0."""
-        check_member_and_flank(member, flank)
-        return self.generate_flanks(
-            design, member=member, grid=grid, flanks=(flank,), tool_pass=tool_pass
-        )[flank]
 
     def generate_flanks(
         self,

@@ -127,6 +127,7 @@ from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
+from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
@@ -151,9 +152,6 @@ MACHINE_KEYS = MEMBERS
 #: the outside blade cuts the concave flank (+1: material radially outside the edge)
 BLADE_SIDE = {"concave": 1.0, "convex": -1.0}
 BLADE_OF_FLANK = {"concave": "outside", "convex": "inside"}
-INFINITE = "inf"
-#: the profile radius must exceed this many whole depths (the arc must not turn far)
-MIN_PROFILE_RADIUS_DEPTHS = 2.0
 #: the blade's tip may stay this far above the root line (rounding of printed settings)
 ROOT_REACH_TOL_MM = 1e-6
 
@@ -272,24 +270,6 @@ class FaceMillingSettings:
 # --- parsing -------------------------------------------------------------------------------------
 
 
-def _read_profile_radius(table: Mapping[str, Any], where: str, min_mm: float) -> float:
-    value = table.get("blade_profile_radius_mm", INFINITE)
-    name = f"{where}.blade_profile_radius_mm"
-    if isinstance(value, str):
-        if value.strip().lower() not in ("inf", "infinity", "+inf"):
-            raise DesignError(name, value, 'must be a radius in mm or "inf" (a straight blade)')
-        return math.inf
-    radius = read_number(table, "blade_profile_radius_mm", where, gt=0.0)
-    if radius <= min_mm:
-        raise DesignError(
-            name,
-            radius,
-            f"must exceed {MIN_PROFILE_RADIUS_DEPTHS:g} whole depths = {min_mm:.3f} mm (the arc "
-            'must not turn far over the blade); "inf" for a straight blade',
-        )
-    return radius
-
-
 def _parse_flank(
     merged: Mapping[str, Any], where: str, pair: PairData, member: str, flank: str
 ) -> FaceMillingFlank:
@@ -331,7 +311,7 @@ def _parse_flank(
     values = dict(
         cutter_point_radius_mm=rp,
         blade_pressure_angle_deg=alpha,
-        blade_profile_radius_mm=_read_profile_radius(
+        blade_profile_radius_mm=read_profile_radius(
             merged, where, MIN_PROFILE_RADIUS_DEPTHS * max(blank.whole_depth_mm)
         ),
         blade_tip_radius_mm=tip,
@@ -436,21 +416,6 @@ class FaceMilling(BaseMachineModel):
             ),
             **out,
         )
-
-    def generate_flank(
-        self,
-        design: Design,
-        *,
-        member: str,
-        flank: str,
-        grid: FlankGrid | None = None,
-        tool_pass: int = 0,
-    ) -> FlankMap:
-        """The member's convex (inside blade) or concave (outside blade) flank of tooth 0."""
-        check_member_and_flank(member, flank)
-        return self.generate_flanks(
-            design, member=member, grid=grid, flanks=(flank,), tool_pass=tool_pass
-        )[flank]
 
     def generate_flanks(
         self,
