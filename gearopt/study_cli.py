@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
+import sys
 import tomllib
 from pathlib import Path
 
@@ -24,21 +26,31 @@ def _parse_assignment(text: str) -> tuple[str, float]:
     return key.strip(), parsed
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from gearopt.study import run_study
     from gearopt.studyfile import load_study_spec
 
     spec = load_study_spec(args.study)
-    summary = run_study(
-        spec,
-        trials=args.trials,
-        jobs=args.jobs,
-        storage=args.storage,
-        deterministic=args.deterministic,
-        progress=not args.no_progress,
-        backend=args.backend,
-        scheduler=args.scheduler,
-    )
+    # a polite stop (a scheduler's SIGTERM) is a Ctrl-C: the trials in hand go back to the queue
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        summary = run_study(
+            spec,
+            trials=args.trials,
+            jobs=args.jobs,
+            storage=args.storage,
+            deterministic=args.deterministic,
+            progress=not args.no_progress,
+            backend=args.backend,
+            scheduler=args.scheduler,
+        )
+    except KeyboardInterrupt:
+        print("gearopt: stopped; the trials in hand are back in the queue", file=sys.stderr)
+        return 130
     best = summary.best
     report = {
         "study": summary.study,

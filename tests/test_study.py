@@ -621,3 +621,33 @@ def test_seed003_table5_sweep_through_the_queue_fills_the_tables(tmp_path, seed_
     for row in table:
         got = ours[float(row["cutter_edge_radius_mm"])]
         assert got == pytest.approx(row["max_kinematic_error_arcsec"], abs=0.05)
+
+
+def test_a_terminated_coordinator_puts_its_trials_back_in_the_queue(tmp_path, toy_site):
+    study = _toy_study(tmp_path, conditions="{sleep_s = 0.4}")
+    db = tmp_path / "toy_probe.db"
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study)]
+    args += ["--trials", "8", "--jobs", "2", "--no-progress"]
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        time.sleep(0.2)
+        try:
+            states = _states(_trials(db))
+        except Exception:  # the study is being created
+            continue
+        if states.get("COMPLETE", 0) >= 2 and states.get("RUNNING", 0) >= 1:
+            break
+    proc.send_signal(signal.SIGTERM)  # the coordinator only: it stops its workers itself
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    trials = _trials(db)
+    states = _states(trials)
+    assert "RUNNING" not in states and states.get("WAITING", 0) >= 1
+    back = [t for t in trials if t.state == TrialState.FAIL]
+    assert all("coordinator stopped" in t.user_attrs["gearopt_error"] for t in back)
+    waiting = [t for t in trials if t.state == TrialState.WAITING]
+    assert all(t.user_attrs["gearopt_attempt"] == 1 for t in waiting)  # not the trials' fault
+    _gearopt(["study", "run", study, "--trials", 8, "--jobs", 2, "--no-progress"], toy_site)
+    assert _states(_trials(db)) == {"COMPLETE": 8, "FAIL": len(back)}
