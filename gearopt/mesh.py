@@ -20,8 +20,11 @@ Definitions used by the outputs:
   contact path is the zone's centroid (weights ``compound - separation``, so a paraboloid's
   centroid is its vertex and a line contact's is its middle) along the carrying pair's cycle;
 - mean contact point M: the path point midway between the carrying pair's hand-overs; bias =
-  face coordinate of the path at the end of the pair's cycle minus at its start; width = extent
-  of the zone at M perpendicular to the path; ``center_offset_mm`` = M minus the flank centre C
+  the contact line's extension along the face (seed 003 section 6): the face coordinate of the
+  contact point where the pair leaves contact inside the flanks minus where it enters (the ends
+  of its contact interval, found by bisection to an eighth of a position step; the carrying
+  cycle's ends when the contact never leaves the flanks' interior); width = extent of the zone
+  at M perpendicular to the path; ``center_offset_mm`` = M minus the flank centre C
   (the mean cone distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
 - contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
   at an edge), over the angular pitch (sampled on beyond the analysed range when a pair is
@@ -738,7 +741,10 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     width = _width(pattern * 1e-3, compound_mm, face, profile, mean_point, direction)
     minor = _minor_axis(ex_sep[3], compound_mm, face, profile)
     major = _width(ex_sep[3], compound_mm, face, profile, mean_point, minor)
-    bias = float(cs[0] - cs[1])
+    # bias: the contact line's extension along the face from the pair's entry into contact to
+    # its exit (seed 003 section 6): the contact points at the ends of its contact interval
+    ends = getattr(st, "ci_s", None)
+    bias = float(ends[1] - ends[0]) if ends is not None else float(cs[0] - cs[1])
     start, end = st.interval
     centre = frame.centre_mm
     handovers = st.v_star + p1 * np.arange(-12, 13)

@@ -59,7 +59,7 @@ def _line(ax, rows, key, label):
     te = -np.array([r["te_peak_to_peak_arcsec"] for r in rows.values()])[order]
     bias = np.array([r["pattern_bias_mm"] for r in rows.values()])[order]
     ax.plot(x[order], te, "o-", label="max. kinematic error (arcsec)")
-    ax.plot(x[order], bias, "s--", label="bias (mm, path over the carrying cycle)")
+    ax.plot(x[order], bias, "s--", label="bias (mm, the contact line's extension)")
     ax.set_xlabel(label)
     ax.grid(True, alpha=0.3)
     ax.legend()
