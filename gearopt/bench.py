@@ -177,15 +177,12 @@ def bench_tca_newton() -> tuple[float, dict]:
 def bench_study_trial() -> tuple[float, dict]:
     """One trial of the example study as a worker evaluates it (the design with the trial's
     keys, both members generated, TCA aligned and misaligned, backlash, objectives, table rows),
-    a different design each time so that nothing is cached; one warm-up trial first."""
-    from pathlib import Path
-
+    a different pinion each time (the unchanged gear's solved slope angle is remembered, as in
+    a study's worker); one warm-up trial first."""
     from gearopt.studyfile import load_study_spec
     from gearopt.trial import evaluate_trial
 
-    path = Path(__file__).resolve().parents[1] / "studies" / "cyclo_palloid_contact.toml"
-    _study_text(path.name)  # a clear error without a source checkout
-    spec = load_study_spec(path)
+    spec = load_study_spec(_study_path("cyclo_palloid_contact.toml"))
     params = dict(spec.enqueue[0])
     key = "machine.pinion.inner_cutter_radius_mm"
     radii = iter([74.5, 74.6, 74.7, 74.8, 74.9, 75.1])
@@ -201,15 +198,20 @@ def bench_study_trial() -> tuple[float, dict]:
     }
 
 
-def _study_text(name: str) -> str:
+def _study_path(name: str):
+    """``studies/<name>`` of the source checkout, or a NotAvailableError."""
     from pathlib import Path
 
     path = Path(__file__).resolve().parents[1] / "studies" / name
-    if path.exists():
-        return path.read_text()
-    from gearopt.errors import NotAvailableError
+    if not path.exists():
+        from gearopt.errors import NotAvailableError
 
-    raise NotAvailableError("benchmark design", str(path), "needs a source checkout (studies/)")
+        raise NotAvailableError("benchmark design", str(path), "needs a source checkout (studies/)")
+    return path
+
+
+def _study_text(name: str) -> str:
+    return _study_path(name).read_text()
 
 
 def _run_one(name: str) -> None:

@@ -73,8 +73,7 @@ _COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP
 def default_storage_url(spec: StudySpec) -> str:
     """``sqlite:///<study name>.db`` beside the study file (the name sanitised)."""
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", spec.name)
-    folder = Path(spec.path).resolve().parent if spec.path else Path.cwd()
-    return f"sqlite:///{folder / (name + '.db')}"
+    return f"sqlite:///{spec.folder / (name + '.db')}"
 
 
 def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
@@ -351,7 +350,6 @@ def run_study(
     progress: bool = True,
     save_best: bool = True,
     max_failures: int | None = None,
-    on_told: Callable[[int], None] | None = None,
     backend: str = "loky",
     scheduler: str | None = None,
 ) -> RunSummary:
@@ -446,8 +444,6 @@ def run_study(
                 if time.monotonic() - shown[0] > 1.0:  # reading every trial costs: once a second
                     _best_postfix(bar, study, spec)
                     shown[0] = time.monotonic()
-        if on_told is not None:
-            on_told(number)
 
     held: list[tuple[Any, dict, int]] = []  # innocent trials to resubmit
     suspects: list[tuple[Any, dict, int]] = []  # started when a worker died: run each alone
@@ -604,8 +600,7 @@ def run_study(
 def artifact_dir(spec: StudySpec) -> Path:
     """Where a study's artifacts go: ``<study name>_artifacts`` beside the study file (give
     it to ``optuna-dashboard --artifact-dir``)."""
-    folder = Path(spec.path).resolve().parent if spec.path else Path.cwd()
-    return folder / f"{spec.name}_artifacts"
+    return spec.folder / f"{spec.name}_artifacts"
 
 
 def _upload(spec: StudySpec, study, trial, figures) -> None:
@@ -692,8 +687,7 @@ def save_design(spec: StudySpec, trial: optuna.trial.FrozenTrial) -> str:
     meta = data.setdefault("meta", {})
     meta["name"] = f"{spec.name}_best"
     meta["source"] = f"study {spec.name}, trial {trial.number}"
-    folder = Path(spec.path).resolve().parent if spec.path else Path.cwd()
-    path = folder / f"{spec.name}_best.toml"
+    path = spec.folder / f"{spec.name}_best.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
     return str(path)
 

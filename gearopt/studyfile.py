@@ -154,6 +154,12 @@ class StudySpec:
                 )
 
     @property
+    def folder(self) -> Path:
+        """The study file's folder (the working directory for a study built in a script
+        without a path): the base design, the default storage and the outputs are there."""
+        return _folder(self.path)
+
+    @property
     def directions(self) -> list[str]:
         return [o.direction for o in self.objectives]
 
@@ -177,6 +183,10 @@ class StudySpec:
     def design_for(self, params: Mapping[str, Any]) -> Design:
         """The base design with the searched keys set."""
         return with_overrides(self.design, params)
+
+
+def _folder(path: str | Path | None) -> Path:
+    return Path(path).resolve().parent if path else Path.cwd()
 
 
 def _float(value: Any, where: str) -> float:
@@ -290,8 +300,7 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         raise StudyError("study", sorted(set(study) - set(_STUDY_KEYS)), f"known: {_STUDY_KEYS}")
     if "design" not in study:
         raise StudyError("study.design", rule="name the base design file")
-    base = Path(path).resolve().parent if path else Path.cwd()
-    design = load_design(base / study["design"])
+    design = load_design(_folder(path) / study["design"])
     fixed = data.get("fixed", {})
     if not isinstance(fixed, Mapping):
         raise StudyError("fixed", fixed, "must be a table of dotted design keys and values")
