@@ -124,6 +124,12 @@ VIEWS = {
 }
 
 
+def _rows(table: sa.Table, key: dict, tuples) -> list[dict]:
+    """Rows of a per-trial table from tuples of its columns after ``study, trial_number``."""
+    names = [c.name for c in table.columns][2:]
+    return [{**key, **dict(zip(names, row, strict=True))} for row in tuples]
+
+
 def _utcnow() -> dt.datetime:
     return dt.datetime.now(dt.UTC).replace(tzinfo=None)
 
@@ -194,28 +200,23 @@ class ResultsStore:
                     "coordinator": coordinator,
                 }
             ],
-            metrics_t: [
-                {**key, "evaluation": e, "metric": m, "value": v} for e, m, v in outcome.metrics
-            ],
-            objectives_t: [
-                {**key, "label": label, "kind": kind, "value": value}
-                for (label, kind), value in zip(
-                    labels.items(),
-                    [*outcome.values, *outcome.constraints.values()],
-                    strict=True,
-                )
-            ],
-            settings_t: [
-                {**key, "member": m, "key": k, "value": v} for m, k, v in outcome.settings
-            ],
-            curves_t: [
-                {**key, "evaluation": e, "curve": c, "side": s, "idx": i, "x": x, "y": y}
-                for e, c, s, i, x, y in outcome.curves
-            ],
-            patterns_t: [
-                {**key, "evaluation": e, "side": s, "idx": i, "face_mm": f, "profile_mm": p}
-                for e, s, i, f, p in outcome.patterns
-            ],
+            objectives_t: _rows(
+                objectives_t,
+                key,
+                [
+                    (label, kind, value)
+                    for (label, kind), value in zip(
+                        labels.items(),
+                        [*outcome.values, *outcome.constraints.values()],
+                        strict=True,
+                    )
+                ],
+            ),
+            # the outcome's row tuples list the columns in the tables' order
+            metrics_t: _rows(metrics_t, key, outcome.metrics),
+            settings_t: _rows(settings_t, key, outcome.settings),
+            curves_t: _rows(curves_t, key, outcome.curves),
+            patterns_t: _rows(patterns_t, key, outcome.patterns),
         }
         with self.engine.begin() as con:
             self._delete(con, study, [outcome.number])

@@ -72,6 +72,10 @@ def pattern_outline(
     )
 
 
+#: the sides of the contact evaluators' arrays: drive unprefixed, coast ``coast_``
+_SIDES = (("drive", ""), ("coast", "coast_"))
+
+
 def _curves(label: str, arrays: Mapping[str, np.ndarray]) -> list[tuple]:
     """Curves an evaluation carries, by the array names the built-in evaluators use."""
     pairs = {
@@ -81,7 +85,7 @@ def _curves(label: str, arrays: Mapping[str, np.ndarray]) -> list[tuple]:
     }
     rows = []
     for curve, (xk, yk) in pairs.items():
-        for side, prefix in (("drive", ""), ("coast", "coast_")):
+        for side, prefix in _SIDES:
             x, y = arrays.get(prefix + xk), arrays.get(prefix + yk)
             if x is None or y is None or np.shape(x) != np.shape(y):
                 continue
@@ -93,11 +97,17 @@ def _curves(label: str, arrays: Mapping[str, np.ndarray]) -> list[tuple]:
     return rows
 
 
-def _patterns(label: str, arrays: Mapping[str, np.ndarray], compound_um: float) -> list[tuple]:
+def _patterns(label: str, evaluation) -> list[tuple]:
+    """Pattern outlines of an evaluation that carries the ``tca`` evaluator's pattern arrays,
+    at the marking compound of its conditions."""
+    from gearopt.analysis import AnalysisOptions
+
+    arrays = evaluation.arrays
     if "face_mm" not in arrays or "profile_mm" not in arrays:
         return []
+    compound_um = float(evaluation.conditions.get("compound_um", AnalysisOptions.compound_um))
     rows = []
-    for side, prefix in (("drive", ""), ("coast", "coast_")):
+    for side, prefix in _SIDES:
         if prefix + "pattern_um" not in arrays:
             continue
         outline = pattern_outline(
@@ -107,7 +117,7 @@ def _patterns(label: str, arrays: Mapping[str, np.ndarray], compound_um: float) 
     return rows
 
 
-def _settings(spec: StudySpec, design) -> list[tuple[str, str, float]]:
+def _settings(design) -> list[tuple[str, str, float]]:
     from gearopt.plugins import get_machine_model
 
     settings = get_machine_model(design.model).basic_settings(design).as_dict()
@@ -163,8 +173,7 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
         for label, evaluation in evaluations.items():
             metrics += [(label, k, float(v)) for k, v in evaluation.metrics.items()]
             curves += _curves(label, evaluation.arrays)
-            compound = float(evaluation.conditions.get("compound_um", 6.5) or 6.5)
-            patterns += _patterns(label, evaluation.arrays, compound)
+            patterns += _patterns(label, evaluation)
         return TrialOutcome(
             number=number,
             values=values,
@@ -172,7 +181,7 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
             metrics=metrics,
             curves=curves,
             patterns=patterns,
-            settings=_settings(spec, design),
+            settings=_settings(design),
             figures=_figures(spec, design, evaluations) if spec.artifacts else [],
             seconds=time.perf_counter() - start,
             pid=pid,
