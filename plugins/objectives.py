@@ -6,7 +6,8 @@ number. Options come from the study file's ``[[objectives]]`` / ``[[constraints]
 
 ``te_peak_to_peak``
     The TE peak-to-peak (arcsec) of one TCA. ``on`` (label, default ``"tca"``), ``side``
-    (``"drive"``, ``"coast"`` or ``"both"``, the larger; default ``"drive"``).
+    (``"drive"``, ``"coast"`` or ``"both"``, the larger; default ``"drive"``). Given several
+    labels in ``on``, this and the other TCA objectives take the worst of them.
 ``worst_te``
     The largest TE peak-to-peak (arcsec) over several TCAs, e.g. a set of misalignments.
     ``on`` (list of labels, required), ``side`` as above.
@@ -77,6 +78,10 @@ def _metric(evaluations: Mapping[str, Evaluation], label: str, key: str) -> floa
     return float(evaluations[label].metrics[key])
 
 
+def _te(evaluations):
+    return lambda label, p: _metric(evaluations, label, f"{p}te_peak_to_peak_arcsec")
+
+
 class _ContactObjective(BaseObjective):
     """An objective on TCA results: ``on`` labels of ``tca`` evaluations, ``side``."""
 
@@ -91,17 +96,22 @@ class _ContactObjective(BaseObjective):
         labels = _labels(self.name, options.get("on", self.default_on))
         return {label: self.requires[0] for label in labels}
 
+    def _worst(self, evaluations, options, of) -> float:
+        """The largest ``of(label, prefix)`` over the TCAs ``on`` and the sides ``side``
+        (``prefix``: the side's metric prefix)."""
+        return max(
+            of(label, prefix)
+            for label in _labels(self.name, options.get("on", self.default_on))
+            for prefix in _side(self.name, options)
+        )
+
 
 class TePeakToPeak(_ContactObjective):
     name = "te_peak_to_peak"
     description = "TE peak-to-peak of one TCA (arcsec)"
 
     def value(self, evaluations, **options):
-        (label,) = _labels(self.name, options.get("on", "tca"))[:1]
-        return max(
-            _metric(evaluations, label, f"{p}te_peak_to_peak_arcsec")
-            for p in _side(self.name, options)
-        )
+        return self._worst(evaluations, options, _te(evaluations))
 
 
 class WorstTe(_ContactObjective):
@@ -115,11 +125,7 @@ class WorstTe(_ContactObjective):
         return super().reads(**options)
 
     def value(self, evaluations, **options):
-        return max(
-            _metric(evaluations, label, f"{p}te_peak_to_peak_arcsec")
-            for label in _labels(self.name, options["on"])
-            for p in _side(self.name, options)
-        )
+        return self._worst(evaluations, options, _te(evaluations))
 
 
 class TeLevel(_ContactObjective):
@@ -134,11 +140,7 @@ class TeLevel(_ContactObjective):
         return super().reads(**options)
 
     def value(self, evaluations, **options):
-        (label,) = _labels(self.name, options.get("on", "tca"))[:1]
-        te = max(
-            _metric(evaluations, label, f"{p}te_peak_to_peak_arcsec")
-            for p in _side(self.name, options)
-        )
+        te = self._worst(evaluations, options, _te(evaluations))
         return abs(te - float(options["level_arcsec"]))
 
 
@@ -156,15 +158,16 @@ class PatternCenterOffset(_ContactObjective):
         return super().reads(**options)
 
     def value(self, evaluations, **options):
-        (label,) = _labels(self.name, options.get("on", "tca"))[:1]
         component = options.get("component", "both")
-        worst = 0.0
-        for p in _side(self.name, options):
+
+        def size(label, p):
             face = _metric(evaluations, label, f"{p}pattern_center_offset_face_mm")
             profile = _metric(evaluations, label, f"{p}pattern_center_offset_profile_mm")
-            size = {"both": math.hypot(face, profile), "face": abs(face), "profile": abs(profile)}
-            worst = max(worst, size[component])
-        return worst
+            return {"both": math.hypot(face, profile), "face": abs(face), "profile": abs(profile)}[
+                component
+            ]
+
+        return self._worst(evaluations, options, size)
 
 
 class PatternBias(_ContactObjective):
@@ -172,10 +175,10 @@ class PatternBias(_ContactObjective):
     description = "magnitude of the contact pattern's bias (mm)"
 
     def value(self, evaluations, **options):
-        (label,) = _labels(self.name, options.get("on", "tca"))[:1]
-        return max(
-            abs(_metric(evaluations, label, f"{p}pattern_bias_mm"))
-            for p in _side(self.name, options)
+        return self._worst(
+            evaluations,
+            options,
+            lambda label, p: abs(_metric(evaluations, label, f"{p}pattern_bias_mm")),
         )
 
 
@@ -247,10 +250,8 @@ class EdgeContact(_ContactObjective):
     default_on = ("tca",)
 
     def value(self, evaluations, **options):
-        edge = max(
-            _metric(evaluations, label, f"{p}edge_contact")
-            for label in _labels(self.name, options.get("on", self.default_on))
-            for p in _side(self.name, options)
+        edge = self._worst(
+            evaluations, options, lambda label, p: _metric(evaluations, label, f"{p}edge_contact")
         )
         return edge - 0.5
 

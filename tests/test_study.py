@@ -208,6 +208,7 @@ def test_objectives_read_the_labelled_evaluations():
     evals = {"tca": nominal, "mis": shifted}
     assert objs["worst_te"].value(evals, on=["tca", "mis"]) == 7.0
     assert objs["te_peak_to_peak"].value(evals) == 1.0
+    assert objs["te_peak_to_peak"].value(evals, on=["tca", "mis"]) == 7.0  # the worst of them
     assert objs["pattern_center_offset"].value(evals) == pytest.approx(np.hypot(1.0, 0.5))
     assert objs["pattern_center_offset"].value(evals, component="profile") == 0.5
     assert objs["pattern_bias"].value(evals, on="mis") == 2.0
