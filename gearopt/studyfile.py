@@ -47,7 +47,7 @@ import itertools
 import re
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -271,7 +271,8 @@ def _evaluations(table: Mapping[str, Any]) -> tuple[EvaluationSpec, ...]:
     return tuple(specs)
 
 
-def _given(spec_search: Mapping[str, Dimension], data: Mapping[str, Any]) -> list[dict]:
+def _given(data: Mapping[str, Any]) -> list[dict]:
+    """The given designs: the ``[[enqueue]]`` entries, then every combination of ``[grid]``."""
     given = []
     for i, entry in enumerate(data.get("enqueue", [])):
         if not isinstance(entry, Mapping):
@@ -350,15 +351,13 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         artifacts=bool(study.get("artifacts", False)),
         path=str(path) if path else None,
     )
-    given = tuple(
-        spec.check_params(p, f"enqueue[{i}]") for i, p in enumerate(_given(spec.dimensions, data))
-    )
+    given = tuple(spec.check_params(p, f"enqueue[{i}]") for i, p in enumerate(_given(data)))
     for i, params in enumerate(given):
         try:
             spec.design_for(params)
         except GearoptError as exc:
             raise StudyError(f"enqueue[{i}]", params, f"gives an invalid design: {exc}") from None
-    return StudySpec(**{**spec.__dict__, "enqueue": given})
+    return replace(spec, enqueue=given)
 
 
 def load_study_spec(path: str | Path) -> StudySpec:
