@@ -47,10 +47,7 @@ def flank_point(
         )
     index = MEMBERS.index(member)
     blank = design.blank
-    gamma = math.radians(blank.pitch_angle_deg[index])
-    # the axial plane's (L, R) turned into the grid's (cone distance, height above the pitch cone)
-    face = axial_mm * math.cos(gamma) + radius_mm * math.sin(gamma)
-    profile = -axial_mm * math.sin(gamma) + radius_mm * math.cos(gamma)
+    face, profile = (float(v) for v in fm.to_grid(axial_mm, radius_mm))
     geo = fm.surface.geometry_at(face, profile)
     point, normal = geo["point"], geo["normal"]
     inside = (
