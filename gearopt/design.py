@@ -57,7 +57,7 @@ __all__ = [
 ]
 
 MEMBERS = ("pinion", "gear")
-SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation", "analysis")
+SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation", "analysis", "synthesis")
 MODULE_TOLERANCE = 1e-3  # module and cone distance, when both are given, agree within 0.1 %
 
 _PAIR_KEYS = (
@@ -374,7 +374,10 @@ def parse_design(
     if not isinstance(model_name, str):
         raise DesignError("machine.model", model_name, "must be a string naming a machine model")
     model = get_machine_model(model_name, plugin_manager=plugin_manager)
-    machine = model.parse_machine(machine_table, pair)
+    if "synthesis" in data:
+        machine = model.synthesize(machine_table, tables["synthesis"], pair)
+    else:
+        machine = model.parse_machine(machine_table, pair)
     meta_table = tables["meta"]
     check_keys(meta_table, ("name", "description", "source"), "meta")
     return Design(

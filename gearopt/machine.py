@@ -109,6 +109,21 @@ class BaseMachineModel(abc.ABC):
         ``machine.<member>.<key>``.
         """
 
+    def synthesize(
+        self, table: Mapping[str, Any], synthesis: Mapping[str, Any], pair: PairData
+    ) -> Any:
+        """Derive the settings the ``[machine]`` table leaves out from the blank and the
+        design's ``[synthesis]`` table (what the contact should be), and return the same frozen
+        dataclass as :meth:`parse_machine`.
+
+        Called instead of :meth:`parse_machine` when the design has a ``[synthesis]`` table.
+        The default raises :class:`~gearopt.errors.NotAvailableError` naming ``synthesis``:
+        a model without a synthesis refuses the table rather than ignoring it.
+        """
+        raise NotAvailableError(
+            "synthesis", rule=f"the {self.name!r} machine model has no settings synthesis"
+        )
+
     @abc.abstractmethod
     def basic_settings(self, design: Design) -> MachineSettings:
         """Compute the basic machine-tool settings of both members from the blank and the

@@ -114,7 +114,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -129,6 +129,7 @@ from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
+from gearopt_plugins.face_milling_synthesis import SIDES
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
 
@@ -225,6 +226,8 @@ class FaceMillingMachine:
 
     pinion: FaceMillingMember
     gear: FaceMillingMember
+    #: how the settings were derived when the design has a ``[synthesis]`` table
+    synthesis: tuple = field(default=(), compare=False)
 
     def member(self, name: str) -> FaceMillingMember:
         return getattr(self, name)
@@ -347,6 +350,89 @@ def _parse_flank(
     return spec
 
 
+def _parse_member(table: Mapping[str, Any], member: str, pair: PairData) -> FaceMillingMember:
+    sub = read_table(table, member, "machine")
+    check_keys(sub, MEMBER_KEYS, f"machine.{member}")
+    common = {k: v for k, v in sub.items() if k in FLANK_KEYS}
+    flanks = {}
+    for flank in FLANKS:
+        where = f"machine.{member}.{flank}"
+        own = read_table(sub, flank, f"machine.{member}")
+        check_keys(own, FLANK_KEYS, where)
+        flanks[flank] = _parse_flank({**common, **own}, where, pair, member, flank)
+    return FaceMillingMember(**flanks)
+
+
+# --- settings by synthesis -----------------------------------------------------------------------
+
+_SYNTHESES: dict = {}
+_SYNTHESIS_NOTE = (
+    "derived: the gear's settings from the blank (unless [machine.gear] gives them), the "
+    "pinion's by local synthesis at M ([synthesis]; gearopt_plugins.face_milling_synthesis)"
+)
+
+
+def _flat(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
+    out = []
+    for k, v in table.items():
+        if isinstance(v, Mapping):
+            out += _flat(v, f"{prefix}{k}.")
+        else:
+            out.append((prefix + k, v))
+    return out
+
+
+def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
+    from gearopt_plugins import face_milling_synthesis as fs
+
+    check_keys(table, MACHINE_KEYS, "machine")
+    targets, cutter_radius = fs.read_synthesis(synthesis, pair.blank)
+    if "gear" in table:
+        gear = _parse_member(table, "gear", pair)
+    else:
+        given = fs.gear_flanks_from_blank(pair, cutter_radius)
+        gear = FaceMillingMember(
+            **{
+                f: _parse_flank(given[f], f"machine.gear.{f} (from the blank)", pair, "gear", f)
+                for f in FLANKS
+            }
+        )
+    sub = read_table(table, "pinion", "machine")
+    check_keys(sub, (*fs.CHOSEN_KEYS, *FLANKS), "machine.pinion")
+    gear_dicts = {f: fs._as_dict(gear.flank(f)) for f in FLANKS}
+    flanks, reports = {}, []
+    for side, (flank, _) in fs.SIDES.items():
+        where = f"machine.pinion.{flank}"
+        own = read_table(sub, flank, "machine.pinion")
+        check_keys(own, fs.CHOSEN_KEYS, where)
+        merged = {**{k: v for k, v in sub.items() if k in fs.CHOSEN_KEYS}, **own}
+        chosen = fs.default_chosen(pair, gear_dicts, flank)
+        for key in fs.CHOSEN_KEYS:
+            if key == "blade_profile_radius_mm":
+                chosen[key] = read_profile_radius(
+                    merged, where, MIN_PROFILE_RADIUS_DEPTHS * max(pair.blank.whole_depth_mm)
+                )
+            elif key in merged:
+                chosen[key] = read_number(merged, key, where)
+        spec, report = fs.synthesize_pinion_flank(
+            pair,
+            flank=flank,
+            gear_specs={f: gear.flank(f) for f in FLANKS},
+            chosen=chosen,
+            targets=targets[side],
+            flank_type=FaceMillingFlank,
+            place_tip="cutter_point_radius_mm" not in merged,
+        )
+        values = {k: float(v) for k, v in fs._as_dict(spec).items()}
+        if math.isinf(values["blade_profile_radius_mm"]):
+            values["blade_profile_radius_mm"] = "inf"
+        flanks[flank] = _parse_flank(values, where + " (synthesised)", pair, "pinion", flank)
+        reports.append(report)
+    return FaceMillingMachine(
+        pinion=FaceMillingMember(**flanks), gear=gear, synthesis=tuple(reports)
+    )
+
+
 # --- the model -----------------------------------------------------------------------------------
 
 
@@ -378,19 +464,21 @@ class FaceMilling(BaseMachineModel):
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> FaceMillingMachine:
         check_keys(table, MACHINE_KEYS, "machine")
-        members = {}
-        for member in MEMBERS:
-            sub = read_table(table, member, "machine")
-            check_keys(sub, MEMBER_KEYS, f"machine.{member}")
-            common = {k: v for k, v in sub.items() if k in FLANK_KEYS}
-            flanks = {}
-            for flank in FLANKS:
-                where = f"machine.{member}.{flank}"
-                own = read_table(sub, flank, f"machine.{member}")
-                check_keys(own, FLANK_KEYS, where)
-                flanks[flank] = _parse_flank({**common, **own}, where, pair, member, flank)
-            members[member] = FaceMillingMember(**flanks)
-        return FaceMillingMachine(**members)
+        return FaceMillingMachine(**{m: _parse_member(table, m, pair) for m in MEMBERS})
+
+    def synthesize(
+        self, table: Mapping[str, Any], synthesis: Mapping[str, Any], pair: PairData
+    ) -> FaceMillingMachine:
+        """The gear's settings from the blank (unless ``[machine.gear]`` gives them) and the
+        pinion's by local synthesis, per flank, from the ``[synthesis]`` table
+        (:mod:`gearopt_plugins.face_milling_synthesis`). ``[machine.pinion]`` and
+        ``[machine.pinion.<flank>]`` may hold the chosen inputs only."""
+        key = repr((pair, sorted(_flat(table)), sorted(_flat(synthesis))))
+        if key not in _SYNTHESES:
+            _SYNTHESES[key] = _synthesize(table, synthesis, pair)
+            while len(_SYNTHESES) > 64:
+                _SYNTHESES.pop(next(iter(_SYNTHESES)))
+        return _SYNTHESES[key]
 
     def basic_settings(self, design: Design) -> MachineSettings:
         if not design.compensation.is_zero:
@@ -408,14 +496,21 @@ class FaceMilling(BaseMachineModel):
                     values[f"{flank}_{key}"] = getattr(spec, key)
                 values[f"{flank}_blade_profile_curvature_per_mm"] = spec.profile_curvature_per_mm
             out[member] = FaceMillingSettings(**values)
-        return MachineSettings(
-            model=self.name,
-            notes=(
-                "the settings as given in [machine] (this model derives none from the blank yet)",
-                "blade_profile_curvature_per_mm = 0 means a straight blade",
-            ),
-            **out,
-        )
+        machine: FaceMillingMachine = design.machine
+        notes = ["blade_profile_curvature_per_mm = 0 means a straight blade"]
+        if machine.synthesis:
+            notes.insert(0, _SYNTHESIS_NOTE)
+            for report in machine.synthesis:
+                local = report.as_dict()["local"]
+                notes.append(
+                    f"{report.targets.side} (pinion {SIDES[report.targets.side][0]}): local "
+                    f"path {local['path_angle_deg']:.4f} deg, ellipse "
+                    f"{local['ellipse_major_axis_mm']:.4f} mm, TE level "
+                    f"{local['te_level_arcsec']:.4f} arcsec at M"
+                )
+        else:
+            notes.insert(0, "the settings as given in [machine]")
+        return MachineSettings(model=self.name, notes=tuple(notes), **out)
 
     def generate_flanks(
         self,

@@ -1,0 +1,676 @@
+"""Face milling from the blank: the gear's settings, and the pinion by local synthesis.
+
+**Gear (generated, spread blade: one cutter, one setting, both flanks in one pass).** In the
+plane of the generating crown gear (uniform depth: the pitch plane), the mean point of the slot
+is M = (A_m, 0) on the x_m axis (the pitch generatrix nearest the cradle at centre roll, see
+:mod:`gearopt_plugins.face_milling`). The nominal cutter circle of radius r_c passes through M
+tangent to the slot's centre line at the mean spiral angle beta:
+
+    C = M + r_c (-sin beta, cos beta),   radial setting s_r = |C|,   cradle angle q = atan2(C)
+
+(right-hand numbers; a left-hand member is the mirror image cut with the same numbers). The
+blades lie W/2 either side of that circle at the pitch plane (W the slot's mean normal width
+on the pitch line: the circles are concentric, so the normal width is W along the whole face),
+their tips the mean dedendum b below: point radii r_c + W/2 - b tan(alpha) (outside blade,
+concave flank) and r_c - W/2 + b tan(alpha) (inside blade, convex flank), blade angles alpha =
+the blank's pressure angle. Machine root angle = root angle = pitch angle, sliding base = b
+(the root line in the tip plane, the pitch apex on the cradle axis), ratio of roll c1 =
+sin(gamma_2): the cradle is the crown gear. r_c: ``[synthesis] gear_cutter_radius_mm``, default
+the standard cutter radius (Gleason's face-mill diameters 1.1 to 18 in) nearest to A_m, an
+assumption of this code, not a standard's rule. W: pi m_mn / 2 (equal thickness) or, when the
+pair gives ``mean_normal_chordal_thickness_mm``, pi m_mn minus the gear's (chordal read as
+circular: the two differ by about s^3 / (6 d^2), well below 1 um here). Tapered depth is not
+supported here yet (a :class:`NotAvailableError`).
+
+**Pinion by local synthesis (Litvin; Litvin and Zhang, NASA CR-4342), per flank.** Chosen:
+cutter point radius, blade angle (and profile radius), machine root angle, machine centre to
+back (``[machine.pinion]`` / ``[machine.pinion.<flank>]``, defaults below). Solved: radial
+setting, cradle angle, blank offset, sliding base, ratio of roll c1 and the second-order roll
+term c2, from six conditions at the mean contact point M:
+
+1. M (given in the pinion's pattern coordinates, DESIGN.md) is generated at centre roll
+   (phi_p = 0, so the modified roll is expanded about M): the meshing equation of the pinion's
+   generation holds at the centre-roll tool point that lies at M's axial position and radius;
+2. and 3. the pinion's normal there equals the gear's at M, in M's cylindrical frame (the
+   pinion's angular position is free: that is the index of the cut);
+4. the path of contact on the gear flank at M has the direction ``path_angle_deg``
+   (:func:`gearopt_plugins.face_milling_local.path_angle`: from the gear's root line, toward
+   the heel, positive toward the tooth top);
+5. the contact ellipse at M has the major axis ``ellipse_major_axis_mm`` at the separation
+   ``compound_um`` (along the normal), measured as the contact engine measures it (the
+   pattern's projection on the pinion's axial plane);
+6. the transmission error is locally the parabola -0.5 m'21 u^2 (u the pinion rotation from M,
+   m'21 = d m21 / d phi1, m21 = d phi2 / d phi1) that reaches ``te_level_arcsec`` at the
+   transfer points half a pinion pitch from M: |m'21| = 2 |TE level| / (pi / N1)^2 (rad of gear).
+
+M on the gear is where M's circle about the pinion axis (the pinion's polar angle is free)
+meets the gear flank at a point where the meshing equation of the pair (nominal ratio) holds.
+Conditions 4-6 come from a local tooth contact analysis of the two flanks' second-order Taylor
+patches at M (:func:`gearopt_plugins.face_milling_local.local_mesh`), all on the exact
+envelopes. The six equations are solved by Levenberg-Marquardt with finite-difference
+Jacobians, with the targets reached by continuation from the complementary settings (the
+gear's generating surface with the pinion's cutter radius), where the contact is already a
+point contact.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq, least_squares
+
+from gearopt.blank import Blank
+from gearopt.contact import Placement
+from gearopt.design import PairData
+from gearopt.errors import DesignError, NotAvailableError, SettingsError
+from gearopt.solve import newton
+from gearopt.validate import check_keys, read_number, read_table
+from gearopt_plugins.face_milling_family import FaceMillingFamily
+from gearopt_plugins.face_milling_local import (
+    TaylorJet,
+    _solve_nodes,
+    envelope_jet,
+    local_mesh,
+)
+
+__all__ = [
+    "STANDARD_CUTTER_RADII_IN",
+    "SideTargets",
+    "SynthesisReport",
+    "gear_flanks_from_blank",
+    "read_synthesis",
+    "synthesize_pinion_flank",
+]
+
+ARCSEC = 180.0 * 3600.0 / math.pi
+#: nominal radii (in) of Gleason's standard face-mill cutters (diameters 1.1 ... 18 in)
+STANDARD_CUTTER_RADII_IN = (0.55, 0.75, 1.0, 1.75, 2.5, 3.0, 3.75, 4.5, 5.25, 6.0, 7.5, 9.0)
+#: pinion cutter radius at the pitch plane, default: the mating gear blade's radius there,
+#: made this much smaller (convex flank) or larger (concave flank): the lengthwise mismatch
+DEFAULT_RADIUS_MISMATCH = 0.03
+SIDES = {"drive": ("convex", "concave"), "coast": ("concave", "convex")}  # pinion, gear flank
+TARGET_KEYS = (
+    "mean_point_face_mm",
+    "mean_point_profile_mm",
+    "path_angle_deg",
+    "ellipse_major_axis_mm",
+    "compound_um",
+    "te_level_arcsec",
+)
+SYNTHESIS_KEYS = (*TARGET_KEYS, "gear_cutter_radius_mm", *SIDES)
+#: keys of [machine.pinion] / [machine.pinion.<flank>] chosen before the synthesis
+CHOSEN_KEYS = (
+    "cutter_point_radius_mm",
+    "blade_pressure_angle_deg",
+    "blade_profile_radius_mm",
+    "machine_root_angle_deg",
+    "machine_center_to_back_mm",
+)
+SOLVED_KEYS = (
+    "radial_setting_mm",
+    "cradle_angle_deg",
+    "blank_offset_mm",
+    "sliding_base_mm",
+    "ratio_of_roll",
+    "roll_c2",
+)
+#: closing tolerances of the synthesis (met or SettingsError)
+TOLERANCE = {"first_order": 1e-8, "path_deg": 1e-3, "relative": 1e-4}
+
+
+@dataclass(frozen=True, kw_only=True)
+class SideTargets:
+    """What local synthesis asks of one side (``[synthesis]``, ``[synthesis.<side>]``)."""
+
+    side: str
+    mean_point_face_mm: float
+    mean_point_profile_mm: float
+    path_angle_deg: float
+    ellipse_major_axis_mm: float
+    compound_um: float
+    te_level_arcsec: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class SynthesisReport:
+    """How the synthesis of one pinion flank closed: the targets, what the local analysis of
+    the solved settings gives, the solver's evaluations."""
+
+    targets: SideTargets
+    path_angle_deg: float
+    ellipse_major_axis_mm: float
+    te_level_arcsec: float
+    first_order_residual: float
+    evaluations: int
+
+    def as_dict(self) -> dict:
+        t = self.targets
+        return {
+            "side": t.side,
+            "mean_point_mm": [t.mean_point_face_mm, t.mean_point_profile_mm],
+            "asked": {
+                "path_angle_deg": t.path_angle_deg,
+                "ellipse_major_axis_mm": t.ellipse_major_axis_mm,
+                "te_level_arcsec": t.te_level_arcsec,
+                "compound_um": t.compound_um,
+            },
+            "local": {
+                "path_angle_deg": self.path_angle_deg,
+                "ellipse_major_axis_mm": self.ellipse_major_axis_mm,
+                "te_level_arcsec": self.te_level_arcsec,
+                "first_order_residual": self.first_order_residual,
+            },
+            "evaluations": self.evaluations,
+        }
+
+
+# --- input ---------------------------------------------------------------------------------------
+
+
+def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, float | None]:
+    """``({side: SideTargets}, gear cutter radius or None)`` from the ``[synthesis]`` table."""
+    check_keys(table, SYNTHESIS_KEYS, "synthesis")
+    from gearopt.mesh import ToothFrame
+
+    centre = ToothFrame.from_blank(blank).centre_mm
+    common = {k: v for k, v in table.items() if k in TARGET_KEYS}
+    out = {}
+    for side in SIDES:
+        own = read_table(table, side, "synthesis")
+        check_keys(own, TARGET_KEYS, f"synthesis.{side}")
+        merged = {**common, **own}
+        where = f"synthesis.{side}" if own else "synthesis"
+        for key in ("path_angle_deg", "ellipse_major_axis_mm", "te_level_arcsec"):
+            if key not in merged:
+                raise DesignError(f"{where}.{key}", rule="required for local synthesis")
+        face = read_number(merged, "mean_point_face_mm", where, centre[0])
+        if not 0.0 < face < blank.face_width_mm:
+            raise DesignError(
+                f"{where}.mean_point_face_mm",
+                face,
+                f"must lie inside the face width (0, {blank.face_width_mm:g}) mm",
+            )
+        depth = blank.mean_dedendum_mm[0] + blank.mean_addendum_mm[0]
+        profile = read_number(merged, "mean_point_profile_mm", where, centre[1])
+        if not 0.0 < profile < depth:
+            raise DesignError(
+                f"{where}.mean_point_profile_mm",
+                profile,
+                f"must lie on the pinion flank, between its root (0) and top ({depth:.3f}) mm",
+            )
+        ellipse = read_number(merged, "ellipse_major_axis_mm", where, gt=0.0)
+        if ellipse >= blank.face_width_mm:
+            raise DesignError(
+                f"{where}.ellipse_major_axis_mm",
+                ellipse,
+                f"the contact ellipse must be shorter than the face width "
+                f"{blank.face_width_mm:g} mm (its projection on the flank)",
+            )
+        level = read_number(merged, "te_level_arcsec", where)
+        if level == 0.0 or abs(level) > 300.0:
+            raise DesignError(
+                f"{where}.te_level_arcsec",
+                level,
+                "must be non-zero (a parabolic transmission error; its sign is ignored: the "
+                "TE is negative away from M) and at most 300 arcsec in magnitude",
+            )
+        out[side] = SideTargets(
+            side=side,
+            mean_point_face_mm=face,
+            mean_point_profile_mm=profile,
+            path_angle_deg=read_number(merged, "path_angle_deg", where, gt=-90.0, le=90.0),
+            ellipse_major_axis_mm=ellipse,
+            compound_um=read_number(merged, "compound_um", where, 6.5, gt=0.0, le=100.0),
+            te_level_arcsec=-abs(level),
+        )
+    radius = table.get("gear_cutter_radius_mm")
+    if radius is not None:
+        radius = read_number(table, "gear_cutter_radius_mm", "synthesis", gt=0.0)
+    return out, radius
+
+
+# --- the gear from its blank ---------------------------------------------------------------------
+
+
+def _uniform(blank: Blank) -> None:
+    for k, member in enumerate(("pinion", "gear")):
+        if abs(blank.root_angle_deg[k] - blank.pitch_angle_deg[k]) > 1e-9:
+            raise NotAvailableError(
+                "pair.root_angle_deg",
+                blank.root_angle_deg,
+                f"settings from the blank need uniform depth for now ({member} is tapered)",
+            )
+
+
+def default_cutter_radius_mm(blank: Blank) -> float:
+    """The standard cutter radius nearest to the mean cone distance."""
+    radii = np.array(STANDARD_CUTTER_RADII_IN) * 25.4
+    return float(radii[np.argmin(np.abs(radii - blank.mean_cone_distance_mm))])
+
+
+def slot_width_mm(pair: PairData) -> float:
+    """The gear's mean normal slot width on the pitch line (module docstring)."""
+    blank = pair.blank
+    pitch = math.pi * blank.mean_normal_module_mm
+    thickness = pair.mean_normal_chordal_thickness_mm
+    return pitch / 2.0 if thickness is None else pitch - thickness[1]
+
+
+def gear_flanks_from_blank(pair: PairData, cutter_radius_mm: float | None = None) -> dict:
+    """The gear's ``{flank: {key: value}}`` settings (module docstring)."""
+    blank = pair.blank
+    _uniform(blank)
+    rc = default_cutter_radius_mm(blank) if cutter_radius_mm is None else cutter_radius_mm
+    beta = math.radians(blank.mean_spiral_angle_deg)
+    am = blank.mean_cone_distance_mm
+    cx, cy = am - rc * math.sin(beta), rc * math.cos(beta)
+    width = slot_width_mm(pair)
+    b = blank.mean_dedendum_mm[1]
+    alpha = blank.pressure_angle_deg
+    reach = b * math.tan(math.radians(alpha))
+    if rc - width / 2.0 - reach <= 0.0:
+        raise DesignError(
+            "synthesis.gear_cutter_radius_mm",
+            rc,
+            "too small for the slot: the inside blade's point radius would not be positive",
+        )
+    gamma = math.radians(blank.pitch_angle_deg[1])
+    common = dict(
+        blade_pressure_angle_deg=alpha,
+        radial_setting_mm=math.hypot(cx, cy),
+        cradle_angle_deg=math.degrees(math.atan2(cy, cx)),
+        machine_root_angle_deg=blank.root_angle_deg[1],
+        machine_center_to_back_mm=0.0,
+        sliding_base_mm=b,
+        blank_offset_mm=0.0,
+        ratio_of_roll=math.sin(gamma),
+    )
+    return {
+        "concave": {**common, "cutter_point_radius_mm": rc + width / 2.0 - reach},
+        "convex": {**common, "cutter_point_radius_mm": rc - width / 2.0 + reach},
+    }
+
+
+# --- local synthesis of a pinion flank -----------------------------------------------------------
+
+
+def _family(spec, flank: str, blank: Blank, index: int) -> FaceMillingFamily:
+    return FaceMillingFamily(
+        cutters=(spec.cutter(flank, pitch_depth_mm=blank.mean_dedendum_mm[index]),),
+        scale_mm=blank.mean_cone_distance_mm,
+        pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
+    )
+
+
+def _rot_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+@dataclass(frozen=True, kw_only=True)
+class _MeanPoint:
+    """M on both members at the mean position (pinion angle 0)."""
+
+    s1: float
+    h1: float
+    omega: float  # M's polar angle on the pinion
+    normal1: np.ndarray  # the pinion's out-of-material normal at M, pinion frame
+    gear_jet: Any
+    gear_turn: float
+
+
+def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) -> _MeanPoint:
+    """Where the gear flank meets M's circle about the pinion axis at a point of contact."""
+    from gearopt.mesh import ToothFrame
+
+    blank = pair.blank
+    frame = ToothFrame.from_blank(blank)
+    s1 = frame.toe_mm + targets.mean_point_face_mm
+    h1 = frame.root_mm + targets.mean_point_profile_mm
+    g1, g2 = (math.radians(a) for a in blank.pitch_angle_deg)
+    big_l1 = s1 * math.cos(g1) - h1 * math.sin(g1)
+    big_r1 = s1 * math.sin(g1) + h1 * math.cos(g1)
+    b, c = placement.pinion_to_gear
+    ratio = pair.pinion_teeth / pair.gear_teeth
+    hand2 = 1.0 if blank.hand[1] == "right" else -1.0
+    family = _family(gear_spec, gear_flank, blank, 1)
+    start = family.pitch_row(np.array([blank.mean_cone_distance_mm]))[0, 0]
+    axis1 = b[:, 2]
+
+    def state(omega):
+        omega = np.atleast_1d(omega)
+        p = np.stack(
+            [big_r1 * np.cos(omega), big_r1 * np.sin(omega), np.full_like(omega, big_l1)], -1
+        )
+        q = p @ b.T + c
+        big_l2, big_r2 = q[:, 2], np.hypot(q[:, 0], q[:, 1])
+        s2 = big_l2 * math.cos(g2) + big_r2 * math.sin(g2)
+        h2 = -big_l2 * math.sin(g2) + big_r2 * math.cos(g2)
+        sol = _solve_nodes(family, s2, h2, start, g2)
+        geo = family.geometry(sol.x, np.zeros(len(omega), int))
+        point, normal = geo["point"], geo["normal"]
+        point[:, 1] *= hand2
+        normal[:, 1] *= hand2
+        turn = np.arctan2(q[:, 1], q[:, 0]) - np.arctan2(point[:, 1], point[:, 0])
+        ct, st = np.cos(turn), np.sin(turn)
+        n = np.stack(
+            [
+                ct * normal[:, 0] - st * normal[:, 1],
+                st * normal[:, 0] + ct * normal[:, 1],
+                normal[:, 2],
+            ],
+            -1,
+        )
+        v = np.cross(axis1, q - c) + ratio * np.cross([0.0, 0.0, 1.0], q)
+        meshing = np.einsum("ij,ij->i", n, v) / np.maximum(np.linalg.norm(v, axis=1), 1e-300)
+        return meshing, sol, s2, h2, turn, n, p
+
+    grid = np.linspace(-0.6, 0.6, 48)  # not through 0: v12 = 0 on the instantaneous axis
+    values, sol, *_ = state(grid)
+    values = np.where(sol.converged, values, np.nan)
+    change = np.flatnonzero(
+        np.isfinite(values[:-1])
+        & np.isfinite(values[1:])
+        & (np.sign(values[:-1]) != np.sign(values[1:]))
+    )
+    if change.size == 0:
+        raise SettingsError(
+            "synthesis.mean_point_face_mm",
+            (targets.mean_point_face_mm, targets.mean_point_profile_mm),
+            f"no point of the gear's {gear_flank} flank meets M's circle about the pinion axis "
+            "in contact: M is off the gear flank",
+        )
+    k = change[np.argmin(np.abs(grid[change]))]
+    omega = brentq(lambda w: float(state(w)[0][0]), grid[k], grid[k + 1], xtol=1e-15)
+    _, sol, s2, h2, turn, n, p = state(omega)
+    jet = envelope_jet(
+        family,
+        s_mm=float(s2[0]),
+        h_mm=float(h2[0]),
+        pitch_angle_rad=g2,
+        hand_sign=hand2,
+        guess=sol.x[0],
+    )
+    return _MeanPoint(
+        s1=s1,
+        h1=h1,
+        omega=float(omega),
+        normal1=-(b.T @ n[0]),
+        gear_jet=jet,
+        gear_turn=float(turn[0]),
+    )
+
+
+def pinion_start(pair: PairData, gear_flanks: dict, flank: str, chosen: Mapping) -> dict:
+    """The complementary settings of a pinion flank with the chosen cutter: the gear's
+    generating surface seen from the pinion (same radial setting and cradle angle), the cutter
+    centre moved along the line to the gear flank's mean point so the chosen radius passes
+    through it (uniform depth)."""
+    blank = pair.blank
+    gear_flank = "concave" if flank == "convex" else "convex"
+    g = gear_flanks[gear_flank]
+    b1, b2 = blank.mean_dedendum_mm
+    alpha2 = math.radians(g["blade_pressure_angle_deg"])
+    side2 = 1.0 if gear_flank == "concave" else -1.0
+    r2 = g["cutter_point_radius_mm"] + side2 * b2 * math.tan(alpha2)  # at the pitch plane
+    q2 = math.radians(g["cradle_angle_deg"])
+    centre = g["radial_setting_mm"] * np.array([math.cos(q2), math.sin(q2)])
+    mean = np.array([blank.mean_cone_distance_mm, 0.0])
+    toward = (mean - centre) / np.linalg.norm(mean - centre)
+    point = centre + r2 * toward
+    alpha1 = math.radians(chosen["blade_pressure_angle_deg"])
+    side1 = 1.0 if flank == "concave" else -1.0
+    r1 = chosen["cutter_point_radius_mm"] + side1 * b1 * math.tan(alpha1)
+    c1 = point - r1 * toward
+    return dict(
+        radial_setting_mm=float(np.hypot(*c1)),
+        cradle_angle_deg=math.degrees(math.atan2(c1[1], c1[0])),
+        blank_offset_mm=0.0,
+        sliding_base_mm=b1
+        + chosen["machine_center_to_back_mm"]
+        * math.sin(math.radians(chosen["machine_root_angle_deg"])),
+        ratio_of_roll=math.sin(math.radians(blank.pitch_angle_deg[0])),
+        roll_c2=0.0,
+    )
+
+
+def default_chosen(pair: PairData, gear_flanks: dict, flank: str) -> dict:
+    """Defaults of the chosen pinion inputs: the mating gear blade's angle, the gear radius
+    at the pitch plane made :data:`DEFAULT_RADIUS_MISMATCH` smaller (convex) or larger
+    (concave), machine root angle = root angle, machine centre to back 0."""
+    blank = pair.blank
+    gear_flank = "concave" if flank == "convex" else "convex"
+    g = gear_flanks[gear_flank]
+    alpha = g["blade_pressure_angle_deg"]
+    ta = math.tan(math.radians(alpha))
+    side2 = 1.0 if gear_flank == "concave" else -1.0
+    r2 = g["cutter_point_radius_mm"] + side2 * blank.mean_dedendum_mm[1] * ta
+    side1 = 1.0 if flank == "concave" else -1.0
+    r1 = r2 * (1.0 + side1 * DEFAULT_RADIUS_MISMATCH)
+    return dict(
+        cutter_point_radius_mm=r1 - side1 * blank.mean_dedendum_mm[0] * ta,
+        blade_pressure_angle_deg=alpha,
+        blade_profile_radius_mm=math.inf,
+        machine_root_angle_deg=blank.root_angle_deg[0],
+        machine_center_to_back_mm=0.0,
+    )
+
+
+_SCALES = np.array([1.0, 0.01, 1.0, 1.0, 0.01, 0.01])  # mm, rad, mm, mm, c1 and c2 (x c1)
+
+
+def synthesize_pinion_flank(
+    pair: PairData,
+    *,
+    flank: str,
+    gear_specs: Mapping[str, Any],
+    chosen: Mapping[str, Any],
+    targets: SideTargets,
+    flank_type,
+    place_tip: bool = True,
+) -> tuple[Any, SynthesisReport]:
+    """The pinion flank's settings (a ``flank_type`` instance) by local synthesis;
+    ``place_tip``: then put a straight blade's tip on the root line (:func:`_tip_on_root`;
+    the chosen cutter radius is then the blade's radius at M's height, not at its tip)."""
+    blank = pair.blank
+    _uniform(blank)
+    gear_flank = "concave" if flank == "convex" else "convex"
+    placement = Placement(shaft_angle_deg=pair.shaft_angle_deg)
+    mean = _mean_point(pair, gear_specs[gear_flank], gear_flank, targets, placement)
+    g1 = math.radians(blank.pitch_angle_deg[0])
+    big_l1 = mean.s1 * math.cos(g1) - mean.h1 * math.sin(g1)
+    big_r1 = mean.s1 * math.sin(g1) + mean.h1 * math.cos(g1)
+    e_t = np.array([-math.sin(mean.omega), math.cos(mean.omega), 0.0])
+    n_target = np.array([mean.normal1 @ e_t, mean.normal1[2]])
+    hand1 = 1.0 if blank.hand[0] == "right" else -1.0
+    ratio = pair.pinion_teeth / pair.gear_teeth
+    lag_target = 2.0 * abs(targets.te_level_arcsec) / ARCSEC / (math.pi / pair.pinion_teeth) ** 2
+    start = pinion_start(pair, {f: _as_dict(s) for f, s in gear_specs.items()}, flank, chosen)
+    x_start = np.array([start[k] for k in SOLVED_KEYS])
+    x_start[1] = math.radians(x_start[1])
+    scales = _SCALES * np.array([1, 1, 1, 1, x_start[4], x_start[4]])
+    root_angle = math.radians(blank.root_angle_deg[1])
+    guess = {"q": None}
+    count = {"n": 0}
+
+    def spec_of(x):
+        values = dict(zip(SOLVED_KEYS, x, strict=True))
+        values["cradle_angle_deg"] = math.degrees(values["cradle_angle_deg"])
+        return flank_type(**{k: chosen[k] for k in CHOSEN_KEYS}, blade_tip_radius_mm=0.0, **values)
+
+    def analyse(x, second=True):
+        count["n"] += 1
+        spec = spec_of(x)
+        family = _family(spec, flank, blank, 0)
+        q0 = guess["q"]
+        if q0 is None:
+            q0 = family.pitch_row(np.array([mean.s1]))[0, 0]
+        scale = family.scale_mm
+
+        def residual(z, idx):
+            q = np.concatenate([z, 0.0 * z[:, :1]], axis=1)
+            big_l, big_r, _ = family.axial_radial_meshing(q, np.zeros(len(z), int))
+            return np.stack([(big_l - big_l1) / scale, (big_r - big_r1) / scale], -1)
+
+        sol = newton(residual, q0[None, :2], tol=1e-15, max_iter=40, max_step=(1.0, 0.05))
+        if not sol.all_converged:
+            raise SettingsError(
+                f"synthesis.{targets.side}",
+                rule="at centre roll the pinion cutter does not reach M's position",
+            )
+        q = np.array([sol.x[0, 0], sol.x[0, 1], 0.0])
+        f = family.axial_radial_meshing(q[None], np.zeros(1, int))[2][0]
+        geo = family.geometry(q[None], np.zeros(1, int))
+        point, normal = geo["point"][0], geo["normal"][0]
+        point[1] *= hand1
+        normal[1] *= hand1
+        theta = math.atan2(point[1], point[0])
+        et = np.array([-math.sin(theta), math.cos(theta), 0.0])
+        first = np.array([f, normal @ et - n_target[0], normal[2] - n_target[1]])
+        guess["q"] = q
+        if not second:
+            return first, None
+        jet = envelope_jet(
+            family, s_mm=mean.s1, h_mm=mean.h1, pitch_angle_rad=g1, hand_sign=hand1, guess=q
+        )
+        guess["q"] = q
+        sense = 1 if (point[0] * normal[1] - point[1] * normal[0]) > 0.0 else -1
+        orientation = 1.0 if TaylorJet(jet).frame()[-1] @ normal > 0.0 else -1.0
+        local = local_mesh(
+            TaylorJet(jet, turn_rad=mean.omega - jet.theta),
+            TaylorJet(mean.gear_jet),
+            placement=placement,
+            ratio=ratio,
+            sense=sense,
+            gear_turn_rad=mean.gear_turn,
+            root_angle_rad=root_angle,
+            compound_um=targets.compound_um,
+            orientation=orientation,
+        )
+        return first, local
+
+    def residuals(z, goal):
+        try:
+            first, local = analyse(x_start + scales * z)
+        except SettingsError:
+            return np.full(6, 1e3)  # no regular contact there: the solver steps back
+        return np.concatenate(
+            [
+                first * 100.0,
+                [
+                    (local.lag_curvature - goal[0]) / lag_target,
+                    math.radians(local.path_angle_deg - goal[1]) * 10.0,
+                    local.ellipse_form * goal[2] ** 2 / 4.0 - 1.0,
+                ],
+            ]
+        )
+
+    # first order alone (tangency at M, generated at centre roll), then the second order by
+    # continuation from what the first-order solution gives
+    z = least_squares(
+        lambda z: analyse(x_start + scales * z, second=False)[0],
+        np.zeros(6),
+        method="trf",
+        diff_step=1e-5,
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+    ).x
+    _, local0 = analyse(x_start + scales * z)
+    begin = np.array(
+        [local0.lag_curvature, local0.path_angle_deg, min(local0.ellipse_major_axis_mm, 1e3)]
+    )
+    end = np.array([lag_target, targets.path_angle_deg, targets.ellipse_major_axis_mm])
+    for t in (0.25, 0.5, 0.75, 1.0):
+        goal = begin + t * (end - begin)
+        fit = least_squares(
+            residuals,
+            z,
+            args=(goal,),
+            method="lm",
+            diff_step=1e-5,
+            xtol=1e-14,
+            ftol=1e-14,
+            gtol=1e-14,
+            max_nfev=400,
+        )
+        z = fit.x
+    first, local = analyse(x_start + scales * z)
+    report = SynthesisReport(
+        targets=targets,
+        path_angle_deg=local.path_angle_deg,
+        ellipse_major_axis_mm=local.ellipse_major_axis_mm,
+        te_level_arcsec=-0.5 * local.lag_curvature * (math.pi / pair.pinion_teeth) ** 2 * ARCSEC,
+        first_order_residual=float(np.max(np.abs(first))),
+        evaluations=count["n"],
+    )
+    _check(report, lag_target, local, targets)
+    spec = spec_of(x_start + scales * z)
+    if place_tip and math.isinf(spec.blade_profile_radius_mm):
+        spec = _tip_on_root(spec, flank, blank)
+    return spec, report
+
+
+def _tip_on_root(spec, flank: str, blank: Blank):
+    """The same cone with its tip moved along the cutter axis onto the root line at the mean
+    cone distance (a straight blade: the generated flank is unchanged, only how deep the blade
+    reaches): sliding base and point radius change together."""
+    g = math.radians(spec.machine_root_angle_deg)
+    dg = g - math.radians(blank.pitch_angle_deg[0])
+    apex_z = spec.machine_center_to_back_mm * math.sin(g) - spec.sliding_base_mm
+    root_z = (
+        apex_z
+        + blank.mean_cone_distance_mm * math.sin(dg)
+        + blank.mean_dedendum_mm[0] * math.cos(dg)
+    )
+    side = 1.0 if flank == "concave" else -1.0
+    return replace(
+        spec,
+        sliding_base_mm=spec.sliding_base_mm + root_z,
+        cutter_point_radius_mm=spec.cutter_point_radius_mm
+        - side * root_z * math.tan(math.radians(spec.blade_pressure_angle_deg)),
+    )
+
+
+def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> None:
+    where = f"synthesis.{targets.side}"
+    if report.first_order_residual > TOLERANCE["first_order"]:
+        raise SettingsError(
+            f"{where}.mean_point_face_mm",
+            (targets.mean_point_face_mm, targets.mean_point_profile_mm),
+            f"the pinion cannot be made tangent to the gear at M (residual "
+            f"{report.first_order_residual:.2e})",
+        )
+    if abs(report.path_angle_deg - targets.path_angle_deg) > TOLERANCE["path_deg"]:
+        raise SettingsError(
+            f"{where}.path_angle_deg",
+            targets.path_angle_deg,
+            f"the pinion cannot realise this path direction (reached "
+            f"{report.path_angle_deg:.3f} deg)",
+        )
+    if (
+        abs(report.ellipse_major_axis_mm / targets.ellipse_major_axis_mm - 1.0)
+        > TOLERANCE["relative"]
+    ):
+        raise SettingsError(
+            f"{where}.ellipse_major_axis_mm",
+            targets.ellipse_major_axis_mm,
+            f"not realisable with these chosen inputs (reached "
+            f"{report.ellipse_major_axis_mm:.3f} mm)",
+        )
+    if abs(local.lag_curvature / lag_target - 1.0) > TOLERANCE["relative"]:
+        raise SettingsError(
+            f"{where}.te_level_arcsec",
+            targets.te_level_arcsec,
+            f"not realisable with these chosen inputs (reached {report.te_level_arcsec:.3f})",
+        )
+
+
+def _as_dict(spec) -> dict:
+    if isinstance(spec, Mapping):
+        return dict(spec)
+    return {k: getattr(spec, k) for k in spec.__dataclass_fields__}
