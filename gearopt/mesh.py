@@ -65,6 +65,7 @@ class ToothFrame:
     root_mm: float
     centre_mm: tuple[float, float]
     face_width_mm: float
+    gear_root_angle_deg: float = 90.0
 
     @classmethod
     def from_blank(cls, blank) -> ToothFrame:
@@ -75,7 +76,63 @@ class ToothFrame:
             root_mm=root,
             centre_mm=(0.5 * blank.face_width_mm, 0.5 * (a1 - a2) - root),
             face_width_mm=blank.face_width_mm,
+            gear_root_angle_deg=blank.root_angle_deg[1],
         )
+
+
+def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
+    """Direction (deg) of a path of contact on the gear flank at ``point`` (gear member frame,
+    ``normal`` the flank's): the angle from the gear's root line -- the root cone's generatrix
+    through the point, projected on the tangent plane, toward the heel -- to the path's tangent
+    (oriented toward the heel too), positive when the path rises toward the tooth top. Range
+    (-90, 90]; Litvin's eta_2 of local synthesis with this sign."""
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    theta = math.atan2(point[1], point[0])
+    e_r = np.array([math.cos(theta), math.sin(theta), 0.0])
+    e_z = np.array([0.0, 0.0, 1.0])
+    along = math.sin(root_angle_rad) * e_r + math.cos(root_angle_rad) * e_z
+    up = math.cos(root_angle_rad) * e_r - math.sin(root_angle_rad) * e_z
+    along = along - (along @ n) * n
+    along /= np.linalg.norm(along)
+    up = up - (up @ n) * n - (up @ along) * along
+    up /= np.linalg.norm(up)
+    t = np.asarray(tangent, float)
+    t = t - (t @ n) * n
+    if t @ along < 0.0:
+        t = -t
+    angle = math.degrees(math.atan2(t @ up, t @ along))
+    return 90.0 if angle <= -90.0 + 1e-12 else angle
+
+
+def _gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -> float:
+    """The path's direction on the gear flank at M (:func:`path_angle`) from the contact points
+    of the two positions either side of M (rows 4 and 5 of the extra positions), carried into
+    the gear's frame at their contact angles."""
+    from gearopt.newton_tca import _FlankJet
+
+    b, c = field.b, field.c
+    points = []
+    for k in (4, 5):
+        phi = float(ex.phi_rad[k])
+        p = field.pinion.point_at(ex.contact_face_mm[k], ex.contact_profile_mm[k])
+        cp, sp = math.cos(phi), math.sin(phi)
+        p = np.array([cp * p[0] - sp * p[1], sp * p[0] + cp * p[1], p[2]])
+        q = b @ p + c
+        turn = (
+            -field.ratio * phi
+            + field.phase_rad
+            - field._shift
+            - field.gear_sense * float(ex.minimum_rad[k])
+        )
+        ct, st = math.cos(turn), math.sin(turn)
+        points.append(np.array([ct * q[0] + st * q[1], -st * q[0] + ct * q[1], q[2]]))
+    mid = 0.5 * (points[0] + points[1])
+    s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
+    _, p_s, p_h, *_ = _FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
+    return path_angle(
+        points[1] - points[0], np.cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -115,6 +172,9 @@ class ToothContact:
     ellipse_major_axis_mm
         Length of the instantaneous contact zone at M along its principal (long) axis: the
         major axis of seed 003's contact ellipse, whatever its angle to the path.
+    path_angle_deg
+        Direction of the path of contact at M on the gear flank, from the gear's root line
+        (:func:`path_angle`; the contact points of two positions either side of M).
     contact_ratio
         Pinion rotation with interior contact over the angular pitch.
     compound_um, separation
@@ -139,6 +199,7 @@ class ToothContact:
     profile_mm: NDArray
     width_mm: float
     ellipse_major_axis_mm: float
+    path_angle_deg: float
     bias_mm: float
     center_offset_mm: tuple[float, float]
     mean_point_mm: tuple[float, float]
@@ -168,6 +229,7 @@ class ToothContact:
             "pattern": {
                 "width_mm": float(self.width_mm),
                 "ellipse_major_axis_mm": float(self.ellipse_major_axis_mm),
+                "path_angle_deg": float(self.path_angle_deg),
                 "bias_mm": float(self.bias_mm),
                 "center_offset_mm": [float(v) for v in self.center_offset_mm],
                 "mean_point_mm": [float(v) for v in self.mean_point_mm],
@@ -768,6 +830,7 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
         profile_mm=profile,
         width_mm=width,
         ellipse_major_axis_mm=major,
+        path_angle_deg=_gear_path_angle(field, ex, frame),
         bias_mm=bias,
         center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),
         mean_point_mm=mean_point,

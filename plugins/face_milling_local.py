@@ -26,10 +26,11 @@ from numpy.typing import NDArray
 
 from gearopt.contact import Placement
 from gearopt.errors import SettingsError
+from gearopt.mesh import path_angle
 from gearopt.newton_tca import _FlankJet, _System
 from gearopt.solve import newton
 
-__all__ = ["EnvelopeJet", "LocalMesh", "TaylorJet", "envelope_jet", "local_mesh", "path_angle"]
+__all__ = ["EnvelopeJet", "LocalMesh", "TaylorJet", "envelope_jet", "local_mesh"]
 
 #: stencil step (mm) of the finite differences of Theta on the exact envelope
 JET_STEP_MM = 0.1
@@ -167,7 +168,7 @@ class LocalMesh:
         per rad^2 of pinion rotation (m'21 in magnitude; > 0 when the transmission error is a
         parabola with its maximum at M).
     path_angle_deg
-        Direction of the path of contact on the gear flank at M (:func:`path_angle`).
+        Direction of the path of contact on the gear flank at M (:func:`gearopt.mesh.path_angle`).
     ellipse_major_axis_mm
         Major axis of the contact ellipse at M (separation ``compound_um`` along the normal),
         measured in the pinion's pattern coordinates (its axial-plane projection, as the
@@ -188,30 +189,6 @@ class LocalMesh:
     ellipse_form: float
     ellipse_angle_deg: float
     residual: float
-
-
-def path_angle(tangent, normal, point, root_angle_rad) -> float:
-    """Angle (deg) on the gear flank between its root line and the path tangent at ``point``
-    (gear member frame): the root line is the root cone's generatrix through the point,
-    projected on the tangent plane, oriented toward the heel; the path is oriented toward the
-    heel too; positive when the path rises toward the tooth top (away from the root cone).
-    Range (-90, 90]."""
-    n = normal / np.linalg.norm(normal)
-    theta = math.atan2(point[1], point[0])
-    e_r = np.array([math.cos(theta), math.sin(theta), 0.0])
-    e_z = np.array([0.0, 0.0, 1.0])
-    along = math.sin(root_angle_rad) * e_r + math.cos(root_angle_rad) * e_z
-    up = math.cos(root_angle_rad) * e_r - math.sin(root_angle_rad) * e_z
-    along = along - (along @ n) * n
-    along /= np.linalg.norm(along)
-    up = up - (up @ n) * n - (up @ along) * along
-    up /= np.linalg.norm(up)
-    t = np.asarray(tangent, float)
-    t = t - (t @ n) * n
-    if t @ along < 0.0:
-        t = -t
-    angle = math.degrees(math.atan2(t @ up, t @ along))
-    return 90.0 if angle <= -90.0 + 1e-12 else angle
 
 
 def local_mesh(

@@ -34,7 +34,7 @@ term c2, from six conditions at the mean contact point M:
 2. and 3. the pinion's normal there equals the gear's at M, in M's cylindrical frame (the
    pinion's angular position is free: that is the index of the cut);
 4. the path of contact on the gear flank at M has the direction ``path_angle_deg``
-   (:func:`gearopt_plugins.face_milling_local.path_angle`: from the gear's root line, toward
+   (:func:`gearopt.mesh.path_angle`: from the gear's root line, toward
    the heel, positive toward the tooth top);
 5. the contact ellipse at M has the major axis ``ellipse_major_axis_mm`` at the separation
    ``compound_um`` (along the normal), measured as the contact engine measures it (the
