@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from gearopt.blank import Blank, compute_blank, cone_distance_from_module_mm, pitch_angles_rad
-from gearopt.errors import DesignError, GearoptError
+from gearopt.errors import DesignError, GearoptError, NotAvailableError
 from gearopt.validate import (
     check_integer,
     check_keys,
@@ -302,6 +302,19 @@ class PairData:
     def tapered(self) -> bool:
         """True when a face or root angle is given (tapered depth)."""
         return self.face_angle_deg is not None or self.root_angle_deg is not None
+
+    def require_uniform_depth(self, model: str) -> None:
+        """Raise :class:`NotAvailableError` naming ``pair.face_angle_deg`` (or
+        ``pair.root_angle_deg``) when the pair is tapered: for machine models that cut uniform
+        depth only."""
+        if self.tapered:
+            name = "face_angle_deg" if self.face_angle_deg is not None else "root_angle_deg"
+            raise NotAvailableError(
+                f"pair.{name}",
+                list(getattr(self, name)),
+                f"the {model} model cuts uniform depth only (face = root = pitch angle): "
+                "remove face_angle_deg and root_angle_deg from [pair]",
+            )
 
     @property
     def gear_hand(self) -> str:
