@@ -105,9 +105,21 @@ Design keys (``[machine.<member>.<flank>]``; keys common to both flanks may sit 
     [machine.gear.convex]              # inside blade
     cutter_point_radius_mm = 62.216067159
 
-Not in this slice: tapered depth (``face_angle_deg``/``root_angle_deg``), a blade tip radius,
-settings from the blank (``basic_settings`` reports the settings as given), a published
-settings summary.
+Tapered depth: ``face_angle_deg`` and ``root_angle_deg`` in ``[pair]`` (``[pinion, gear]``;
+uniform depth when absent; :mod:`gearopt.blank` for the mean addendum and dedendum from the
+outer ones at the heel). The flanks are then generated on the tapered grid, root cone to face
+cone in every face column (:class:`gearopt.flank.DepthTaper`). The machine root angle stays a
+setting: with it equal to the root angle and the root line in the tip plane (the sliding base
+b_m cos(theta_d) - A_m sin(theta_d) with dX_D = dE_m = 0, theta_d = pitch - root angle) the
+blade's tip sweeps the root cone along the whole face, and the ratio of roll for rolling
+without slip is c1 = sin(gamma) / cos(theta_d) (``studies/face_milling_tapered.toml``).
+Root reach: the blade's tip (the plane z_m = 0) must reach the root line (the root cone's
+generatrix nearest the cradle at centre roll) at the toe and at the heel, else a
+``DesignError`` names ``sliding_base_mm``.
+
+Not in this slice: a blade tip (edge) radius (``blade_tip_radius_mm`` other than 0 raises
+``NotAvailableError``), settings from the blank (``basic_settings`` reports the settings as
+given), a published settings summary.
 """
 
 from __future__ import annotations
@@ -389,7 +401,7 @@ class FaceMilling(BaseMachineModel):
     name = "face-milling"
     description = (
         "Gleason face milling (head cutter, cradle, modified roll; Litvin's model), generated "
-        "pinion and gear, uniform depth (seed 002)"
+        "pinion and gear, uniform or tapered depth (seed 002)"
     )
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> FaceMillingMachine:
