@@ -514,3 +514,16 @@ def test_tapered_design_analyses_and_plots(tapered, tmp_path, capsys):
         assert (tmp_path / f"{name}.png").stat().st_size > 0
     summary = gearopt.generate_flanks(tapered, "pinion")["convex"].summary()
     assert summary["generated_nodes"] > 0 and math.isfinite(summary["generated_depth_mm"])
+
+
+def test_flank_query_on_a_tapered_grid(tapered):
+    """``gearopt flank --at`` on a tapered member: the point lies at the asked axial position
+    and radius, its height is the true height above the pitch cone."""
+    from gearopt.flank_cli import flank_point
+
+    out = flank_point(tapered, member="gear", flank="convex", axial_mm=30.0, radius_mm=86.0)
+    p = np.array(out["point_mm"])
+    assert_allclose([p[2], np.hypot(p[0], p[1])], [30.0, 86.0], atol=1e-9)
+    g = math.radians(tapered.blank.pitch_angle_deg[1])
+    assert_allclose(out["height_mm"], -30.0 * math.sin(g) + 86.0 * math.cos(g), atol=1e-12)
+    assert out["inside_blank"]
