@@ -438,6 +438,30 @@ class _Engine:
             [np.array([[sg1, cg1]]), np.stack([lin[:, 2] * cg1, -lin[:, 2] * sg1], 1)]
         )
         self._pinion_const = np.concatenate([[0.0], const])[:, None]
+        # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
+        self._pinion_taper = first.pinion.taper
+        gear_taper = first.gear.taper
+        self._gear_taper = None
+        if gear_taper is not None:
+            # unit coordinates (x, y) of (s, h) -> y of (s, t): with d = s - pivot,
+            # y' = (y + ib (h0 - d alpha)) / (1 + d beta) - ib h0
+            self._gear_taper = (
+                s0 - gear_taper.pivot_mm,
+                1.0 / ia,
+                ib,
+                h0,
+                gear_taper.alpha,
+                gear_taper.beta,
+            )
+
+    def _untaper(self, xy) -> None:
+        """Gear unit grid coordinates of (s, h) made those of (s, t), in place (tapered
+        depth; nothing for uniform depth)."""
+        if self._gear_taper is None:
+            return
+        d0, inv_ia, ib, h0, alpha, beta = self._gear_taper
+        d = xy[0] * inv_ia + d0
+        xy[1] = (xy[1] + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
 
     # --- evaluation ---------------------------------------------------------------------
 
@@ -490,6 +514,7 @@ class _Engine:
         theta = np.arctan2(out[1], out[0])
         xy = out[2:]
         xy += self._rho_coef.reshape((2,) + (1,) * radius.ndim) * radius
+        self._untaper(xy)
         flank, cell, within = self._cells(self.gear_coef, xy, self._gear_table, rows.gear_offset)
         valid = self.gear_ok[cell]
         valid &= within
@@ -539,6 +564,7 @@ class _Engine:
         xy = out[2:]
         np.multiply(self._rho_coef[:, None, None], radius, out=tmp[:2])
         xy += tmp[:2]
+        self._untaper(xy)
         # the gear's cells (as _cells)
         limit, n_cols = self._gear_table
         uv = np.fmax(xy, 0.0, out=tmp[:2])
@@ -613,7 +639,10 @@ class _Engine:
         theta, cell, within = self._cells(
             self.pinion_coef, xy, self._pinion_table, rows.pinion_offset
         )
-        lin = self._pinion_map @ sh.reshape(2, -1)
+        flat = sh.reshape(2, -1)
+        if self._pinion_taper is not None:  # (s, t) -> (s, h)
+            flat = np.stack([flat[0], self._pinion_taper.height_mm(flat[0], flat[1])])
+        lin = self._pinion_map @ flat
         lin += self._pinion_const
         lin = lin.reshape((5,) + sh.shape[1:])
         big_r = lin[0]

@@ -19,6 +19,9 @@ Example (seed 001, Table 2)::
     pinion_hand = "left"
     outer_addendum_mm = [3.397, 3.397]
     outer_dedendum_mm = [4.076, 4.076]
+    # tapered depth (face-milling model only; uniform depth when absent):
+    # face_angle_deg = [pinion, gear]      # face (tip) cone angles
+    # root_angle_deg = [pinion, gear]      # root cone angles
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from gearopt.blank import Blank, compute_blank, cone_distance_from_module_mm, pitch_angles_rad
-from gearopt.errors import DesignError, GearoptError
+from gearopt.errors import DesignError, GearoptError, NotAvailableError
 from gearopt.validate import (
     check_integer,
     check_keys,
@@ -59,6 +62,8 @@ __all__ = [
 MEMBERS = ("pinion", "gear")
 SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation", "analysis", "synthesis")
 MODULE_TOLERANCE = 1e-3  # module and cone distance, when both are given, agree within 0.1 %
+#: the largest addendum or dedendum angle (face - pitch, pitch - root) of a tapered-depth blank
+MAX_TAPER_ANGLE_DEG = 15.0
 
 _PAIR_KEYS = (
     "pinion_teeth",
@@ -72,6 +77,8 @@ _PAIR_KEYS = (
     "pinion_hand",
     "outer_addendum_mm",
     "outer_dedendum_mm",
+    "face_angle_deg",
+    "root_angle_deg",
     "mean_normal_chordal_addendum_mm",
     "mean_normal_chordal_thickness_mm",
 )
@@ -96,6 +103,15 @@ class PairData:
     are given the cone distance is used and the module only checked against it (0.1 %).
     ``outer_addendum_mm`` and ``outer_dedendum_mm`` default to 1.0 and 1.25 mean normal modules;
     the chordal addendum and thickness are needed only to solve the additional slope angle.
+
+    Tapered depth: ``face_angle_deg`` and ``root_angle_deg`` (``[pinion, gear]``, as published
+    summaries print them) give the face and root cones; either absent means that cone is
+    parallel to the pitch cone (uniform depth: face = root = pitch angle). The outer addendum
+    and dedendum are then those at the heel (outer cone distance A_o), and the mean ones follow
+    from the addendum angle theta_a = face - pitch and the dedendum angle
+    theta_d = pitch - root (:func:`gearopt.blank.compute_blank`). Rules: root <= pitch <= face,
+    each angle at most ``MAX_TAPER_ANGLE_DEG`` = 15 deg, root angle > 0, positive addendum and
+    dedendum at the toe, and the mating top clearing the root at toe and heel.
     """
 
     pinion_teeth: int
@@ -109,6 +125,8 @@ class PairData:
     mean_normal_module_mm: float | None = None
     outer_addendum_mm: tuple[float, float] | None = None
     outer_dedendum_mm: tuple[float, float] | None = None
+    face_angle_deg: tuple[float, float] | None = None
+    root_angle_deg: tuple[float, float] | None = None
     mean_normal_chordal_addendum_mm: tuple[float, float] | None = None
     mean_normal_chordal_thickness_mm: tuple[float, float] | None = None
 
@@ -193,6 +211,7 @@ class PairData:
                 )
         set_(self, "outer_addendum_mm", add)
         set_(self, "outer_dedendum_mm", ded)
+        self._check_taper(g1, face, add, ded)
         pitch = math.pi * derived
         for name in ("mean_normal_chordal_addendum_mm", "mean_normal_chordal_thickness_mm"):
             value = getattr(self, name)
@@ -215,6 +234,87 @@ class PairData:
                         ca,
                         f"must be < the whole depth {a + d:g} mm",
                     )
+
+    def _check_taper(self, g1: float, face: float, add, ded) -> None:
+        """Validate ``face_angle_deg`` and ``root_angle_deg`` (tapered depth)."""
+        pitch = (math.degrees(g1), self.shaft_angle_deg - math.degrees(g1))
+        tans = {}
+        for name, sign in (("face_angle_deg", 1.0), ("root_angle_deg", -1.0)):
+            value = getattr(self, name)
+            if value is None:
+                tans[name] = (0.0, 0.0)
+                continue
+            where = f"pair.{name}"
+            if not isinstance(value, list | tuple) or len(value) != 2:
+                raise DesignError(where, value, "must be a list of two angles [pinion, gear]")
+            angles = tuple(
+                check_number(f"{where}[{m}]", v, gt=0.0, lt=180.0, unit="degrees")
+                for m, v in zip(MEMBERS, value, strict=True)
+            )
+            for m, angle, p in zip(MEMBERS, angles, pitch, strict=True):
+                taper = sign * (angle - p)  # addendum angle, or dedendum angle
+                if taper < 0.0:
+                    rule = (
+                        f"must be >= the pitch angle {p:.6f} deg (the face cone lies outside the "
+                        "pitch cone)"
+                        if sign > 0
+                        else f"must be <= the pitch angle {p:.6f} deg (the root cone lies "
+                        "inside the pitch cone)"
+                    )
+                    raise DesignError(f"{where}[{m}]", angle, rule)
+                if taper > MAX_TAPER_ANGLE_DEG:
+                    which = "face - pitch" if sign > 0 else "pitch - root"
+                    raise DesignError(
+                        f"{where}[{m}]",
+                        angle,
+                        f"{which} = {taper:.4f} deg exceeds {MAX_TAPER_ANGLE_DEG:g} deg "
+                        f"(pitch angle {p:.6f} deg): not a tapered-depth bevel blank",
+                    )
+            object.__setattr__(self, name, tuple(float(a) for a in angles))
+            tans[name] = tuple(
+                math.tan(math.radians(sign * (a - p))) for a, p in zip(angles, pitch, strict=True)
+            )
+        # at the toe (cone distance A_o - F): addenda and dedenda positive, tops clear roots
+        toe_add = [a - face * t for a, t in zip(add, tans["face_angle_deg"], strict=True)]
+        toe_ded = [b - face * t for b, t in zip(ded, tans["root_angle_deg"], strict=True)]
+        for k, m in enumerate(MEMBERS):
+            for name, value in (("face_angle_deg", toe_add[k]), ("root_angle_deg", toe_ded[k])):
+                if value <= 0.0:
+                    what = "addendum" if name == "face_angle_deg" else "dedendum"
+                    raise DesignError(
+                        f"pair.{name}[{m}]",
+                        getattr(self, name)[k],
+                        f"leaves the {what} at the toe {value:.4f} mm <= 0 (the outer {what} "
+                        "is at the heel; the toe lies face_width_mm inward)",
+                    )
+        for i, j in ((0, 1), (1, 0)):
+            if toe_ded[i] < toe_add[j] - 1e-9:
+                name = "face_angle_deg" if self.face_angle_deg is not None else "root_angle_deg"
+                raise DesignError(
+                    f"pair.{name}",
+                    list(getattr(self, name)),
+                    f"at the toe the {MEMBERS[i]}'s dedendum {toe_ded[i]:.4f} mm is smaller than "
+                    f"the {MEMBERS[j]}'s addendum {toe_add[j]:.4f} mm (the mating tooth's top "
+                    "must clear the root)",
+                )
+
+    @property
+    def tapered(self) -> bool:
+        """True when a face or root angle is given (tapered depth)."""
+        return self.face_angle_deg is not None or self.root_angle_deg is not None
+
+    def require_uniform_depth(self, model: str) -> None:
+        """Raise :class:`NotAvailableError` naming ``pair.face_angle_deg`` (or
+        ``pair.root_angle_deg``) when the pair is tapered: for machine models that cut uniform
+        depth only."""
+        if self.tapered:
+            name = "face_angle_deg" if self.face_angle_deg is not None else "root_angle_deg"
+            raise NotAvailableError(
+                f"pair.{name}",
+                list(getattr(self, name)),
+                f"the {model} model cuts uniform depth only (face = root = pitch angle): "
+                "remove face_angle_deg and root_angle_deg from [pair]",
+            )
 
     @property
     def gear_hand(self) -> str:

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import RegularGridInterpolator
 
 from gearopt.errors import GearoptError, SettingsError
-from gearopt.flank import FlankGrid, FlankMap
+from gearopt.flank import DepthTaper, FlankGrid, FlankMap
 
 __all__ = [
     "GeneratingFamily",
@@ -100,6 +100,7 @@ class EnvelopeSolution:
     mask: NDArray
     sheet: NDArray  # nodes on the envelope's sheet, connected to the pitch row
     iterations: int
+    taper: DepthTaper | None = None  # tapered depth: profile_mm holds the grid coordinate t
 
 
 def _residual_and_jacobian(family, q, flank, big_l, big_r):
@@ -190,6 +191,7 @@ def solve_envelope(
     heights_mm: tuple[float, float],
     pitch_angle_rad: float,
     grid: FlankGrid,
+    taper: DepthTaper | None = None,
     tol: float = 1e-14,
     max_iter: int = 8,
     fold_trim_mm: float = 0.3,
@@ -204,9 +206,13 @@ def solve_envelope(
     cone_distances_mm
         ``(toe, heel)`` cone distances of the grid's face range.
     heights_mm
-        ``(root, top)`` heights above the pitch cone (root negative) of its profile range.
+        ``(root, top)`` heights above the pitch cone (root negative) of its profile range
+        (with ``taper``: of the profile coordinate t, i.e. at the taper's pivot).
     pitch_angle_rad
         Pitch angle gamma.
+    taper
+        Tapered depth: node (s_i, t_j) lies at the height ``taper.height_mm(s_i, t_j)``, so
+        the grid spans root cone to face cone in every column (None: uniform depth, h = t).
     tol
         Convergence tolerance on every scaled residual.
     fold_trim_mm
@@ -224,8 +230,13 @@ def solve_envelope(
     k, (n_f, n_p) = family.n_flanks, grid.shape
     cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
     flank = np.broadcast_to(np.arange(k)[:, None, None], (k, n_f, n_p))
-    big_l = np.broadcast_to(s[:, None] * cg - h[None, :] * sg, (k, n_f, n_p))
-    big_r = np.broadcast_to(s[:, None] * sg + h[None, :] * cg, (k, n_f, n_p))
+    # the nodes' heights above the pitch cone (n_f, n_p): h in every column for uniform depth
+    if taper is None:
+        height = np.broadcast_to(h[None, :], (n_f, n_p))
+    else:
+        height = taper.height_mm(s[:, None], h[None, :])
+    big_l = np.broadcast_to(s[:, None] * cg - height * sg, (k, n_f, n_p))
+    big_r = np.broadcast_to(s[:, None] * sg + height * cg, (k, n_f, n_p))
     # the pitch line (h = 0) from the model's start there (often exact: no iteration)
     row_l, row_r = np.tile(s * cg, k), np.tile(s * sg, k)
     row_flank = flank[:, :, 0].ravel()
@@ -256,7 +267,7 @@ def solve_envelope(
     )[1]
     d2q_dh2 = (_predictor(family, jac1, sg, cg) - dq_dh) / eps
     q0, dq_dh, d2q_dh2 = (a.reshape(k, n_f, 1, 3) for a in (q0, dq_dh, d2q_dh2))
-    hh = h[None, None, :, None]
+    hh = height[None, :, :, None]
     q = q0 + hh * dq_dh + 0.5 * hh**2 * d2q_dh2
     q, res, jac, converged, it = _newton(
         family,
@@ -284,7 +295,7 @@ def solve_envelope(
         dq = _predictor(family, jac[fk, fi, nj], sg, cg)
         qr, fr, jr, ok, it = _newton(
             family,
-            q[fk, fi, nj] + (h[pj] - h[nj])[:, None] * dq,
+            q[fk, fi, nj] + (height[fi, pj] - height[fi, nj])[:, None] * dq,
             fk,
             big_l[fk, fi, pj],
             big_r[fk, fi, pj],
@@ -301,9 +312,9 @@ def solve_envelope(
     down = np.flip(np.cumprod(np.flip(good[..., : j0 + 1], axis=-1), axis=-1), axis=-1)
     connected = np.concatenate([down[..., :j0].astype(bool), up], axis=-1)
     # trim just above the first bad node below the pitch row, column by column
-    first_bad = np.where(~connected & (h < h[j0]), h, -np.inf).max(axis=-1)
+    first_bad = np.where(~connected & (h < h[j0]), height, -np.inf).max(axis=-1)
     margin = np.where(np.isfinite(first_bad), fold_trim_mm, 0.0)
-    trimmed = h >= (first_bad + margin)[..., None]
+    trimmed = height >= (first_bad + margin)[..., None]
     within = np.asarray(family.within_tool(q, flank), bool)
     return EnvelopeSolution(
         face_mm=s,
@@ -317,6 +328,7 @@ def solve_envelope(
         mask=connected & trimmed & within,
         sheet=connected,
         iterations=iterations,
+        taper=taper,
     )
 
 
@@ -341,6 +353,7 @@ class EnvelopeSurface:
     sign: float = 1.0
     offset_rad: float = 0.0
     tol: float = 1e-14
+    taper: DepthTaper | None = None
 
     def transformed(self, *, sign: float = 1.0, offset_rad: float = 0.0) -> EnvelopeSurface:
         """The surface after Theta -> sign Theta + offset_rad."""
@@ -363,6 +376,8 @@ class EnvelopeSurface:
         )(np.stack([s.ravel(), h.ravel()], axis=-1))
         cg, sg = math.cos(self.pitch_angle_rad), math.sin(self.pitch_angle_rad)
         sf, hf = s.ravel(), h.ravel()
+        if self.taper is not None:  # grid coordinate t -> height
+            hf = self.taper.height_mm(sf, hf)
         flank = np.full(len(sf), self.index)
         q, _, _, ok, _ = _newton(
             self.family,
@@ -472,7 +487,9 @@ def flank_map(
             profile_mm=solution.profile_mm,
             q=q,
             mask=mask,
+            taper=solution.taper,
         ),
+        taper=solution.taper,
     )
     if turn_rad:
         result = result.rotated(turn_rad)

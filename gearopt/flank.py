@@ -13,6 +13,14 @@ above the pitch cone, root to top), so that
 
 with gamma the pitch angle: a rotation of the L x R grid that makes the uniform-depth tooth a
 rectangle. Node ``[i, j]`` is (face_mm[i], profile_mm[j]).
+
+Tapered depth (face and root cones not parallel to the pitch cone): the tooth is a trapezoid in
+(s, h), so the profile coordinate of the grid is then ``t``, the height scaled column by column
+so that the root cone and the face cone are the grid's first and last rows
+(:class:`DepthTaper`): h = t + (s - A_m)(alpha + beta t), bilinear, t = h at the mean cone
+distance A_m. Every method that goes between the grid and space (:attr:`FlankMap.axial_mm`,
+:meth:`FlankMap.to_grid`, :meth:`FlankMap.point_at`, the interpolants' derivatives) applies it;
+``profile_mm`` and every "grid coordinate" are t. Uniform depth has no taper (t = h).
 """
 
 from __future__ import annotations
@@ -28,7 +36,15 @@ from scipy.interpolate import RectBivariateSpline
 
 from gearopt.errors import GearoptError
 
-__all__ = ["FlankGrid", "FlankMap", "MEMBERS", "FLANKS", "HANDS", "check_member_and_flank"]
+__all__ = [
+    "DepthTaper",
+    "FlankGrid",
+    "FlankMap",
+    "MEMBERS",
+    "FLANKS",
+    "HANDS",
+    "check_member_and_flank",
+]
 
 MEMBERS = ("pinion", "gear")
 FLANKS = ("convex", "concave")
@@ -62,6 +78,74 @@ class FlankGrid:
         return (self.n_face, self.n_profile)
 
 
+@dataclass(frozen=True, kw_only=True)
+class DepthTaper:
+    """The profile coordinate t of a tapered-depth grid: the height above the pitch cone
+
+        h(s, t) = t + (s - pivot_mm) (alpha + beta t),
+
+    with ``beta = (top_slope - root_slope) / (top_mm - root_mm)`` and
+    ``alpha = root_slope - beta root_mm``, so that the line t = ``root_mm`` is the root cone
+    (h = root_mm + (s - pivot_mm) root_slope), t = ``top_mm`` the face cone, and t = h at the
+    pivot (the mean cone distance). The slopes are dh/ds of the cones' generatrices in the
+    axial plane: ``top_slope`` = tan(face angle - pitch angle) (the addendum angle),
+    ``root_slope`` = -tan(pitch angle - root angle) (minus the dedendum angle's tangent).
+
+    Parameters
+    ----------
+    pivot_mm
+        Cone distance where t = h (the mean cone distance A_m).
+    root_mm, top_mm
+        t of the root and face cones (-b_m and a_m, the mean dedendum and addendum).
+    root_slope, top_slope
+        dh/ds of the root and face cones' generatrices.
+    """
+
+    pivot_mm: float
+    root_mm: float
+    top_mm: float
+    root_slope: float
+    top_slope: float
+
+    def __post_init__(self):
+        for name in ("pivot_mm", "root_mm", "top_mm", "root_slope", "top_slope"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise GearoptError(f"DepthTaper.{name}", value, "must be finite")
+            object.__setattr__(self, name, float(value))
+        if not self.top_mm > self.root_mm:
+            raise GearoptError("DepthTaper.top_mm", self.top_mm, "must exceed root_mm")
+
+    @property
+    def beta(self) -> float:
+        """d^2 h / (ds dt)."""
+        return (self.top_slope - self.root_slope) / (self.top_mm - self.root_mm)
+
+    @property
+    def alpha(self) -> float:
+        """dh/ds at t = 0."""
+        return self.root_slope - self.beta * self.root_mm
+
+    def height_mm(self, face_mm, profile_mm):
+        """h(s, t)."""
+        d = np.asarray(face_mm) - self.pivot_mm
+        t = np.asarray(profile_mm)
+        return t + d * (self.alpha + self.beta * t)
+
+    def profile_of(self, face_mm, height_mm):
+        """t(s, h), the inverse of :meth:`height_mm` at fixed s."""
+        d = np.asarray(face_mm) - self.pivot_mm
+        return (np.asarray(height_mm) - d * self.alpha) / (1.0 + d * self.beta)
+
+    def dheight_dprofile(self, face_mm):
+        """dh/dt at fixed s: 1 + (s - pivot) beta."""
+        return 1.0 + (np.asarray(face_mm) - self.pivot_mm) * self.beta
+
+    def dheight_dface(self, profile_mm):
+        """dh/ds at fixed t: alpha + beta t."""
+        return self.alpha + self.beta * np.asarray(profile_mm)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class FlankMap:
     """A generated tooth flank on a regular axial-plane grid (see the module docstring).
@@ -77,7 +161,8 @@ class FlankMap:
     pitch_angle_deg
         Pitch angle gamma of the grid's axes.
     face_mm, profile_mm
-        ``(n_f,)`` cone distances and ``(n_p,)`` heights above the pitch cone of the nodes.
+        ``(n_f,)`` cone distances and ``(n_p,)`` heights above the pitch cone of the nodes
+        (with ``taper``: the profile coordinates t, :attr:`heights_mm` the heights).
     polar_angle_rad
         ``(n_f, n_p)`` Theta of the flank at each node.
     points_mm, normals
@@ -97,6 +182,9 @@ class FlankMap:
         anything with the same ``points_at``, ``tool_points`` and ``transformed``), or None:
         exact points at any grid coordinates and the tool that cut the flank, for checks and
         refinements. It follows the map's turns and mirror.
+    taper
+        :class:`DepthTaper` of a tapered-depth member (the profile coordinate is then t, see
+        the module docstring), or None for uniform depth.
     """
 
     member: str
@@ -115,6 +203,7 @@ class FlankMap:
     parameters: NDArray = field(repr=False)
     notes: tuple[str, ...] = ()
     surface: Any = field(default=None, repr=False)
+    taper: DepthTaper | None = None
 
     def __post_init__(self):
         n_f, n_p = len(self.face_mm), len(self.profile_mm)
@@ -154,32 +243,54 @@ class FlankMap:
         return 2.0 * math.pi / self.teeth
 
     @cached_property
+    def heights_mm(self) -> NDArray:
+        """``(n_f, n_p)`` heights h above the pitch cone of the nodes (``profile_mm`` in every
+        column for uniform depth)."""
+        if self.taper is None:
+            return np.broadcast_to(self.profile_mm[None, :], self.shape)
+        return self.taper.height_mm(self.face_mm[:, None], self.profile_mm[None, :])
+
+    def height_at(self, face_mm, profile_mm) -> NDArray:
+        """Height h above the pitch cone at grid coordinates ``(s, t)``."""
+        if self.taper is None:
+            return np.asarray(profile_mm)
+        return self.taper.height_mm(face_mm, profile_mm)
+
+    @cached_property
     def axial_mm(self) -> NDArray:
         """``(n_f, n_p)`` L of the nodes."""
         g = math.radians(self.pitch_angle_deg)
+        if self.taper is not None:
+            return self.face_mm[:, None] * math.cos(g) - self.heights_mm * math.sin(g)
         return self.face_mm[:, None] * math.cos(g) - self.profile_mm[None, :] * math.sin(g)
 
     @cached_property
     def radius_mm(self) -> NDArray:
         """``(n_f, n_p)`` R of the nodes."""
         g = math.radians(self.pitch_angle_deg)
+        if self.taper is not None:
+            return self.face_mm[:, None] * math.sin(g) + self.heights_mm * math.cos(g)
         return self.face_mm[:, None] * math.sin(g) + self.profile_mm[None, :] * math.cos(g)
 
     def to_grid(self, axial_mm, radius_mm) -> tuple[NDArray, NDArray]:
-        """Face and profile coordinates ``(s, h)`` of axial-plane points ``(L, R)``."""
+        """Face and profile (grid) coordinates ``(s, t)`` of axial-plane points ``(L, R)``
+        (t = h, the height above the pitch cone, for uniform depth)."""
         g = math.radians(self.pitch_angle_deg)
         axial_mm, radius_mm = np.asarray(axial_mm), np.asarray(radius_mm)
         s = axial_mm * math.cos(g) + radius_mm * math.sin(g)
         h = -axial_mm * math.sin(g) + radius_mm * math.cos(g)
+        if self.taper is not None:
+            h = self.taper.profile_of(s, h)
         return s, h
 
     @property
     def generated_depth_mm(self) -> NDArray:
         """``(n_f,)`` lowest height h of a generated node in each face column (NaN-free: a
         column with no generated node reports the top of the grid)."""
-        h = np.where(self.mask, self.profile_mm[None, :], np.inf)
+        heights = self.heights_mm
+        h = np.where(self.mask, heights, np.inf)
         low = h.min(axis=1)
-        return np.where(np.isfinite(low), low, self.profile_mm[-1])
+        return np.where(np.isfinite(low), low, heights[:, -1])
 
     # --- interpolation ----------------------------------------------------------------------
 
@@ -209,6 +320,9 @@ class FlankMap:
         big_r = self.radius_mm
         d_s = -(sg * n_r + cg * n[..., 2]) / (big_r * n_t)
         d_h = -(cg * n_r - sg * n[..., 2]) / (big_r * n_t)
+        if self.taper is not None:  # to grid coordinates (s, t): the chain rule
+            d_s = d_s + d_h * self.taper.dheight_dface(self.profile_mm)[None, :]
+            d_h = d_h * self.taper.dheight_dprofile(self.face_mm)[:, None]
         d_sh = 0.5 * (
             _masked_gradient(d_h, self.mask, float(self.face_mm[1] - self.face_mm[0]), 0)
             + _masked_gradient(d_s, self.mask, float(self.profile_mm[1] - self.profile_mm[0]), 1)
@@ -291,8 +405,9 @@ class FlankMap:
         """``(..., 3)`` points of the flank at grid coordinates ``(s, h)`` (spline)."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
         g = math.radians(self.pitch_angle_deg)
-        big_l = s * math.cos(g) - h * math.sin(g)
-        big_r = s * math.sin(g) + h * math.cos(g)
+        height = self.height_at(s, h)
+        big_l = s * math.cos(g) - height * math.sin(g)
+        big_r = s * math.sin(g) + height * math.cos(g)
         theta = self.polar_angle_at(s, h)
         return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
 
@@ -392,7 +507,9 @@ class FlankMap:
                 "middle": float(depth[len(depth) // 2]),
                 "heel": float(depth[-1]),
             },
-            "generated_depth_mm": float(self.profile_mm[-1] - depth.max()),
+            "generated_depth_mm": float(self.profile_mm[-1] - depth.max())
+            if self.taper is None
+            else float((self.heights_mm[:, -1] - depth).min()),
         }
 
 

@@ -50,6 +50,8 @@ def flank_point(
     face, profile = (float(v) for v in fm.to_grid(axial_mm, radius_mm))
     geo = fm.surface.geometry_at(face, profile)
     point, normal = geo["point"], geo["normal"]
+    # (tapered depth: ``profile`` is the grid coordinate t, which maps the root and face cones
+    # to -b_m and a_m at every cone distance; the height is reported)
     inside = (
         blank.inner_cone_distance_mm <= face <= blank.outer_cone_distance_mm
         and -blank.mean_dedendum_mm[index] <= profile <= blank.mean_addendum_mm[index]
@@ -62,7 +64,7 @@ def flank_point(
         "axial_mm": axial_mm,
         "radius_mm": radius_mm,
         "cone_distance_mm": face,
-        "height_mm": profile,
+        "height_mm": float(fm.height_at(face, profile)),
         "point_mm": [float(v) for v in point],
         "normal": [float(v) for v in normal],
         "polar_angle_deg": math.degrees(math.atan2(point[1], point[0])),

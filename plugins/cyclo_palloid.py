@@ -355,6 +355,7 @@ class CycloPalloid(BaseMachineModel):
     description = "Klingelnberg cyclo-palloid dual-head face hobbing, uniform depth (seed 001)"
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> CycloPalloidMachine:
+        pair.require_uniform_depth(self.name)
         check_keys(table, MACHINE_KEYS, "machine")
         nb = read_integer(table, "blade_groups", "machine", ge=1, le=30)
         default_mb = pair.mean_normal_module_mm

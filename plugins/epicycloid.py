@@ -264,6 +264,7 @@ class Epicycloid(BaseMachineModel):
     )
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> EpicycloidMachine:
+        pair.require_uniform_depth(self.name)
         check_keys(table, MACHINE_KEYS, "machine")
         nb = read_integer(table, "blade_groups", "machine", ge=1, le=30)
         mb = read_number(table, "blade_module_mm", "machine", pair.mean_normal_module_mm, gt=0.0)

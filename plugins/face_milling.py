@@ -105,9 +105,21 @@ Design keys (``[machine.<member>.<flank>]``; keys common to both flanks may sit 
     [machine.gear.convex]              # inside blade
     cutter_point_radius_mm = 62.216067159
 
-Not in this slice: tapered depth (``face_angle_deg``/``root_angle_deg``), a blade tip radius,
-settings from the blank (``basic_settings`` reports the settings as given), a published
-settings summary.
+Tapered depth: ``face_angle_deg`` and ``root_angle_deg`` in ``[pair]`` (``[pinion, gear]``;
+uniform depth when absent; :mod:`gearopt.blank` for the mean addendum and dedendum from the
+outer ones at the heel). The flanks are then generated on the tapered grid, root cone to face
+cone in every face column (:class:`gearopt.flank.DepthTaper`). The machine root angle stays a
+setting: with it equal to the root angle and the root line in the tip plane (the sliding base
+b_m cos(theta_d) - A_m sin(theta_d) with dX_D = dE_m = 0, theta_d = pitch - root angle) the
+blade's tip sweeps the root cone along the whole face, and the ratio of roll for rolling
+without slip is c1 = sin(gamma) / cos(theta_d) (``studies/face_milling_tapered.toml``).
+Root reach: the blade's tip (the plane z_m = 0) must reach the root line (the root cone's
+generatrix nearest the cradle at centre roll) at the toe and at the heel, else a
+``DesignError`` names ``sliding_base_mm``.
+
+Not in this slice: a blade tip (edge) radius (``blade_tip_radius_mm`` other than 0 raises
+``NotAvailableError``), settings from the blank (``basic_settings`` reports the settings as
+given), a published settings summary.
 """
 
 from __future__ import annotations
@@ -278,7 +290,8 @@ def _parse_flank(
 ) -> FaceMillingFlank:
     index = MEMBERS.index(member)
     blank = pair.blank
-    depth = blank.whole_depth_mm[index]
+    # the deepest tooth: at the heel (tapered depth) or anywhere (uniform)
+    depth = blank.outer_addendum_mm[index] + blank.outer_dedendum_mm[index]
     for key in FLANK_KEYS:
         if key not in merged and key not in (
             "blade_profile_radius_mm",
@@ -330,24 +343,39 @@ def _parse_flank(
         **{k: read_number(merged, k, where, 0.0) for k in ROLL_KEYS},
     )
     spec = FaceMillingFlank(**values)
-    # the blade's tip (the plane z_m = 0) must reach the root line at the mean cone distance
+    _check_root_reach(spec, blank, index, where)
+    return spec
+
+
+def _root_height_mm(spec: FaceMillingFlank, blank, index: int, cone_distance_mm):
+    """z_m of the member's root line (the root cone's generatrix nearest the cradle at centre
+    roll) at a cone distance: the blade's tip (the plane z_m = 0) reaches it where this is
+    <= 0. The line is linear in the cone distance, so toe and heel bound it."""
     g = math.radians(spec.machine_root_angle_deg)
     dg = g - math.radians(blank.pitch_angle_deg[index])
     apex_z = spec.machine_center_to_back_mm * math.sin(g) - spec.sliding_base_mm
-    root_z = (
+    return (
         apex_z
-        + blank.mean_cone_distance_mm * math.sin(dg)
-        + blank.mean_dedendum_mm[index] * math.cos(dg)
+        + cone_distance_mm * math.sin(dg)
+        + blank.dedendum_at_mm(index, cone_distance_mm) * math.cos(dg)
     )
+
+
+def _check_root_reach(spec: FaceMillingFlank, blank, index: int, where: str) -> None:
+    """The blade's tip must reach the root line over the whole face (toe and heel; the root
+    cone's generatrix with tapered depth)."""
+    ends = (("toe", blank.inner_cone_distance_mm), ("heel", blank.outer_cone_distance_mm))
+    heights = [(_root_height_mm(spec, blank, index, a), name, a) for name, a in ends]
+    root_z, name, a = max(heights)
     if root_z > ROOT_REACH_TOL_MM:
         raise DesignError(
             f"{where}.sliding_base_mm",
             spec.sliding_base_mm,
             f"the blade cannot reach the root: its tip stays {root_z:.4f} mm above the root "
-            "line at the mean cone distance (sliding_base_mm, machine_center_to_back_mm and "
+            f"line at the {name} (cone distance {a:.3f} mm); the tip must reach the root cone "
+            "over the whole face (sliding_base_mm, machine_center_to_back_mm and "
             "machine_root_angle_deg place the work; module docstring)",
         )
-    return spec
 
 
 def _parse_member(table: Mapping[str, Any], member: str, pair: PairData) -> FaceMillingMember:
@@ -459,7 +487,7 @@ class FaceMilling(BaseMachineModel):
     name = "face-milling"
     description = (
         "Gleason face milling (head cutter, cradle, modified roll; Litvin's model), generated "
-        "pinion and gear, uniform depth (seed 002)"
+        "pinion and gear, uniform or tapered depth (seed 002)"
     )
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> FaceMillingMachine:
@@ -536,6 +564,7 @@ class FaceMilling(BaseMachineModel):
             heights_mm=(-blank.mean_dedendum_mm[index], blank.mean_addendum_mm[index]),
             pitch_angle_rad=gamma,
             grid=grid or FlankGrid(),
+            taper=blank.depth_taper(index),
             where=f"{member} flanks {', '.join(flanks)}",
         )
         hand = blank.hand[index]

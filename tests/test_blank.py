@@ -62,3 +62,124 @@ def test_cone_distance_and_module_are_one_datum():
     both = gearopt.PairData(mean_normal_module_mm=3.397, mean_cone_distance_mm=91.265, **common)
     assert both.mean_cone_distance_mm == 91.265
     assert_allclose(both.mean_normal_module_mm, 3.3973, atol=5e-5)
+
+
+# --- tapered depth -------------------------------------------------------------------------------
+
+TAPERED = dict(
+    pinion_teeth=12,
+    gear_teeth=36,
+    mean_spiral_angle_deg=35.0,
+    mean_cone_distance_mm=90.0,
+    face_width_mm=28.0,
+    outer_addendum_mm=[4.5, 4.7],
+    outer_dedendum_mm=[5.7, 5.5],
+)
+
+
+def _tapered_pair(face_delta=(2.5, 3.5), root_delta=(3.5, 2.5), **changes):
+    g1 = math.degrees(math.atan2(1.0, 3.0))
+    pitch = (g1, 90.0 - g1)
+    data = dict(
+        TAPERED,
+        face_angle_deg=[p + d for p, d in zip(pitch, face_delta, strict=True)],
+        root_angle_deg=[p - d for p, d in zip(pitch, root_delta, strict=True)],
+    )
+    data.update(changes)
+    return gearopt.PairData(**data)
+
+
+def _line_height(point_lr, angle_rad, blank, index, cone_distance_mm):
+    """Height above the pitch cone, on the normal to the pitch generatrix at a cone distance,
+    of the axial-plane line through ``point_lr`` at ``angle_rad`` from the member axis."""
+    g = math.radians(blank.pitch_angle_deg[index])
+    foot = cone_distance_mm * np.array([math.cos(g), math.sin(g)])
+    normal = np.array([-math.sin(g), math.cos(g)])
+    direction = np.array([math.cos(angle_rad), math.sin(angle_rad)])
+    # foot + h normal = point + k direction
+    h, _ = np.linalg.solve(np.stack([normal, -direction], axis=1), np.asarray(point_lr) - foot)
+    return h
+
+
+@pytest.mark.parametrize("index", [0, 1])
+def test_tapered_blank_is_the_cones_through_the_heel(index):
+    """The face and root cones drawn in the axial plane through the heel's tip and root points
+    (the outer addendum and dedendum on the back cone) at the face and root angles: their
+    heights above the pitch cone at the mean cone distance are the blank's mean addendum and
+    dedendum, the heel tip point gives the outside diameter, and the FlankMap grid's first and
+    last rows (DepthTaper) lie on those cones at every cone distance."""
+    pair = _tapered_pair()
+    blank = pair.blank
+    g = math.radians(blank.pitch_angle_deg[index])
+    ao = blank.outer_cone_distance_mm
+    pitch_heel = ao * np.array([math.cos(g), math.sin(g)])
+    back = np.array([-math.sin(g), math.cos(g)])  # the back cone's element (normal to pitch)
+    tip_heel = pitch_heel + pair.outer_addendum_mm[index] * back
+    root_heel = pitch_heel - pair.outer_dedendum_mm[index] * back
+    face = math.radians(pair.face_angle_deg[index])
+    root = math.radians(pair.root_angle_deg[index])
+    am = blank.mean_cone_distance_mm
+    assert_allclose(
+        _line_height(tip_heel, face, blank, index, am), blank.mean_addendum_mm[index], atol=1e-12
+    )
+    assert_allclose(
+        -_line_height(root_heel, root, blank, index, am),
+        blank.mean_dedendum_mm[index],
+        atol=1e-12,
+    )
+    assert_allclose(blank.outside_diameter_mm[index], 2.0 * tip_heel[1], rtol=1e-14)
+    taper = blank.depth_taper(index)
+    s = np.linspace(blank.inner_cone_distance_mm, ao, 5)
+    for t, point, angle in ((taper.root_mm, root_heel, root), (taper.top_mm, tip_heel, face)):
+        want = [_line_height(point, angle, blank, index, a) for a in s]
+        assert_allclose(taper.height_mm(s, t), want, atol=1e-12)
+        assert_allclose(taper.profile_of(s, taper.height_mm(s, t)), t, atol=1e-12)
+    # the mean whole depth and clearance are those between the cones at A_m
+    assert_allclose(
+        blank.whole_depth_mm[index],
+        blank.mean_addendum_mm[index] + blank.mean_dedendum_mm[index],
+        rtol=1e-15,
+    )
+
+
+def test_uniform_depth_blank_is_unchanged():
+    pair = gearopt.PairData(**TAPERED)
+    blank = pair.blank
+    assert blank.face_angle_deg == blank.root_angle_deg == blank.pitch_angle_deg
+    assert blank.mean_addendum_mm == blank.outer_addendum_mm == (4.5, 4.7)
+    assert blank.mean_dedendum_mm == (5.7, 5.5)
+    assert blank.depth_taper(0) is None and blank.depth_taper(1) is None
+    assert not pair.tapered and blank.tapered == (False, False)
+
+
+@pytest.mark.parametrize(
+    ("changes", "parameter", "rule"),
+    [
+        (dict(root_delta=(3.5, -0.1)), "pair.root_angle_deg[gear]", "<= the pitch angle"),
+        (dict(face_delta=(-0.2, 3.5)), "pair.face_angle_deg[pinion]", ">= the pitch angle"),
+        (dict(root_delta=(16.0, 2.5)), "pair.root_angle_deg[pinion]", "exceeds 15"),
+        (dict(face_delta=(2.5, 9.6)), "pair.face_angle_deg[gear]", "addendum at the toe"),
+        (dict(root_delta=(11.8, 2.5)), "pair.root_angle_deg[pinion]", "dedendum at the toe"),
+        (dict(face_delta=(2.5, 0.5)), "pair.face_angle_deg", "must clear the root"),
+        (dict(face_angle_deg=20.0), "pair.face_angle_deg", "list of two angles"),
+        (dict(root_angle_deg=[14.0, "x"]), "pair.root_angle_deg[gear]", ""),
+    ],
+)
+def test_bad_taper_names_the_parameter(changes, parameter, rule):
+    with pytest.raises(gearopt.DesignError) as info:
+        _tapered_pair(**changes)
+    assert info.value.parameter == parameter
+    assert rule in str(info.value)
+
+
+@pytest.mark.parametrize("study", ["seed001_table3.toml", "seed003_case_A.toml"])
+def test_uniform_depth_models_refuse_a_tapered_pair(study):
+    """Cyclo-palloid and epicycloid cut uniform depth only."""
+    from .conftest import STUDIES
+
+    design = gearopt.load_design(STUDIES / study)
+    g = design.blank.pitch_angle_deg
+    with pytest.raises(gearopt.NotAvailableError) as info:
+        gearopt.with_overrides(design, {"pair.face_angle_deg": [g[0] + 1.0, g[1] + 1.0]})
+    assert info.value.parameter == "pair.face_angle_deg"
+    assert "uniform depth" in str(info.value)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -335,3 +336,194 @@ def test_profile_arc_is_tangent_at_the_pitch_line_point_and_crowns_both_ways():
         r_s, h_s, *_ = edge(straight, u0 + du)
         relief = np.dot([r_a - r_s, h_a - h_s], normal)
         assert relief == pytest.approx(du**2 / (2 * 400.0), rel=1e-3)
+
+
+# --- tapered depth -------------------------------------------------------------------------------
+
+TAPERED = STUDIES / "face_milling_tapered.toml"
+MAIN_REFERENCE = Path(__file__).parent / "data" / "face_milling_conjugate_main.npz"
+
+
+@pytest.fixture(scope="module")
+def tapered():
+    return gearopt.load_design(TAPERED)
+
+
+def test_uniform_depth_output_is_mains(conjugate):
+    """The conjugate design's flanks (9 x 7 grid) and TCA metrics equal those of main before
+    tapered depth (tests/data, written by main at 5122773) to 1e-12."""
+    from gearopt.flank import FlankGrid
+
+    ref = np.load(MAIN_REFERENCE)
+    for member in MEMBERS:
+        maps = gearopt.generate_flanks(conjugate, member, grid=FlankGrid(n_face=9, n_profile=7))
+        for flank, fm in maps.items():
+            key = f"{member}_{flank}_"
+            assert np.array_equal(fm.mask, ref[key + "mask"])
+            for name in ("polar_angle_rad", "points_mm", "normals"):
+                assert_allclose(getattr(fm, name), ref[key + name], rtol=0, atol=1e-12)
+    metrics = gearopt.evaluators()["tca"].evaluate(conjugate, None).metrics
+    for name, value in metrics.items():
+        assert_allclose(value, ref["metric_" + name], rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+def _tip_line_heights(fm):
+    """Per face column, the height at which the envelope's blade parameter u crosses 0: the
+    line the blade's tip generates on the flank (interpolated between the grid's rows along
+    the envelope, which the solver continues past the tip)."""
+    u, h = fm.parameters[..., 0], fm.heights_mm
+    out = []
+    for c in range(fm.shape[0]):
+        j = int(np.flatnonzero((u[c, :-1] < 0.0) & (u[c, 1:] >= 0.0))[0])
+        w = u[c, j] / (u[c, j] - u[c, j + 1])
+        out.append(h[c, j] + w * (h[c, j + 1] - h[c, j]))
+    return np.array(out)
+
+
+def test_tapered_gear_flank_spans_the_face_and_root_cones(tapered):
+    """Gear of the tapered design (machine root angle = root angle): the generated points of
+    the top row lie on the face cone at every cone distance (toe and heel included); the tip
+    line (u = 0) follows the root cone: it stays between 0.2 and 0.4 mm above it (the blade's
+    tip corner touches the flank off the root cone's contact line) while the root cone drops
+    F tan(theta_d) = 1.22 mm from heel to toe."""
+    from gearopt.flank import FlankGrid
+
+    blank = tapered.blank
+    maps = gearopt.generate_flanks(tapered, "gear", grid=FlankGrid(n_face=15, n_profile=25))
+    g = math.radians(blank.pitch_angle_deg[1])
+    face_angle = math.radians(blank.face_angle_deg[1])
+    heel = blank.outer_cone_distance_mm * np.array([math.cos(g), math.sin(g)])
+    heel_tip = heel + blank.outer_addendum_mm[1] * np.array([-math.sin(g), math.cos(g)])
+    along = np.array([math.cos(face_angle), math.sin(face_angle)])
+    drop = blank.face_width_mm * math.tan(math.radians(blank.dedendum_angle_deg[1]))
+    assert drop == pytest.approx(1.2226, abs=1e-4)
+    for fm in maps.values():
+        assert fm.taper is not None
+        assert fm.mask[:, -1].all()  # generated up to the face cone, toe to heel
+        p = fm.points_mm[:, -1]
+        lr = np.stack([p[:, 2], np.hypot(p[:, 0], p[:, 1])], axis=-1) - heel_tip
+        off_face_cone = lr[:, 0] * along[1] - lr[:, 1] * along[0]
+        assert np.abs(off_face_cone).max() < 1e-9
+        above = _tip_line_heights(fm) + blank.dedendum_at_mm(1, fm.face_mm)
+        assert above.min() > 0.2 and above.max() < 0.4, above
+        assert np.ptp(above) < 0.15
+        # the lowest generated nodes lie within a row of the tip line
+        step = float(np.max(np.diff(fm.heights_mm, axis=1)))
+        depth = fm.generated_depth_mm + blank.dedendum_at_mm(1, fm.face_mm)
+        assert np.all(depth >= above - 1e-9) and np.all(depth <= above + step + 1e-9)
+
+
+@pytest.mark.parametrize("member", MEMBERS)
+def test_tapered_tip_sweeps_the_root_cone(tapered, member):
+    """The blade's tip (u = 0) over cutter phases and roll angles, in the work: never below
+    the root cone, and touching it all along the face (machine root angle = root angle: the
+    tip plane holds the root cone's generatrix), measured as the least height above the root
+    cone in each of 7 bins of the face width."""
+    index = MEMBERS.index(member)
+    blank = tapered.blank
+    family = _family(tapered, member, ("convex",))
+    theta = np.linspace(-math.pi, math.pi, 2001)
+    phi = np.linspace(-0.6, 0.6, 121)
+    q = np.stack(np.broadcast_arrays(0.0, theta[:, None], phi[None, :]), axis=-1)
+    p = family.geometry(q, np.zeros(q.shape[:-1], int))["point"].reshape(-1, 3)
+    g = math.radians(blank.pitch_angle_deg[index])
+    big_l, big_r = p[:, 2], np.hypot(p[:, 0], p[:, 1])
+    s = big_l * math.cos(g) + big_r * math.sin(g)
+    h = -big_l * math.sin(g) + big_r * math.cos(g)
+    above = h + blank.dedendum_at_mm(index, s)
+    ai, ao = blank.inner_cone_distance_mm, blank.outer_cone_distance_mm
+    on = (s >= ai) & (s <= ao)
+    assert above[on].min() > -1e-9
+    bins = np.linspace(ai, ao, 8)
+    least = [above[(s >= a) & (s < b)].min() for a, b in zip(bins[:-1], bins[1:], strict=True)]
+    assert max(least) < 0.01, least
+
+
+def test_root_reach_is_checked_at_toe_and_heel(conjugate, tapered):
+    """The blade's tip must reach the root line over the whole face: a tapered root cut with
+    the machine root angle at the pitch angle misses the heel's root; a uniform-depth member
+    with the work tilted by 1 deg (the mean root line just reached) misses one end."""
+    g = tapered.blank.pitch_angle_deg[1]
+    with pytest.raises(DesignError, match="at the heel") as info:
+        gearopt.with_overrides(
+            tapered,
+            {"machine.gear.machine_root_angle_deg": g, "machine.gear.sliding_base_mm": 4.857},
+        )
+    assert info.value.parameter == "machine.gear.convex.sliding_base_mm"
+    g = conjugate.blank.pitch_angle_deg[1]
+    a_m, b_m = 90.0, conjugate.blank.mean_dedendum_mm[1]
+    tilt = math.radians(1.0)
+    reach = a_m * math.sin(tilt) + b_m * math.cos(tilt)  # the mean root line in the tip plane
+    with pytest.raises(DesignError, match="at the heel") as info:
+        gearopt.with_overrides(
+            conjugate,
+            {
+                "machine.gear.machine_root_angle_deg": g + 1.0,
+                "machine.gear.sliding_base_mm": reach,
+            },
+        )
+    assert "sliding_base_mm" in info.value.parameter
+    with pytest.raises(DesignError, match="at the toe"):
+        gearopt.with_overrides(
+            conjugate,
+            {
+                "machine.gear.machine_root_angle_deg": g - 1.0,
+                "machine.gear.sliding_base_mm": -a_m * math.sin(tilt) + b_m * math.cos(tilt),
+            },
+        )
+
+
+def test_tapered_face_keeps_the_conjugate_pair_conjugate(conjugate):
+    """The conjugate pair with face cones 2 deg outside the pitch cones (the outer addendum
+    raised to keep the mean one): the same generated surfaces on a tapered grid, so the TE
+    stays below 0.05 arcsec (a wrong height on the gear's grid would read as hundreds of
+    arcsec), and the taller heel raises the contact ratio."""
+    from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair
+
+    pitch = conjugate.blank.pitch_angle_deg
+    a_m = conjugate.blank.mean_addendum_mm
+    rise = 14.0 * math.tan(math.radians(2.0))
+    design = gearopt.with_overrides(
+        conjugate,
+        {
+            "pair.face_angle_deg": [pitch[0] + 2.0, pitch[1] + 2.0],
+            "pair.outer_addendum_mm": [a_m[0] + rise, a_m[1] + rise],
+        },
+    )
+    assert design.blank.tapered == (True, True)
+    assert_allclose(design.blank.mean_addendum_mm, a_m, rtol=1e-14)
+    opts = AnalysisOptions()
+    base = contact_sides(meshed_pair(conjugate, opts), opts)
+    sides = contact_sides(meshed_pair(design, opts), opts)
+    for side in ("drive", "coast"):
+        assert sides[side].te_peak_to_peak_arcsec < 0.05, side
+        assert not sides[side].edge_contact, side
+        assert sides[side].contact_ratio > base[side].contact_ratio, side
+
+
+def test_tapered_design_analyses_and_plots(tapered, tmp_path, capsys):
+    """The tapered design file through the contact engine, the CLI's analysis and its plots,
+    and the flank summary: finite metrics, the figures written."""
+    from gearopt.cli import main
+
+    metrics = gearopt.evaluators()["tca"].evaluate(tapered, None).metrics
+    assert all(math.isfinite(v) for v in metrics.values())
+    assert main(["analyze", str(TAPERED), "--json", "--plot", str(tmp_path)]) == 0
+    capsys.readouterr()
+    for name in ("te", "pattern", "backlash", "ease_off"):
+        assert (tmp_path / f"{name}.png").stat().st_size > 0
+    summary = gearopt.generate_flanks(tapered, "pinion")["convex"].summary()
+    assert summary["generated_nodes"] > 0 and math.isfinite(summary["generated_depth_mm"])
+
+
+def test_flank_query_on_a_tapered_grid(tapered):
+    """``gearopt flank --at`` on a tapered member: the point lies at the asked axial position
+    and radius, its height is the true height above the pitch cone."""
+    from gearopt.flank_cli import flank_point
+
+    out = flank_point(tapered, member="gear", flank="convex", axial_mm=30.0, radius_mm=86.0)
+    p = np.array(out["point_mm"])
+    assert_allclose([p[2], np.hypot(p[0], p[1])], [30.0, 86.0], atol=1e-9)
+    g = math.radians(tapered.blank.pitch_angle_deg[1])
+    assert_allclose(out["height_mm"], -30.0 * math.sin(g) + 86.0 * math.cos(g), atol=1e-12)
+    assert out["inside_blank"]
