@@ -62,6 +62,9 @@ cut with the same numbers, :meth:`gearopt.flank.FlankMap.mirrored`)::
   velocities of the crown gear and of the work agree along the pitch generatrix); c1 = sin
   gamma for a crown gear generating a member of pitch angle gamma. ``ratio_of_roll`` must be
   positive.
+* Work phase: ``work_phase_deg`` turns the work about +a_w before the cut (right-hand
+  numbers; the work's index for this flank: a pinion whose flanks are cut with separate
+  settings sets its tooth thickness with it, the stock division of the second cut).
 * Member frame (FlankMap): origin at the pitch apex, z along a_w; at centre roll x lies in the
   x_m-z_m plane, x = (sin gamma_m, 0, -cos gamma_m), so the pitch generatrix nearest the cradle
   has polar angle 0 (the angular zero is tied to the machine at centre roll).
@@ -96,6 +99,7 @@ Design keys (``[machine.<member>.<flank>]``; keys common to both flanks may sit 
     blank_offset_mm = 0.0
     ratio_of_roll = 0.948683298051     # c1
     # roll_c2 ... roll_c6 = 0.0        # modified roll (default 0)
+    # work_phase_deg = 0.0             # the work's index for this flank's cut (default 0)
     # blade_profile_radius_mm = "inf"  # or a radius in mm
     # blade_tip_radius_mm = 0.0        # the blade's edge radius: not supported yet
 
@@ -159,6 +163,7 @@ FLANK_KEYS = (
     "blank_offset_mm",
     "ratio_of_roll",
     *ROLL_KEYS,
+    "work_phase_deg",
 )
 MEMBER_KEYS = (*FLANK_KEYS, *FLANKS)
 MACHINE_KEYS = MEMBERS
@@ -189,6 +194,7 @@ class FaceMillingFlank:
     roll_c4: float = 0.0
     roll_c5: float = 0.0
     roll_c6: float = 0.0
+    work_phase_deg: float = 0.0
 
     @property
     def roll(self) -> tuple[float, ...]:
@@ -219,7 +225,7 @@ class FaceMillingFlank:
             blank_offset_mm=self.blank_offset_mm,
             sliding_base_mm=self.sliding_base_mm,
             roll=self.roll,
-            index_rad=index_rad,
+            index_rad=index_rad + math.radians(self.work_phase_deg),
         )
 
 
@@ -265,6 +271,7 @@ class FaceMillingSettings:
     concave_roll_c4: float
     concave_roll_c5: float
     concave_roll_c6: float
+    concave_work_phase_deg: float
     convex_cutter_point_radius_mm: float
     convex_blade_pressure_angle_deg: float
     convex_blade_profile_curvature_per_mm: float
@@ -280,6 +287,7 @@ class FaceMillingSettings:
     convex_roll_c4: float
     convex_roll_c5: float
     convex_roll_c6: float
+    convex_work_phase_deg: float
 
 
 # --- parsing -------------------------------------------------------------------------------------
@@ -297,6 +305,7 @@ def _parse_flank(
             "blade_profile_radius_mm",
             "blade_tip_radius_mm",
             *ROLL_KEYS,
+            "work_phase_deg",
         ):
             raise DesignError(
                 f"{where}.{key}", rule="required (in this flank's table or its member's)"
@@ -341,6 +350,7 @@ def _parse_flank(
         blank_offset_mm=read_number(merged, "blank_offset_mm", where),
         ratio_of_roll=c1,
         **{k: read_number(merged, k, where, 0.0) for k in ROLL_KEYS},
+        work_phase_deg=read_number(merged, "work_phase_deg", where, 0.0, gt=-360.0, lt=360.0),
     )
     spec = FaceMillingFlank(**values)
     _check_root_reach(spec, blank, index, where)
@@ -414,11 +424,11 @@ def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
     from gearopt_plugins import face_milling_synthesis as fs
 
     check_keys(table, MACHINE_KEYS, "machine")
-    targets, cutter_radius = fs.read_synthesis(synthesis, pair.blank)
+    targets, options = fs.read_synthesis(synthesis, pair.blank)
     if "gear" in table:
         gear = _parse_member(table, "gear", pair)
     else:
-        given = fs.gear_flanks_from_blank(pair, cutter_radius)
+        given = fs.gear_flanks_from_blank(pair, options["gear_cutter_radius_mm"])
         gear = FaceMillingMember(
             **{
                 f: _parse_flank(given[f], f"machine.gear.{f} (from the blank)", pair, "gear", f)
@@ -450,6 +460,8 @@ def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
             targets=targets[side],
             flank_type=FaceMillingFlank,
             place_tip="cutter_point_radius_mm" not in merged,
+            backlash_mm=options["backlash_mm"],
+            reference_gear_turn_rad=reports[0].gear_turn_rad if reports else None,
         )
         values = {k: float(v) for k, v in fs._as_dict(spec).items()}
         if math.isinf(values["blade_profile_radius_mm"]):

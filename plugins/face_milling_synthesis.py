@@ -101,7 +101,7 @@ TARGET_KEYS = (
     "compound_um",
     "te_level_arcsec",
 )
-SYNTHESIS_KEYS = (*TARGET_KEYS, "gear_cutter_radius_mm", *SIDES)
+SYNTHESIS_KEYS = (*TARGET_KEYS, "gear_cutter_radius_mm", "backlash_mm", *SIDES)
 #: keys of [machine.pinion] / [machine.pinion.<flank>] chosen before the synthesis
 CHOSEN_KEYS = (
     "cutter_point_radius_mm",
@@ -146,6 +146,7 @@ class SynthesisReport:
     te_level_arcsec: float
     first_order_residual: float
     evaluations: int
+    gear_turn_rad: float
 
     def as_dict(self) -> dict:
         t = self.targets
@@ -171,8 +172,9 @@ class SynthesisReport:
 # --- input ---------------------------------------------------------------------------------------
 
 
-def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, float | None]:
-    """``({side: SideTargets}, gear cutter radius or None)`` from the ``[synthesis]`` table."""
+def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, dict]:
+    """``({side: SideTargets}, options)`` from the ``[synthesis]`` table; options:
+    ``gear_cutter_radius_mm`` (None: the default) and ``backlash_mm`` (default 0)."""
     check_keys(table, SYNTHESIS_KEYS, "synthesis")
     from gearopt.mesh import ToothFrame
 
@@ -230,7 +232,8 @@ def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, float 
     radius = table.get("gear_cutter_radius_mm")
     if radius is not None:
         radius = read_number(table, "gear_cutter_radius_mm", "synthesis", gt=0.0)
-    return out, radius
+    backlash = read_number(table, "backlash_mm", "synthesis", 0.0, ge=0.0, le=1.0)
+    return out, {"gear_cutter_radius_mm": radius, "backlash_mm": backlash}
 
 
 # --- the gear from its blank ---------------------------------------------------------------------
@@ -472,10 +475,17 @@ def synthesize_pinion_flank(
     targets: SideTargets,
     flank_type,
     place_tip: bool = True,
+    backlash_mm: float = 0.0,
+    reference_gear_turn_rad: float | None = None,
 ) -> tuple[Any, SynthesisReport]:
     """The pinion flank's settings (a ``flank_type`` instance) by local synthesis;
     ``place_tip``: then put a straight blade's tip on the root line (:func:`_tip_on_root`;
-    the chosen cutter radius is then the blade's radius at M's height, not at its tip)."""
+    the chosen cutter radius is then the blade's radius at M's height, not at its tip).
+    ``work_phase_deg`` is set so that the flank meets the gear at M in the assembly, the coast
+    flank turned further by ``backlash_mm`` (circumferential at the gear's outer pitch radius,
+    DESIGN.md) to thin the tooth; ``reference_gear_turn_rad``: the gear's angle when the
+    other side touched at its M at pinion angle 0 (the report's ``gear_turn_rad``), so that
+    both flanks sit in one assembly."""
     blank = pair.blank
     _uniform(blank)
     gear_flank = "concave" if flank == "convex" else "convex"
@@ -496,6 +506,7 @@ def synthesize_pinion_flank(
     root_angle = math.radians(blank.root_angle_deg[1])
     guess = {"q": None}
     count = {"n": 0}
+    analysis = {}
 
     def spec_of(x):
         values = dict(zip(SOLVED_KEYS, x, strict=True))
@@ -539,6 +550,7 @@ def synthesize_pinion_flank(
         )
         guess["q"] = q
         sense = 1 if (point[0] * normal[1] - point[1] * normal[0]) > 0.0 else -1
+        analysis.update(theta=theta, sense=sense)
         orientation = 1.0 if TaylorJet(jet).frame()[-1] @ normal > 0.0 else -1.0
         local = local_mesh(
             TaylorJet(jet, turn_rad=mean.omega - jet.theta),
@@ -607,9 +619,25 @@ def synthesize_pinion_flank(
         te_level_arcsec=-0.5 * local.lag_curvature * (math.pi / pair.pinion_teeth) ** 2 * ARCSEC,
         first_order_residual=float(np.max(np.abs(first))),
         evaluations=count["n"],
+        gear_turn_rad=mean.gear_turn,
     )
     _check(report, lag_target, local, targets)
     spec = spec_of(x_start + scales * z)
+    # the work's index that puts the flank's M at its place in the mesh (its polar angle omega
+    # at pinion angle 0), less the backlash on the coast flank (a thinner tooth)
+    thinning = 0.0
+    if targets.side == "coast":
+        gear_turn = backlash_mm / blank.outer_pitch_radius_mm[1]
+        thinning = -analysis["sense"] * gear_turn / ratio
+    # the pinion angle at which this side touches at M when the other side touched its M at
+    # pinion angle 0 (the gear turns by -ratio phi1 as the pinion turns by phi1)
+    phi = (
+        0.0
+        if reference_gear_turn_rad is None
+        else (reference_gear_turn_rad - mean.gear_turn) / ratio
+    )
+    turn = mean.omega - phi - analysis["theta"] + thinning
+    spec = replace(spec, work_phase_deg=math.degrees(hand1 * turn))
     if place_tip and math.isinf(spec.blade_profile_radius_mm):
         spec = _tip_on_root(spec, flank, blank)
     return spec, report
