@@ -96,9 +96,10 @@ def _roll(c: CutterFlank, phi):
     return value, slope
 
 
-def _machine(c: CutterFlank, u, theta, phi):
+def _machine(c: CutterFlank, u, theta, phi, cradle=None):
     """Tool point, unit normal (the edge's, not oriented to the material) and relative velocity
-    per unit phi_p, in the machine frame; the work's apex and axis."""
+    per unit phi_p, in the machine frame; the work's apex and axis. ``cradle``: ``(phi_c,
+    dphi_c/dphi_p)`` instead of the roll law's (inverse TCA)."""
     radius, height, dr, dh = edge(c, u)
     ct, st = np.cos(theta), np.sin(theta)
     sr, q = c.radial_setting_mm, c.cradle_angle_rad
@@ -107,7 +108,7 @@ def _machine(c: CutterFlank, u, theta, phi):
     zc = height
     # normal of the cone r = (rho cos t, rho sin t, h): (r_u x r_t) / rho, unit for arc length u
     nx, ny, nz = -dh * ct, -dh * st, dr
-    phi_c, dphi_c = _roll(c, phi)
+    phi_c, dphi_c = _roll(c, phi) if cradle is None else cradle
     cc, sc = np.cos(phi_c), np.sin(phi_c)
     x, y = cc * xc - sc * yc, sc * xc + cc * yc
     n = (cc * nx - sc * ny, sc * nx + cc * ny, nz)
@@ -162,9 +163,11 @@ class FaceMillingFamily:
         meshing = n[0] * v[0] + n[1] * v[1] + n[2] * v[2]  # |n| = 1
         return axial, radius, meshing / self.scale_mm
 
-    def geometry(self, q, flank) -> dict[str, NDArray]:
+    def geometry(self, q, flank, *, cradle=None) -> dict[str, NDArray]:
+        """Point and unit normal (out of the material) in the work frame; ``cradle`` as in
+        :func:`_machine`, with ``meshing`` (per unit phi_p, scaled) added to the result."""
         c = self._take(flank)
-        (dx, dy, dz), n, _, (cg, sg) = _machine(c, q[..., 0], q[..., 1], q[..., 2])
+        (dx, dy, dz), n, v, (cg, sg) = _machine(c, q[..., 0], q[..., 1], q[..., 2], cradle)
         turn = c.index_rad - q[..., 2]  # the work turned by phi_p: material seen at -phi_p
         ct, st = np.cos(turn), np.sin(turn)
 
@@ -173,8 +176,13 @@ class FaceMillingFamily:
             return np.stack([ct * xw - st * y, st * xw + ct * y, zw], axis=-1)
 
         normal = to_work(*n) * (-c.side)[..., None]  # out of the tooth material
-        normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
-        return {"point": to_work(dx, dy, dz), "normal": normal}
+        out = {
+            "point": to_work(dx, dy, dz),
+            "normal": normal / np.sqrt((normal * normal).sum(-1))[..., None],
+        }
+        if cradle is not None:
+            out["meshing"] = (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / self.scale_mm
+        return out
 
     def within_tool(self, q, flank):
         return np.real(q[..., 0]) >= -1e-9  # the blade ends at its tip (u = 0)

@@ -230,12 +230,15 @@ def local_mesh(
             return F, J
 
         z = x.copy() if k < 3 else 2.0 * out[k - 2] - out[0]  # linear extrapolation
-        for _ in range(30):  # Newton: the lag's second difference needs machine precision
-            F, J = fun(z)
-            step = np.linalg.solve(J, F)
-            z = z - step
-            if np.max(np.abs(step)) < 1e-14 * (1.0 + np.max(np.abs(z))):
-                break
+        try:
+            for _ in range(30):  # Newton: the lag's second difference needs machine precision
+                F, J = fun(z)
+                step = np.linalg.solve(J, F)
+                z = z - step
+                if np.max(np.abs(step)) < 1e-14 * (1.0 + np.max(np.abs(z))):
+                    break
+        except np.linalg.LinAlgError:
+            z = np.full(5, np.nan)
         if not np.all(np.isfinite(z)) or np.max(np.abs(fun(z)[0])) > 1e-10:
             raise SettingsError(
                 "local synthesis",
@@ -262,13 +265,18 @@ def local_mesh(
     p_s, p_h, p_ss, p_sh, p_hh, p_n = (m @ v for v in (p_s, p_h, p_ss, p_sh, p_hh, p_n))
     basis = np.stack([p_s / np.linalg.norm(p_s), np.zeros(3)], axis=1)
     basis[:, 1] = np.cross(p_n, basis[:, 0])
-    k1, to_pinion = _shape(p_s, p_h, p_ss, p_sh, p_hh, p_n, basis)
-    k2, _ = _shape(g_s, g_h, g_ss, g_sh, g_hh, p_n, basis)
+    try:
+        k1, to_pinion = _shape(p_s, p_h, p_ss, p_sh, p_hh, p_n, basis)
+        k2, _ = _shape(g_s, g_h, g_ss, g_sh, g_hh, p_n, basis)
+        from_pinion = np.linalg.inv(to_pinion)
+    except np.linalg.LinAlgError:
+        raise SettingsError(
+            "local synthesis", rule="a flank is singular at M (no tangent plane)"
+        ) from None
     rel = (k2 - k1) * orientation  # the gap's Hessian: positive definite for point contact
     # the ellipse {xi: xi^T rel xi <= 2 delta} seen in the pinion's (s, h) coordinates:
     # {a: a^T form a <= 1}, its major axis 2 / sqrt(smallest eigenvalue of form)
     delta = compound_um * 1e-3
-    from_pinion = np.linalg.inv(to_pinion)
     form = from_pinion.T @ rel @ from_pinion / (2.0 * delta)
     w, v = np.linalg.eigh(form)
     major = 2.0 / math.sqrt(w[0]) if w[0] > 0.0 else math.inf

@@ -61,7 +61,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq, least_squares
+from scipy.optimize import brentq, least_squares, root
 
 from gearopt.blank import Blank
 from gearopt.contact import Placement
@@ -575,7 +575,7 @@ def synthesize_pinion_flank(
                 first * 100.0,
                 [
                     (local.lag_curvature - goal[0]) / lag_target,
-                    math.radians(local.path_angle_deg - goal[1]) * 10.0,
+                    math.radians(_line_difference_deg(local.path_angle_deg, goal[1])) * 10.0,
                     local.ellipse_form * goal[2] ** 2 / 4.0 - 1.0,
                 ],
             ]
@@ -597,6 +597,8 @@ def synthesize_pinion_flank(
         [local0.lag_curvature, local0.path_angle_deg, min(local0.ellipse_major_axis_mm, 1e3)]
     )
     end = np.array([lag_target, targets.path_angle_deg, targets.ellipse_major_axis_mm])
+    # the path is a line: continue along the shorter way round (through +-90 deg if need be)
+    end[1] = begin[1] + _line_difference_deg(end[1], begin[1])
     for t in (0.25, 0.5, 0.75, 1.0):
         goal = begin + t * (end - begin)
         fit = least_squares(
@@ -611,6 +613,10 @@ def synthesize_pinion_flank(
             max_nfev=150,
         )
         z = fit.x
+    if fit.cost > 1e-20:  # LM stalled: a last Powell hybrid from where it stopped
+        polish = root(lambda w: residuals(w, end), z, method="hybr", options={"xtol": 1e-14})
+        if np.sum(residuals(polish.x, end) ** 2) < 2.0 * fit.cost:
+            z = polish.x
     first, local = analyse(x_start + scales * z)
     report = SynthesisReport(
         targets=targets,
@@ -664,6 +670,11 @@ def _tip_on_root(spec, flank: str, blank: Blank):
     )
 
 
+def _line_difference_deg(a: float, b: float) -> float:
+    """a - b for directions of lines (mod 180 deg), in [-90, 90)."""
+    return (a - b + 90.0) % 180.0 - 90.0
+
+
 def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> None:
     """A :class:`SettingsError` naming the input the solution misses most (relative to its
     tolerance): a second-order target the pinion cannot realise with the chosen inputs, or M
@@ -671,7 +682,8 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
     where = f"synthesis.{targets.side}"
     misses = {
         "path_angle_deg": (
-            abs(report.path_angle_deg - targets.path_angle_deg) / TOLERANCE["path_deg"],
+            abs(_line_difference_deg(report.path_angle_deg, targets.path_angle_deg))
+            / TOLERANCE["path_deg"],
             targets.path_angle_deg,
             f"{report.path_angle_deg:.3f} deg",
         ),
