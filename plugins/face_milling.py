@@ -401,6 +401,21 @@ def _parse_member(table: Mapping[str, Any], member: str, pair: PairData) -> Face
     return FaceMillingMember(**flanks)
 
 
+def machine_table(machine: FaceMillingMachine) -> dict[str, Any]:
+    """The ``[machine]`` table (without ``model``) that parses back to ``machine``: every flank's
+    settings written out (a synthesised design as plain settings)."""
+    out: dict[str, Any] = {}
+    for member in MEMBERS:
+        out[member] = {}
+        for flank in FLANKS:
+            spec = machine.member(member).flank(flank)
+            values = {k: float(getattr(spec, k)) for k in FLANK_KEYS}
+            if math.isinf(values["blade_profile_radius_mm"]):
+                values["blade_profile_radius_mm"] = "inf"
+            out[member][flank] = values
+    return out
+
+
 # --- settings by synthesis -----------------------------------------------------------------------
 
 _SYNTHESES: dict = {}

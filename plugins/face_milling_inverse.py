@@ -1,0 +1,281 @@
+"""Inverse TCA: the pinion's modified roll that realises a designed TE (seed 002).
+
+The gear is fixed. For pinion rotations u across the designed contact (|u| <= x_in, the
+mesh-in point of the :class:`gearopt.te_target.TETarget`), the gear is put where the target
+says, lagging lambda(u) = -delta_phi2(u) behind its ideal angle, and the equations of
+continuous tangency are solved for the pinion flank point that touches it -- not on a given
+pinion flank but on the tool: the unknowns are the blade point (u_t, theta_t), the work angle
+phi_p and the cradle angle phi_c at which the tool generates it, and the gear point (its own
+generation parameters):
+
+    B R(phi1) p(u_t, theta_t, phi_p, phi_c) + c = R(psi) r(u_g, theta_g, phi_g)    (3)
+    n1 + n2 = 0 in the tangent plane                                                  (2)
+    f_p(u_t, theta_t, phi_p; phi_c, dphi_c/dphi_p) = 0   (the pinion's generation)     (1)
+    f_g(u_g, theta_g, phi_g) = 0                          (the gear's generation)        (1)
+
+with phi1 = phi1_0 + s u, psi = psi_0 - (N1/N2) s u + s lambda(u) (s the pinion's sense of
+rotation; the frames of :mod:`gearopt.contact`). The reference (phi1_0, psi_0) is the contact
+of the given pair at the pinion point generated at centre roll nearest the flank centre. The
+meshing equation of the generation involves the roll's derivative, so the fit is iterated: the
+data (phi_p, phi_c) are fitted by phi_c = c0 + c1 phi_p + ... + c6 phi_p^6 (least squares), the
+fit's derivative goes back into f_p, until the coefficients stop moving. c0 is a change of the
+cradle angle setting; c1 ... c6 replace the flank's roll terms.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import Placement
+from gearopt.design import Design
+from gearopt.errors import SettingsError
+from gearopt.mesh import ToothFrame
+from gearopt.solve import newton
+from gearopt.te_target import ARCSEC, TETarget
+from gearopt_plugins.face_milling_local import _solve_nodes
+
+__all__ = ["InverseTCA", "inverse_tca"]
+
+SIDE_FLANKS = {"drive": ("convex", "concave"), "coast": ("concave", "convex")}
+
+
+@dataclass(frozen=True, kw_only=True)
+class InverseTCA:
+    """Outcome of :func:`inverse_tca`.
+
+    Attributes
+    ----------
+    roll
+        ``(c1, ..., c6)`` fitted (rad of cradle per rad^k of work).
+    cradle_shift_deg
+        c0 in degrees: the change of the cradle angle setting.
+    iterations
+        Fixed-point iterations of the fit (the roll's derivative in the generation).
+    history
+        ``(iterations, 7)`` coefficients c0 ... c6 after each iteration.
+    phi_p_rad, phi_c_rad
+        The last iteration's data, one pair per position.
+    fit_residual_arcsec
+        Largest |phi_c - fit| over the data, arcsec of cradle.
+    u_rad
+        The pinion rotations (direction of motion) of the data.
+    """
+
+    roll: tuple[float, ...]
+    cradle_shift_deg: float
+    iterations: int
+    history: NDArray
+    phi_p_rad: NDArray
+    phi_c_rad: NDArray
+    fit_residual_arcsec: float
+    u_rad: NDArray
+
+
+def _rot(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    z, o = 0.0 * c, 1.0 + 0.0 * c
+    return np.stack(
+        [np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2
+    )
+
+
+def _mirror(v, hand):
+    return v * np.array([1.0, hand, 1.0])
+
+
+def _poly(coef, x):
+    """phi_c and its derivative for c0 ... c6."""
+    value = np.polyval(coef[::-1], x)
+    slope = np.polyval((coef[1:] * np.arange(1, len(coef)))[::-1], x)
+    return value, slope
+
+
+class _Pair:
+    """The pinion tool, the gear, their placement and the reference contact."""
+
+    def __init__(self, design: Design, side: str) -> None:
+        from gearopt_plugins.face_milling import _family
+
+        pinion_flank, gear_flank = SIDE_FLANKS[side]
+        blank = design.blank
+        self.pinion = _family(design, "pinion", (pinion_flank,))
+        self.gear = _family(design, "gear", (gear_flank,))
+        self.hand1 = 1.0 if blank.hand[0] == "right" else -1.0
+        self.hand2 = 1.0 if blank.hand[1] == "right" else -1.0
+        self.b, self.c = Placement(shaft_angle_deg=design.pair.shaft_angle_deg).pinion_to_gear
+        self.ratio = design.pair.pinion_teeth / design.pair.gear_teeth
+        self.scale = blank.mean_cone_distance_mm
+        spec = design.machine.pinion.flank(pinion_flank)
+        self.base_roll = np.array([0.0, *spec.roll])
+        self.zero = np.zeros(1, int)
+        self._reference(design, blank)
+
+    def pinion_point(self, q, cradle):
+        geo = self.pinion.geometry(q, np.zeros(q.shape[:-1], int), cradle=cradle)
+        return (
+            _mirror(geo["point"], self.hand1),
+            _mirror(geo["normal"], self.hand1),
+            geo["meshing"],
+        )
+
+    def gear_point(self, q):
+        geo = self.gear.geometry(q, np.zeros(q.shape[:-1], int))
+        f = self.gear.axial_radial_meshing(q, np.zeros(q.shape[:-1], int))[2]
+        return _mirror(geo["point"], self.hand2), _mirror(geo["normal"], self.hand2), f
+
+    def equations(self, x, phi1, psi, roll_slope=None):
+        """Residuals ``(N, 7)`` of the seven equations at unknowns ``x`` ``(N, 7)``:
+        (u_t, theta_t, phi_p, phi_c, u_g, theta_g, phi_g); ``roll_slope(phi_p)`` gives
+        dphi_c/dphi_p."""
+        q1 = x[..., 0:3]
+        slope = roll_slope(x[..., 2])
+        p, n1, f1 = self.pinion_point(q1, (x[..., 3], slope))
+        r, n2, f2 = self.gear_point(x[..., 4:7])
+        rot1, rot2 = _rot(phi1), _rot(psi)
+        q = np.einsum("ij,...jk,...k->...i", self.b, rot1, p) + self.c
+        g = np.einsum("...ij,...j->...i", rot2, r)
+        m1 = np.einsum("ij,...jk,...k->...i", self.b, rot1, n1)
+        m2 = np.einsum("...ij,...j->...i", rot2, n2)
+        s = m1 + m2
+        return np.concatenate(
+            [
+                (q - g) / self.scale,
+                np.einsum("...j,j->...", s, self.t_a)[..., None],
+                np.einsum("...j,j->...", s, self.t_b)[..., None],
+                f1[..., None],
+                f2[..., None],
+            ],
+            axis=-1,
+        )
+
+    def _reference(self, design, blank) -> None:
+        """The contact at the pinion point generated at centre roll nearest the flank centre:
+        (phi1_0, psi_0), the sense of rotation, the starting unknowns."""
+        frame = ToothFrame.from_blank(blank)
+        g1 = math.radians(blank.pitch_angle_deg[0])
+        s1 = frame.toe_mm + frame.centre_mm[0]
+        h1 = frame.root_mm + frame.centre_mm[1]
+        start1 = self.pinion.pitch_row(np.array([s1]))[0, 0]
+        sol = _solve_nodes(self.pinion, np.array([s1]), np.array([h1]), start1, g1)
+        q1 = sol.x[0]
+        p = _mirror(self.pinion.geometry(q1[None], self.zero)["point"][0], self.hand1)
+        n = _mirror(self.pinion.geometry(q1[None], self.zero)["normal"][0], self.hand1)
+        self.sense = 1 if p[0] * n[1] - p[1] * n[0] > 0.0 else -1
+        qg = self.b @ p + self.c
+        g2 = math.radians(blank.pitch_angle_deg[1])
+        big_l2, big_r2 = qg[2], math.hypot(qg[0], qg[1])
+        s2 = big_l2 * math.cos(g2) + big_r2 * math.sin(g2)
+        h2 = -big_l2 * math.sin(g2) + big_r2 * math.cos(g2)
+        start2 = self.gear.pitch_row(np.array([blank.mean_cone_distance_mm]))[0, 0]
+        q2 = _solve_nodes(self.gear, np.array([s2]), np.array([h2]), start2, g2).x[0]
+        r = _mirror(self.gear.geometry(q2[None], self.zero)["point"][0], self.hand2)
+        psi0 = math.atan2(qg[1], qg[0]) - math.atan2(r[1], r[0])
+        # the tangent basis of the normal equations: the pinion's tangent plane at the guess
+        m = self.b @ n
+        t_a = np.cross(m, [0.0, 0.0, 1.0])
+        self.t_a = t_a / np.linalg.norm(t_a)
+        self.t_b = np.cross(m, self.t_a)
+        base = self.base_roll
+
+        # unknowns: u_t, theta_t, u_g, theta_g, phi_g, psi_0, phi1_0 (phi_p = phi_c = 0)
+        def residual(z, idx):
+            x = np.concatenate([z[:, 0:2], 0.0 * z[:, :2], z[:, 2:5]], axis=1)
+            return self.equations(x, z[:, 6], z[:, 5], lambda phi: _poly(base, phi)[1] + 0.0 * phi)
+
+        z0 = np.array([[q1[0], q1[1], *q2, psi0, 0.0]])
+        ref = newton(
+            residual, z0, tol=1e-13, max_iter=60, max_step=(1.0, 0.05, 1.0, 0.05, 0.05, 0.05, 0.05)
+        )
+        if not ref.all_converged:
+            raise SettingsError(
+                "te_target",
+                rule="the pair has no point contact at the pinion point generated at centre "
+                "roll near the flank centre (the reference of the designed TE)",
+            )
+        z = ref.x[0]
+        self.phi1_0, self.psi_0 = float(z[6]), float(z[5])
+        self.start = np.array([z[0], z[1], 0.0, 0.0, z[2], z[3], z[4]])
+
+
+def inverse_tca(
+    design: Design,
+    target: TETarget,
+    *,
+    side: str = "drive",
+    positions: int = 41,
+    degree: int = 6,
+    max_iterations: int = 40,
+    tol: float = 1e-12,
+) -> InverseTCA:
+    """The roll coefficients of the pinion's ``side`` flank that realise ``target`` (module
+    docstring). Raises :class:`SettingsError` when the tangency has no solution at some
+    position (the target asks for contact the geometry cannot give)."""
+    pair = _Pair(design, side)
+    s = pair.sense
+    u = np.linspace(-target.mesh_in_rad, target.mesh_in_rad, positions)
+    lag = -target.delta_rad(u)
+    phi1 = pair.phi1_0 + s * u
+    psi = pair.psi_0 - pair.ratio * s * u + s * lag
+    coef = np.zeros(degree + 1)
+    coef[: len(pair.base_roll)] = pair.base_roll[: degree + 1]
+    steps = (1.0, 0.05, 0.05, 0.05, 1.0, 0.05, 0.05)
+
+    def solve(x0, coef, rows=None):
+        rows = np.arange(positions) if rows is None else rows
+
+        def residual(z, idx):
+            at = rows[idx]
+            return pair.equations(z, phi1[at], psi[at], lambda phi: _poly(coef, phi)[1])
+
+        return newton(residual, x0, tol=1e-13, max_iter=60, max_step=steps)
+
+    # the first pass by continuation outward from the reference (u = 0 in the middle)
+    x = np.empty((positions, 7))
+    mid = positions // 2
+    x[mid] = pair.start
+    for order in (range(mid + 1, positions), range(mid - 1, -1, -1)):
+        last = [mid]
+        for k in order:  # one row at a time: continuation, linear extrapolation
+            guess = x[last[-1]] if len(last) < 2 else 2.0 * x[last[-1]] - x[last[-2]]
+            sol = solve(guess[None], coef, rows=np.array([k]))
+            if not sol.all_converged:
+                raise SettingsError(
+                    "te_target",
+                    float(u[k]),
+                    "no contact of the pinion tool with the gear at this pinion rotation "
+                    "(rad from the reference) for the designed TE",
+                )
+            x[k] = sol.x[0]
+            last.append(k)
+    history = []
+    iteration = 0
+    while iteration < max_iterations:
+        iteration += 1
+        sol = solve(x, coef)
+        if not sol.all_converged:
+            raise SettingsError(
+                "te_target", rule="the inverse TCA lost the contact while its roll was refitted"
+            )
+        x = sol.x
+        phi_p, phi_c = x[:, 2], x[:, 3]
+        new = np.polynomial.polynomial.polyfit(phi_p, phi_c, degree)
+        history.append(new)
+        change = np.max(np.abs(new - coef) * np.max(np.abs(phi_p)) ** np.arange(degree + 1))
+        coef = new
+        if change < tol:
+            break
+    fit = np.polynomial.polynomial.polyval(phi_p, coef)
+    return InverseTCA(
+        roll=tuple(float(c) for c in coef[1:]) + (0.0,) * (6 - degree),
+        cradle_shift_deg=math.degrees(coef[0]),
+        iterations=iteration,
+        history=np.array(history),
+        phi_p_rad=phi_p,
+        phi_c_rad=phi_c,
+        fit_residual_arcsec=float(np.max(np.abs(fit - phi_c)) * ARCSEC),
+        u_rad=u,
+    )
