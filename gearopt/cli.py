@@ -4,6 +4,7 @@
 ``gearopt settings DESIGN.toml`` prints the blank and the basic machine-tool settings;
 ``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
+``gearopt realise-te DESIGN.toml --out NEW.toml`` fits the settings to its ``[te_target]``;
 ``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
 ``gearopt change-gears MACHINE --ratio R`` the best change gears of its set;
 ``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`).
@@ -18,6 +19,7 @@ import dataclasses
 import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from gearopt.design import load_design
@@ -87,6 +89,34 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
         if rows
         else "no plugins found"
     )
+    return 0
+
+
+def _cmd_realise_te(args: argparse.Namespace) -> int:
+    import copy
+
+    import tomli_w
+
+    design = load_design(args.design)
+    table, report = get_machine_model(design.model).realise_te_target(design, side=args.side)
+    data = copy.deepcopy(dict(design.source))
+    data.pop("synthesis", None)
+    data["machine"] = {"model": design.model, **table}
+    header = (
+        f"# {Path(args.design).name} with the pinion's {report.get('pinion_flank', '')} roll "
+        f"fitted to [te_target] by `gearopt realise-te` (inverse TCA).\n"
+        + "".join(f"# {k}: {v}\n" for k, v in report.items() if k not in ("before", "after"))
+        + "\n"
+    )
+    if args.out:
+        Path(args.out).write_text(header + tomli_w.dumps(data), encoding="utf-8")
+        report["written"] = str(args.out)
+    if args.json or not args.out:
+        print(json.dumps(report, indent=2))
+    else:
+        print(
+            f"wrote {args.out}: " + ", ".join(f"{k} = {v:.6g}" for k, v in report["after"].items())
+        )
     return 0
 
 
@@ -434,6 +464,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("design", help="design TOML file")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_settings)
+    p = sub.add_parser(
+        "realise-te",
+        help="fit the machine settings to the design's [te_target] (inverse TCA)",
+    )
+    p.add_argument("design", help="design TOML file with a [te_target] table")
+    p.add_argument("--side", default="drive", choices=("drive", "coast"))
+    p.add_argument("--out", help="write the design with the fitted settings here")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.set_defaults(func=_cmd_realise_te)
     p = sub.add_parser("flanks", help="generate the flanks of a design and measure them")
     p.add_argument("design", help="design TOML file")
     p.add_argument("--grid", default="25,13", help="FlankMap grid n_face,n_profile")

@@ -60,7 +60,16 @@ __all__ = [
 ]
 
 MEMBERS = ("pinion", "gear")
-SECTIONS = ("meta", "pair", "machine", "misalignment", "compensation", "analysis", "synthesis")
+SECTIONS = (
+    "meta",
+    "pair",
+    "machine",
+    "misalignment",
+    "compensation",
+    "analysis",
+    "synthesis",
+    "te_target",
+)
 MODULE_TOLERANCE = 1e-3  # module and cone distance, when both are given, agree within 0.1 %
 #: the largest addendum or dedendum angle (face - pitch, pitch - root) of a tapered-depth blank
 MAX_TAPER_ANGLE_DEG = 15.0
@@ -401,6 +410,7 @@ class Design:
     compensation: Misalignment = field(default_factory=Misalignment)
     meta: Meta = field(default_factory=Meta)
     analysis: Mapping[str, Any] = field(default_factory=dict)
+    te_target: Any = None
     source: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
     path: str | None = field(default=None, compare=False)
 
@@ -442,6 +452,13 @@ def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
         )
         raise DesignError(name, exc.value, exc.rule) from None
     return dict(table)
+
+
+def _te_target(table: Mapping[str, Any], pair: PairData):
+    """The ``[te_target]`` table: a designed transmission error (:mod:`gearopt.te_target`)."""
+    from gearopt.te_target import TETarget
+
+    return TETarget.from_table(table, pair.pinion_teeth)
 
 
 def parse_design(
@@ -488,6 +505,7 @@ def parse_design(
         compensation=Misalignment.from_table(tables["compensation"], "compensation"),
         meta=Meta(**meta_table),
         analysis=_analysis_table(tables["analysis"]),
+        te_target=_te_target(tables["te_target"], pair) if "te_target" in data else None,
         source=copy.deepcopy(dict(data)),
         path=path,
     )

@@ -124,6 +124,17 @@ class BaseMachineModel(abc.ABC):
             "synthesis", rule=f"the {self.name!r} machine model has no settings synthesis"
         )
 
+    def realise_te_target(self, design: Design, *, side: str = "drive") -> tuple[dict, dict]:
+        """Settings that make ``side`` of the pair run with the design's ``[te_target]`` (an
+        inverse TCA): ``(machine table without "model", report)``. The table parses back with
+        :meth:`parse_machine`; the report says what was fitted and how it converged.
+
+        The default raises :class:`~gearopt.errors.NotAvailableError` naming ``te_target``.
+        """
+        raise NotAvailableError(
+            "te_target", rule=f"the {self.name!r} machine model cannot realise a designed TE"
+        )
+
     @abc.abstractmethod
     def basic_settings(self, design: Design) -> MachineSettings:
         """Compute the basic machine-tool settings of both members from the blank and the

@@ -40,6 +40,16 @@ def _te(plt, tca: Mapping, title: str, path: Path) -> None:
         te = np.asarray(tca.arrays[f"{key}te_arcsec"])
         report = tca.report["tca" if not key else "tca_coast"]
         ax.plot(phi, te, "o-", color="C0" if not key else "C1", label="TE (carrying pair)")
+        if not key and "te_target_arcsec" in tca.arrays:
+            fine = np.linspace(phi[0], phi[-1], 401)
+            ax.plot(
+                fine,
+                np.interp(fine, phi, np.asarray(tca.arrays["te_target_arcsec"])),
+                "k--",
+                lw=1.0,
+                label=f"designed TE (max deviation "
+                f"{report['te_target_max_deviation_arcsec']:.3f} arcsec)",
+            )
         for h in report["handover_phi1_deg"]:
             ax.axvline(h, color="0.7", lw=0.8, ls="--")
         ax.set_title(f"{name}: peak-to-peak {report['te_peak_to_peak_arcsec']:.3f} arcsec")

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from gearopt.errors import DesignError
 from gearopt.validate import check_keys, read_number
 
-__all__ = ["ARCSEC", "TE_TARGET_KEYS", "TETarget"]
+__all__ = ["ARCSEC", "TE_TARGET_KEYS", "TETarget", "compare"]
 
 ARCSEC = 180.0 * 3600.0 / math.pi
 TE_TARGET_KEYS = (
@@ -159,3 +159,27 @@ class TETarget:
             contact_ratio=ratio,
             pinion_teeth=pinion_teeth,
         )
+
+
+def compare(target: TETarget, phi1_deg: ArrayLike, te_arcsec: ArrayLike, handover_deg) -> dict:
+    """The target beside an achieved TE (the contact engine's, maximum 0): the target's
+    maximum phi1_0 placed at the achieved maximum -- half a pitch from the first hand-over
+    between pairs (the highest sample when there is none) -- and the target's envelope over the
+    pairs evaluated at the achieved positions.
+
+    Returns ``te_target_arcsec`` (array), ``te_target_max_deviation_arcsec`` and
+    ``te_target_rms_deviation_arcsec`` (achieved minus target)."""
+    phi = np.radians(np.asarray(phi1_deg, float))
+    te = np.asarray(te_arcsec, float)
+    handover = np.radians(np.asarray(handover_deg, float))
+    if handover.size:
+        phi1_0 = handover[0] + target.transfer_rad
+    else:
+        phi1_0 = phi[int(np.argmax(te))]
+    want = target.envelope_arcsec(phi - phi1_0)
+    deviation = te - want
+    return {
+        "te_target_arcsec": want,
+        "te_target_max_deviation_arcsec": float(np.max(np.abs(deviation))),
+        "te_target_rms_deviation_arcsec": float(np.sqrt(np.mean(deviation**2))),
+    }

@@ -535,6 +535,42 @@ class FaceMilling(BaseMachineModel):
                 _SYNTHESES.pop(next(iter(_SYNTHESES)))
         return _SYNTHESES[key]
 
+    def realise_te_target(self, design: Design, *, side: str = "drive") -> tuple[dict, dict]:
+        """The pinion's roll on ``side`` fitted by inverse TCA to the design's ``[te_target]``
+        (:mod:`gearopt_plugins.face_milling_inverse`): c0 moves the cradle angle, c1 ... c6
+        replace ``ratio_of_roll`` and ``roll_c2`` ... ``roll_c6``; the gear is unchanged."""
+        from gearopt_plugins.face_milling_inverse import SIDE_FLANKS, inverse_tca
+
+        if design.te_target is None:
+            raise DesignError("te_target", rule="the design has no [te_target] table")
+        if side not in SIDE_FLANKS:
+            raise DesignError("side", side, f"must be one of {sorted(SIDE_FLANKS)}")
+        result = inverse_tca(design, design.te_target, side=side)
+        table = machine_table(design.machine)
+        flank = SIDE_FLANKS[side][0]
+        values = table["pinion"][flank]
+        before = {k: values[k] for k in ("cradle_angle_deg", "ratio_of_roll", *ROLL_KEYS)}
+        values["cradle_angle_deg"] += result.cradle_shift_deg
+        values["ratio_of_roll"] = result.roll[0]
+        for k, key in enumerate(ROLL_KEYS, start=1):
+            values[key] = result.roll[k]
+        report = {
+            "side": side,
+            "pinion_flank": flank,
+            "te_target": design.te_target.as_dict(),
+            "before": before,
+            "after": {k: values[k] for k in before},
+            "cradle_shift_deg": result.cradle_shift_deg,
+            "iterations": result.iterations,
+            "positions": len(result.u_rad),
+            "fit_residual_arcsec": result.fit_residual_arcsec,
+            "work_angle_range_deg": [
+                math.degrees(float(result.phi_p_rad.min())),
+                math.degrees(float(result.phi_p_rad.max())),
+            ],
+        }
+        return table, report
+
     def basic_settings(self, design: Design) -> MachineSettings:
         if not design.compensation.is_zero:
             raise NotAvailableError(

@@ -14,6 +14,10 @@ number. Options come from the study file's ``[[objectives]]`` / ``[[constraints]
 ``te_level``
     How far (arcsec) the TE peak-to-peak of one TCA is from ``level_arcsec`` (required): the
     design with a prescribed kinematic error (seed 003 Table 7). ``on``, ``side``.
+``te_target``
+    How far (arcsec) the drive side's TE of one TCA is from the design's ``[te_target]``
+    (:func:`gearopt.te_target.compare`): ``measure`` ``"rms"`` (default) or ``"max"`` over the
+    positions; ``on``. A design without ``[te_target]`` is an error.
 ``pattern_center_offset``
     The distance (mm) of the mean contact point M from the flank centre C, in the pattern
     coordinates (face, profile). ``on``, ``side``, ``component`` (``"both"``, ``"face"`` or
@@ -126,6 +130,30 @@ class WorstTe(_ContactObjective):
 
     def value(self, evaluations, **options):
         return self._worst(evaluations, options, _te(evaluations))
+
+
+class TeTarget(_ContactObjective):
+    name = "te_target"
+    description = "deviation of the drive side's TE from the design's [te_target] (arcsec)"
+    options = ("on", "measure")
+
+    def reads(self, **options):
+        measure = options.get("measure", "rms")
+        if measure not in ("rms", "max"):
+            raise StudyError(f"objective {self.name}.measure", measure, "must be 'rms' or 'max'")
+        return super().reads(**{k: v for k, v in options.items() if k != "measure"})
+
+    def value(self, evaluations, **options):
+        key = f"te_target_{options.get('measure', 'rms')}_deviation_arcsec"
+        labels = _labels(self.name, options.get("on", self.default_on))
+        for label in labels:
+            if key not in evaluations[label].metrics:
+                raise StudyError(
+                    f"objective {self.name}",
+                    label,
+                    "the design has no [te_target] table: nothing to compare the TE with",
+                )
+        return max(_metric(evaluations, label, key) for label in labels)
 
 
 class TeLevel(_ContactObjective):
@@ -263,6 +291,7 @@ def gearopt_objectives() -> list[BaseObjective]:
         TePeakToPeak(),
         WorstTe(),
         TeLevel(),
+        TeTarget(),
         PatternCenterOffset(),
         PatternBias(),
         PatternMovement(),

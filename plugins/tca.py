@@ -20,7 +20,9 @@ Conditions (all optional; :class:`gearopt.analysis.AnalysisOptions`)::
 (0/1), ``contact_ratio``. Arrays: ``phi1_deg``, ``te_arcsec``, ``path_face_mm``,
 ``path_profile_mm``, ``pattern_um`` (the least separation of each pinion node over the
 mesh, inf off the flanks), ``flank_mask`` (generated pinion nodes), ``face_mm`` and
-``profile_mm`` (pattern coordinates of the grid), and the ``coast_*`` of each.
+``profile_mm`` (pattern coordinates of the grid), and the ``coast_*`` of each. With a
+``[te_target]`` in the design (drive side): metrics ``te_target_max_deviation_arcsec`` and
+``te_target_rms_deviation_arcsec``, array ``te_target_arcsec`` (:func:`gearopt.te_target.compare`).
 
 ``ease-off`` metrics: ``ease_off_max_um`` and ``coast_ease_off_max_um`` (the largest ease-off
 over the flank where it is defined); arrays ``ease_off_um`` and ``coast_ease_off_um``. The
@@ -44,6 +46,7 @@ from gearopt.analysis import (
 from gearopt.design import Misalignment
 from gearopt.evaluation import BaseEvaluator, Evaluation
 from gearopt.mesh import ToothContact
+from gearopt.te_target import compare
 
 
 def contact_metrics(result: ToothContact, prefix: str = "") -> dict[str, float]:
@@ -78,12 +81,25 @@ class TcaEvaluator(BaseEvaluator):
             arrays[f"{prefix}path_profile_mm"] = side.path_profile_mm
             arrays[f"{prefix}pattern_um"] = side.pattern_um
             arrays[f"{prefix}flank_mask"] = field.pinion.mask
+        metrics = {**contact_metrics(drive), **contact_metrics(coast, "coast_")}
+        report = {"tca": drive.as_dict(), "tca_coast": coast.as_dict()}
+        if design.te_target is not None:  # the designed TE (drive side) beside the achieved
+            versus = compare(
+                design.te_target, drive.phi1_deg, drive.te_arcsec, drive.handover_phi1_deg
+            )
+            arrays["te_target_arcsec"] = versus["te_target_arcsec"]
+            for key in ("te_target_max_deviation_arcsec", "te_target_rms_deviation_arcsec"):
+                metrics[key] = versus[key]
+            report["tca"]["te_target_arcsec"] = [float(v) for v in versus["te_target_arcsec"]]
+            report["tca"]["te_target_max_deviation_arcsec"] = versus[
+                "te_target_max_deviation_arcsec"
+            ]
         return Evaluation(
             evaluator=self.name,
-            metrics={**contact_metrics(drive), **contact_metrics(coast, "coast_")},
+            metrics=metrics,
             arrays=arrays,
             conditions=options.as_dict(),
-            report={"tca": drive.as_dict(), "tca_coast": coast.as_dict()},
+            report=report,
         )
 
 
