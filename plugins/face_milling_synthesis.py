@@ -239,16 +239,6 @@ def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, dict]:
 # --- the gear from its blank ---------------------------------------------------------------------
 
 
-def _uniform(blank: Blank) -> None:
-    for k, member in enumerate(("pinion", "gear")):
-        if abs(blank.root_angle_deg[k] - blank.pitch_angle_deg[k]) > 1e-9:
-            raise NotAvailableError(
-                "pair.root_angle_deg",
-                blank.root_angle_deg,
-                f"settings from the blank need uniform depth for now ({member} is tapered)",
-            )
-
-
 def default_cutter_radius_mm(blank: Blank) -> float:
     """The standard cutter radius nearest to the mean cone distance."""
     radii = np.array(STANDARD_CUTTER_RADII_IN) * 25.4
@@ -263,38 +253,228 @@ def slot_width_mm(pair: PairData) -> float:
     return pitch / 2.0 if thickness is None else pitch - thickness[1]
 
 
+@dataclass(frozen=True, kw_only=True)
+class CradleCone:
+    """The cradle's pitch cone of a member cut with machine root angle = root angle (module
+    docstring): apex on the cradle axis at ``z_m = apex_z_mm`` (minus the sliding base), half
+    angle 90 deg - ``dedendum_angle_rad`` about the cradle axis, opening toward the cradle.
+    A point of cone distance rho and azimuth psi (from x_m) is
+    ``(rho cos(delta) cos(psi), rho cos(delta) sin(psi), apex_z - rho sin(delta))``; its
+    development is the point of polar coordinates ``(rho, psi cos(delta))``."""
+
+    dedendum_angle_rad: float
+    apex_z_mm: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class PitchLinePoint:
+    """A blade cone's pitch line (its intersection with the cradle's pitch cone) at one cone
+    distance, developed: ``point`` (2,) in the plane, ``tangent`` (2,) unit, toward the heel,
+    ``sin_pressure`` the sine of the angle between the blade's normal and the cone's tangent
+    plane (the flank's pressure angle there). Arrays may be complex (complex-step
+    derivatives)."""
+
+    point: np.ndarray
+    tangent: np.ndarray
+    sin_pressure: Any
+
+
+def pitch_line_point(
+    cone: CradleCone,
+    *,
+    radial_setting_mm,
+    cradle_angle_rad,
+    point_radius_mm,
+    blade_angle_rad,
+    side: float,
+    cone_distance_mm,
+    branch: float = 1.0,
+) -> PitchLinePoint:
+    """The point of the blade cone (``side`` +1 outside blade, -1 inside; the edge's radius
+    ``r_p - side z tan(alpha)`` at height ``z <= 0`` below the tip plane) on the cradle's pitch
+    cone at a cone distance, its azimuth ``psi = q - branch acos(...)`` (``branch`` +1: the
+    intersection on the cradle-axis side of the cutter centre, the one near ``psi = 0`` for
+    q > 0). Complex-safe in every length and angle (no comparisons on them)."""
+    d = cone.dedendum_angle_rad
+    cd, sd = math.cos(d), math.sin(d)
+    rho = cone_distance_mm
+    sr, q = radial_setting_mm, cradle_angle_rad
+    z = cone.apex_z_mm - rho * sd
+    ta = np.tan(blade_angle_rad)
+    big_r = point_radius_mm - side * z * ta
+    k = (rho**2 * cd**2 + sr**2 - big_r**2) / (2.0 * rho * cd * sr)
+    psi = q - branch * np.arccos(k)
+    cp, sp = np.cos(psi), np.sin(psi)
+    # the blade's normal n (not oriented) at the point, the cone's normal nc, its generatrix g
+    ct = (rho * cd * cp - sr * np.cos(q)) / big_r
+    st = (rho * cd * sp - sr * np.sin(q)) / big_r
+    ca, sa = np.cos(blade_angle_rad), np.sin(blade_angle_rad)
+    n = np.array([ca * ct, ca * st, side * sa])
+    nc = np.array([sd * cp, sd * sp, cd + 0.0 * cp])
+    g = np.array([cd * cp, cd * sp, -sd + 0.0 * cp])
+    e_psi = np.array([-sp, cp, 0.0 * cp])
+    t = np.cross(nc, n)
+    t_g, t_psi = t @ g, t @ e_psi
+    orient = 1.0 if np.real(t_g) > 0.0 else -1.0
+    t_g, t_psi = orient * t_g, orient * t_psi
+    norm = np.sqrt(t_g**2 + t_psi**2)
+    phi = psi * cd
+    cf, sf = np.cos(phi), np.sin(phi)
+    return PitchLinePoint(
+        point=rho * np.array([cf, sf]),
+        tangent=np.array([t_g * cf - t_psi * sf, t_g * sf + t_psi * cf]) / norm,
+        sin_pressure=side * (n @ nc),
+    )
+
+
+#: unknowns of the gear's tool: radial setting, cradle angle, point radii (outside, inside
+#: blade), blade angles (outside, inside), the cone distances of the slot's normal's ends
+_GEAR_STEP = np.array([5.0, 0.05, 2.0, 2.0, 0.02, 0.02, 2.0, 2.0])
+
+
+def gear_tool(
+    *,
+    cone: CradleCone,
+    mean_cone_distance_mm: float,
+    spiral_angle_rad: float,
+    pressure_angle_rad: float,
+    slot_width_mm: float,
+    cutter_radius_mm: float,
+) -> dict:
+    """The gear's spread-blade tool from the blank (module docstring): ``radial_setting_mm``,
+    ``cradle_angle_rad``, ``point_radius_mm`` and ``blade_angle_rad`` ``(outside, inside)``,
+    and the developed ends of the slot's normal at the mean point (``ends``). Solved by Newton
+    (complex-step Jacobian) from the uniform-depth formulas, exact for delta = 0."""
+    am, beta, alpha, width, rc = (
+        mean_cone_distance_mm,
+        spiral_angle_rad,
+        pressure_angle_rad,
+        slot_width_mm,
+        cutter_radius_mm,
+    )
+    d = cone.dedendum_angle_rad
+    mean_xy = np.array([am * math.cos(d), 0.0])  # the mean pitch point, projected on z_m = 0
+    depth = -(cone.apex_z_mm - am * math.sin(d))  # its depth below the tip plane
+    centre = mean_xy + rc * np.array([-math.sin(beta), math.cos(beta)])
+    reach = depth * math.tan(alpha)
+    toward = np.array([math.sin(beta), -math.cos(beta)])  # from the cutter centre outward at M
+    ends0 = [np.array([am, 0.0]) + side * 0.5 * width * toward for side in (1.0, -1.0)]
+    x0 = np.array(
+        [
+            math.hypot(*centre),
+            math.atan2(centre[1], centre[0]),
+            rc + 0.5 * width - reach,
+            rc - 0.5 * width + reach,
+            alpha,
+            alpha,
+            math.hypot(*ends0[0]),
+            math.hypot(*ends0[1]),
+        ]
+    )
+    sides = (1.0, -1.0)
+    branch = 1.0 if x0[1] > 0.0 else -1.0
+
+    def lines(x, rho_out, rho_in):
+        return [
+            pitch_line_point(
+                cone,
+                radial_setting_mm=x[0],
+                cradle_angle_rad=x[1],
+                point_radius_mm=x[2 + k],
+                blade_angle_rad=x[4 + k],
+                side=side,
+                cone_distance_mm=rho,
+                branch=branch,
+            )
+            for k, (side, rho) in enumerate(zip(sides, (rho_out, rho_in), strict=True))
+        ]
+
+    def residual(xs, idx):
+        rows = []
+        for x in xs:
+            out, inn = lines(x, x[6], x[7])
+            mid = 0.5 * (out.point + inn.point)
+            chord = out.point - inn.point
+            length = np.sqrt(chord @ chord)
+            bis = out.tangent + inn.tangent
+            bis = bis / np.sqrt(bis @ bis)
+            pitch = lines(x, am, am)  # pressure angles at the mean cone distance
+            cx, cy = x[0] * np.cos(x[1]) - mean_xy[0], x[0] * np.sin(x[1])
+            rows.append(
+                [
+                    (mid[0] - am) / am,
+                    mid[1] / am,
+                    (length - width) / am,
+                    chord @ bis / am,  # the normal makes equal angles with both lines
+                    bis[1] * math.cos(beta) - bis[0] * math.sin(beta),
+                    pitch[0].sin_pressure - math.sin(alpha),
+                    pitch[1].sin_pressure - math.sin(alpha),
+                    (np.sqrt(cx * cx + cy * cy) - rc) / am,
+                ]
+            )
+        return np.array(rows)
+
+    sol = newton(residual, x0[None], tol=1e-15, max_iter=40, max_step=_GEAR_STEP)
+    if not sol.all_converged or np.any(np.isnan(sol.x)):
+        raise SettingsError(
+            "synthesis.gear_cutter_radius_mm",
+            rc,
+            "no spread-blade tool meets the blank's spiral angle, pressure angle and slot width "
+            "at the mean point with this cutter radius (Newton did not converge)",
+        )
+    x = sol.x[0]
+    out, inn = lines(x, x[6], x[7])
+    return {
+        "radial_setting_mm": float(x[0]),
+        "cradle_angle_rad": float(x[1]),
+        "point_radius_mm": (float(x[2]), float(x[3])),
+        "blade_angle_rad": (float(x[4]), float(x[5])),
+        "ends": (np.real(out.point), np.real(inn.point)),
+    }
+
+
 def gear_flanks_from_blank(pair: PairData, cutter_radius_mm: float | None = None) -> dict:
     """The gear's ``{flank: {key: value}}`` settings (module docstring)."""
     blank = pair.blank
-    _uniform(blank)
     rc = default_cutter_radius_mm(blank) if cutter_radius_mm is None else cutter_radius_mm
-    beta = math.radians(blank.mean_spiral_angle_deg)
     am = blank.mean_cone_distance_mm
-    cx, cy = am - rc * math.sin(beta), rc * math.cos(beta)
     width = slot_width_mm(pair)
     b = blank.mean_dedendum_mm[1]
-    alpha = blank.pressure_angle_deg
-    reach = b * math.tan(math.radians(alpha))
+    alpha = math.radians(blank.pressure_angle_deg)
+    gamma = math.radians(blank.pitch_angle_deg[1])
+    delta = math.radians(blank.dedendum_angle_deg[1])
+    sliding = b * math.cos(delta) - am * math.sin(delta)
+    reach = b * math.cos(delta) * math.tan(alpha)
     if rc - width / 2.0 - reach <= 0.0:
         raise DesignError(
             "synthesis.gear_cutter_radius_mm",
             rc,
             "too small for the slot: the inside blade's point radius would not be positive",
         )
-    gamma = math.radians(blank.pitch_angle_deg[1])
+    tool = gear_tool(
+        cone=CradleCone(dedendum_angle_rad=delta, apex_z_mm=-sliding),
+        mean_cone_distance_mm=am,
+        spiral_angle_rad=math.radians(blank.mean_spiral_angle_deg),
+        pressure_angle_rad=alpha,
+        slot_width_mm=width,
+        cutter_radius_mm=rc,
+    )
     common = dict(
-        blade_pressure_angle_deg=alpha,
-        radial_setting_mm=math.hypot(cx, cy),
-        cradle_angle_deg=math.degrees(math.atan2(cy, cx)),
+        radial_setting_mm=tool["radial_setting_mm"],
+        cradle_angle_deg=math.degrees(tool["cradle_angle_rad"]),
         machine_root_angle_deg=blank.root_angle_deg[1],
         machine_center_to_back_mm=0.0,
-        sliding_base_mm=b,
+        sliding_base_mm=sliding,
         blank_offset_mm=0.0,
-        ratio_of_roll=math.sin(gamma),
+        ratio_of_roll=math.sin(gamma) / math.cos(delta),
     )
     return {
-        "concave": {**common, "cutter_point_radius_mm": rc + width / 2.0 - reach},
-        "convex": {**common, "cutter_point_radius_mm": rc - width / 2.0 + reach},
+        flank: {
+            **common,
+            "blade_pressure_angle_deg": math.degrees(tool["blade_angle_rad"][k]),
+            "cutter_point_radius_mm": tool["point_radius_mm"][k],
+        }
+        for k, flank in enumerate(("concave", "convex"))
     }
 
 
@@ -487,7 +667,6 @@ def synthesize_pinion_flank(
     other side touched at its M at pinion angle 0 (the report's ``gear_turn_rad``), so that
     both flanks sit in one assembly."""
     blank = pair.blank
-    _uniform(blank)
     gear_flank = "concave" if flank == "convex" else "convex"
     placement = Placement(shaft_angle_deg=pair.shaft_angle_deg)
     mean = _mean_point(pair, gear_specs[gear_flank], gear_flank, targets, placement)
