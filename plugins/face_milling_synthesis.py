@@ -330,6 +330,8 @@ def pitch_line_point(
 #: unknowns of the gear's tool: radial setting, cradle angle, point radii (outside, inside
 #: blade), blade angles (outside, inside), the cone distances of the slot's normal's ends
 _GEAR_STEP = np.array([5.0, 0.05, 2.0, 2.0, 0.02, 0.02, 2.0, 2.0])
+#: cone-distance step (mm) of the central differences of a pitch line's tangent
+_FD_STEP_MM = 0.01
 
 
 def gear_tool(
@@ -374,31 +376,37 @@ def gear_tool(
     sides = (1.0, -1.0)
     branch = 1.0 if x0[1] > 0.0 else -1.0
 
-    def lines(x, rho_out, rho_in):
-        return [
-            pitch_line_point(
-                cone,
-                radial_setting_mm=x[0],
-                cradle_angle_rad=x[1],
-                point_radius_mm=x[2 + k],
-                blade_angle_rad=x[4 + k],
-                side=side,
-                cone_distance_mm=rho,
-                branch=branch,
-            )
-            for k, (side, rho) in enumerate(zip(sides, (rho_out, rho_in), strict=True))
-        ]
+    def line(x, k, rho):
+        return pitch_line_point(
+            cone,
+            radial_setting_mm=x[0],
+            cradle_angle_rad=x[1],
+            point_radius_mm=x[2 + k],
+            blade_angle_rad=x[4 + k],
+            side=sides[k],
+            cone_distance_mm=rho,
+            branch=branch,
+        )
+
+    def jet(x, k, rho):
+        """Point, unit tangent and curvature vector dT/dsigma of a developed pitch line."""
+        lo, mid, hi = (line(x, k, rho + e) for e in (-_FD_STEP_MM, 0.0, _FD_STEP_MM))
+        dpoint = hi.point - lo.point
+        return mid.point, mid.tangent, (hi.tangent - lo.tangent) / np.sqrt(dpoint @ dpoint)
 
     def residual(xs, idx):
         rows = []
         for x in xs:
-            out, inn = lines(x, x[6], x[7])
-            mid = 0.5 * (out.point + inn.point)
-            chord = out.point - inn.point
+            (d1, t1, k1), (d2, t2, k2) = jet(x, 0, x[6]), jet(x, 1, x[7])
+            mid = 0.5 * (d1 + d2)
+            chord = d1 - d2
             length = np.sqrt(chord @ chord)
-            bis = out.tangent + inn.tangent
-            bis = bis / np.sqrt(bis @ bis)
-            pitch = lines(x, am, am)  # pressure angles at the mean cone distance
+            bis = t1 + t2
+            # the centre line (the midpoints' locus) where the normal moves on: d(chord . bis)
+            # = 0 gives dsigma1 : dsigma2 = (t2 . bis - chord . k2) : (t1 . bis + chord . k1)
+            centre = t1 * (t2 @ bis - chord @ k2) + t2 * (t1 @ bis + chord @ k1)
+            centre = centre / np.sqrt(centre @ centre)
+            at_am = [line(x, k, am) for k in (0, 1)]  # pressure angles at the mean cone distance
             cx, cy = x[0] * np.cos(x[1]) - mean_xy[0], x[0] * np.sin(x[1])
             rows.append(
                 [
@@ -406,9 +414,9 @@ def gear_tool(
                     mid[1] / am,
                     (length - width) / am,
                     chord @ bis / am,  # the normal makes equal angles with both lines
-                    bis[1] * math.cos(beta) - bis[0] * math.sin(beta),
-                    pitch[0].sin_pressure - math.sin(alpha),
-                    pitch[1].sin_pressure - math.sin(alpha),
+                    centre[1] * math.cos(beta) - centre[0] * math.sin(beta),
+                    at_am[0].sin_pressure - math.sin(alpha),
+                    at_am[1].sin_pressure - math.sin(alpha),
                     (np.sqrt(cx * cx + cy * cy) - rc) / am,
                 ]
             )
@@ -423,7 +431,7 @@ def gear_tool(
             "at the mean point with this cutter radius (Newton did not converge)",
         )
     x = sol.x[0]
-    out, inn = lines(x, x[6], x[7])
+    out, inn = line(x, 0, x[6]), line(x, 1, x[7])
     return {
         "radial_setting_mm": float(x[0]),
         "cradle_angle_rad": float(x[1]),
