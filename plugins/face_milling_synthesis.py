@@ -66,7 +66,7 @@ from scipy.optimize import brentq, least_squares
 from gearopt.blank import Blank
 from gearopt.contact import Placement
 from gearopt.design import PairData
-from gearopt.errors import DesignError, NotAvailableError, SettingsError
+from gearopt.errors import DesignError, SettingsError
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.face_milling_family import FaceMillingFamily
