@@ -522,6 +522,9 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     frame = ToothFrame.from_blank(blank)
     s1 = frame.toe_mm + targets.mean_point_face_mm
     h1 = frame.root_mm + targets.mean_point_profile_mm
+    taper = blank.depth_taper(0)
+    if taper is not None:  # the pattern's profile coordinate is t (DepthTaper): h at s1
+        h1 = float(taper.height_mm(s1, h1))
     g1, g2 = (math.radians(a) for a in blank.pitch_angle_deg)
     big_l1 = s1 * math.cos(g1) - h1 * math.sin(g1)
     big_r1 = s1 * math.sin(g1) + h1 * math.cos(g1)
@@ -596,59 +599,108 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     )
 
 
+def _pitch_depth_mm(blank: Blank, index: int) -> float:
+    """Depth of the member's mean pitch point below the tip plane when its root line lies in
+    it (machine root angle = root angle): b_m cos(delta)."""
+    return blank.mean_dedendum_mm[index] * math.cos(math.radians(blank.dedendum_angle_deg[index]))
+
+
+def _blade_radius_at_pitch_mm(flank_settings: Mapping, flank: str, depth_mm: float) -> float:
+    """A blade's radius at the depth of the pitch point (outside blade: concave flank)."""
+    side = 1.0 if flank == "concave" else -1.0
+    alpha = math.radians(flank_settings["blade_pressure_angle_deg"])
+    return flank_settings["cutter_point_radius_mm"] + side * depth_mm * math.tan(alpha)
+
+
 def pinion_start(pair: PairData, gear_flanks: dict, flank: str, chosen: Mapping) -> dict:
     """The complementary settings of a pinion flank with the chosen cutter: the gear's
-    generating surface seen from the pinion (same radial setting and cradle angle), the cutter
-    centre moved along the line to the gear flank's mean point so the chosen radius passes
-    through it (uniform depth)."""
+    generating surface seen from the pinion (the same cutter centre relative to the mean
+    pitch point projected on the tip plane), the centre moved along the line to the gear
+    flank's mean point so the chosen radius passes through it; the pinion tilted by its
+    chosen machine root angle: the root line in the tip plane at A_m (sliding base) and the
+    ratio of roll of rolling without slip on the cradle's pitch cone,
+    c1 = sin(gamma_1) / cos(gamma_1 - gamma_m)."""
     blank = pair.blank
+    am = blank.mean_cone_distance_mm
     gear_flank = "concave" if flank == "convex" else "convex"
     g = gear_flanks[gear_flank]
-    b1, b2 = blank.mean_dedendum_mm
-    alpha2 = math.radians(g["blade_pressure_angle_deg"])
-    side2 = 1.0 if gear_flank == "concave" else -1.0
-    r2 = g["cutter_point_radius_mm"] + side2 * b2 * math.tan(alpha2)  # at the pitch plane
+    r2 = _blade_radius_at_pitch_mm(g, gear_flank, _pitch_depth_mm(blank, 1))
     q2 = math.radians(g["cradle_angle_deg"])
     centre = g["radial_setting_mm"] * np.array([math.cos(q2), math.sin(q2)])
-    mean = np.array([blank.mean_cone_distance_mm, 0.0])
-    toward = (mean - centre) / np.linalg.norm(mean - centre)
+    delta2 = math.radians(blank.dedendum_angle_deg[1])
+    mean2 = np.array([am * math.cos(delta2), 0.0])
+    toward = (mean2 - centre) / np.linalg.norm(mean2 - centre)
+    gamma1 = math.radians(blank.pitch_angle_deg[0])
+    tilt = math.radians(chosen["machine_root_angle_deg"]) - gamma1  # -delta_1 at the root angle
+    b1 = blank.mean_dedendum_mm[0]
+    depth1 = b1 * math.cos(tilt)
+    mean1 = np.array([am * math.cos(tilt), 0.0])
+    r1 = _blade_radius_at_pitch_mm(chosen, flank, depth1)
     point = centre + r2 * toward
-    alpha1 = math.radians(chosen["blade_pressure_angle_deg"])
-    side1 = 1.0 if flank == "concave" else -1.0
-    r1 = chosen["cutter_point_radius_mm"] + side1 * b1 * math.tan(alpha1)
-    c1 = point - r1 * toward
+    c1 = point - r1 * toward + (mean1 - mean2)
     return dict(
         radial_setting_mm=float(np.hypot(*c1)),
         cradle_angle_deg=math.degrees(math.atan2(c1[1], c1[0])),
         blank_offset_mm=0.0,
-        sliding_base_mm=b1
+        sliding_base_mm=depth1
+        + am * math.sin(tilt)
         + chosen["machine_center_to_back_mm"]
         * math.sin(math.radians(chosen["machine_root_angle_deg"])),
-        ratio_of_roll=math.sin(math.radians(blank.pitch_angle_deg[0])),
+        ratio_of_roll=math.sin(gamma1) / math.cos(tilt),
         roll_c2=0.0,
     )
 
 
 def default_chosen(pair: PairData, gear_flanks: dict, flank: str) -> dict:
-    """Defaults of the chosen pinion inputs: the mating gear blade's angle, the gear radius
-    at the pitch plane made :data:`DEFAULT_RADIUS_MISMATCH` smaller (convex) or larger
-    (concave), machine root angle = root angle, machine centre to back 0."""
+    """Defaults of the chosen pinion inputs: the mating gear blade's angle (a tilted pinion:
+    the blade angle that gives the blank's pressure angle at its pitch point), the gear blade's
+    radius at its pitch point made :data:`DEFAULT_RADIUS_MISMATCH` smaller (convex) or larger
+    (concave) at the pinion's pitch point, machine root angle = root angle (the pinion tilted
+    by its dedendum angle), machine centre to back 0."""
     blank = pair.blank
     gear_flank = "concave" if flank == "convex" else "convex"
     g = gear_flanks[gear_flank]
     alpha = g["blade_pressure_angle_deg"]
-    ta = math.tan(math.radians(alpha))
-    side2 = 1.0 if gear_flank == "concave" else -1.0
-    r2 = g["cutter_point_radius_mm"] + side2 * blank.mean_dedendum_mm[1] * ta
+    r2 = _blade_radius_at_pitch_mm(g, gear_flank, _pitch_depth_mm(blank, 1))
     side1 = 1.0 if flank == "concave" else -1.0
     r1 = r2 * (1.0 + side1 * DEFAULT_RADIUS_MISMATCH)
-    return dict(
-        cutter_point_radius_mm=r1 - side1 * blank.mean_dedendum_mm[0] * ta,
+    depth1 = _pitch_depth_mm(blank, 0)
+    chosen = dict(
+        cutter_point_radius_mm=r1 - side1 * depth1 * math.tan(math.radians(alpha)),
         blade_pressure_angle_deg=alpha,
         blade_profile_radius_mm=math.inf,
         machine_root_angle_deg=blank.root_angle_deg[0],
         machine_center_to_back_mm=0.0,
     )
+    delta1 = math.radians(blank.dedendum_angle_deg[0])
+    if delta1 == 0.0:
+        return chosen
+    # tilted pinion: the blade angle that gives its flank the blank's pressure angle at its
+    # pitch point of A_m on its cradle's pitch cone (the complementary start's cutter centre)
+    start = pinion_start(pair, gear_flanks, flank, chosen)
+    am = blank.mean_cone_distance_mm
+    cone = CradleCone(dedendum_angle_rad=delta1, apex_z_mm=-start["sliding_base_mm"])
+    target = math.sin(math.radians(blank.pressure_angle_deg))
+
+    def miss(a):
+        return (
+            pitch_line_point(
+                cone,
+                radial_setting_mm=start["radial_setting_mm"],
+                cradle_angle_rad=math.radians(start["cradle_angle_deg"]),
+                point_radius_mm=r1 - side1 * depth1 * math.tan(a),
+                blade_angle_rad=a,
+                side=side1,
+                cone_distance_mm=am,
+            ).sin_pressure
+            - target
+        )
+
+    a = math.radians(alpha)
+    a = brentq(miss, a - 0.1, a + 0.1, xtol=1e-14)
+    chosen["blade_pressure_angle_deg"] = math.degrees(a)
+    chosen["cutter_point_radius_mm"] = r1 - side1 * depth1 * math.tan(a)
+    return chosen
 
 
 _SCALES = np.array([1.0, 0.01, 1.0, 1.0, 0.01, 0.01])  # mm, rad, mm, mm, c1 and c2 (x c1)
@@ -762,7 +814,7 @@ def synthesize_pinion_flank(
                 first * 100.0,
                 [
                     (local.lag_curvature - goal[0]) / lag_target,
-                    math.radians(local.path_angle_deg - goal[1]) * 10.0,
+                    math.radians(_path_difference_deg(local.path_angle_deg, goal[1])) * 10.0,
                     local.ellipse_form * goal[2] ** 2 / 4.0 - 1.0,
                 ],
             ]
@@ -783,7 +835,10 @@ def synthesize_pinion_flank(
     begin = np.array(
         [local0.lag_curvature, local0.path_angle_deg, min(local0.ellipse_major_axis_mm, 1e3)]
     )
-    end = np.array([lag_target, targets.path_angle_deg, targets.ellipse_major_axis_mm])
+    # a path is a direction (mod 180 deg): go the shorter way round (through +/-90 deg, the
+    # profile direction, rather than through 0, along the root line, out of reach)
+    path_end = targets.path_angle_deg - 180.0 * round((targets.path_angle_deg - begin[1]) / 180.0)
+    end = np.array([lag_target, path_end, targets.ellipse_major_axis_mm])
     for t in (0.25, 0.5, 0.75, 1.0):
         goal = begin + t * (end - begin)
         fit = least_squares(
@@ -830,6 +885,12 @@ def synthesize_pinion_flank(
     return spec, report
 
 
+def _path_difference_deg(a: float, b: float) -> float:
+    """a - b for directions (mod 180 deg), in [-90, 90]."""
+    d = a - b
+    return d - 180.0 * round(d / 180.0)
+
+
 def _tip_on_root(spec, flank: str, blank: Blank):
     """The same cone with its tip moved along the cutter axis onto the root line at the mean
     cone distance (a straight blade: the generated flank is unchanged, only how deep the blade
@@ -858,7 +919,8 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
     where = f"synthesis.{targets.side}"
     misses = {
         "path_angle_deg": (
-            abs(report.path_angle_deg - targets.path_angle_deg) / TOLERANCE["path_deg"],
+            abs(_path_difference_deg(report.path_angle_deg, targets.path_angle_deg))
+            / TOLERANCE["path_deg"],
             targets.path_angle_deg,
             f"{report.path_angle_deg:.3f} deg",
         ),
