@@ -19,8 +19,40 @@ sin(gamma_2): the cradle is the crown gear. r_c: ``[synthesis] gear_cutter_radiu
 the standard cutter radius (Gleason's face-mill diameters 1.1 to 18 in) nearest to A_m, an
 assumption of this code, not a standard's rule. W: pi m_mn / 2 (equal thickness) or, when the
 pair gives ``mean_normal_chordal_thickness_mm``, pi m_mn minus the gear's (chordal read as
-circular: the two differ by about s^3 / (6 d^2), well below 1 um here). Tapered depth is not
-supported here yet (a :class:`NotAvailableError`).
+circular: the two differ by about s^3 / (6 d^2), well below 1 um here).
+
+**Tapered depth** (dedendum angle delta = gamma_2 - gamma_R > 0): machine root angle = root
+angle gamma_R, blank offset 0, machine centre to back 0, sliding base b_m cos(delta) - A_m
+sin(delta) (the root line in the tip plane, the pitch apex on the cradle axis: the blade tips
+sweep the root cone along the whole face), ratio of roll c1 = sin(gamma_2) / cos(delta): the
+work's pitch cone rolls without slip on the *cradle's pitch cone*, of half angle 90 deg -
+delta about the cradle axis, apex at the pitch apex (:class:`CradleCone`), the instantaneous
+axis the work's pitch generatrix nearest the cradle (x_m at centre roll). The two pitch cones
+are developable and roll on each other, so the gear flank's pitch line is the image, by that
+rolling isometry, of the curve where the blade's cone meets the cradle's pitch cone (each
+point of that curve is cut when it passes the instantaneous axis, where the relative velocity
+vanishes). In the common development (cone distance rho, polar angle psi cos(delta) on the
+cradle cone, theta sin(gamma_2) on the gear's) the spiral angle of a flank is the angle of
+that curve to the generatrix, and its pressure angle the angle between the blade cone's normal
+and the cradle cone's tangent plane there (:func:`pitch_line_point`, closed form). The tool is
+then solved (:func:`gear_tool`, Newton with complex-step Jacobian, from the uniform formulas
+with M projected on the tip plane) for radial setting, cradle angle, both point radii and both
+blade angles (and the cone distances of the two ends of the slot's normal), so that at the
+mean point, in the development:
+
+* the pressure angle of each flank at the cone distance A_m is the blank's;
+* the slot's normal -- the segment between the two pitch lines that makes equal angles with
+  both (their common normal where they are parallel; with tapered depth the slot widens toward
+  the heel, about 2 tan(alpha) sin(delta) cos(beta) per mm along it, so no segment is normal to
+  both) -- has length W and its midpoint at (A_m, 0): on the generatrix of centre roll;
+* the slot's centre line, the locus of those midpoints, has the spiral angle beta there (its
+  direction from the two lines' tangents and curvatures: d(chord . (t1 + t2)) = 0 gives the
+  ends' speeds);
+* the cutter axis lies r_c from M's projection on the tip plane, (A_m cos(delta), 0) (the
+  one-parameter family of cutters that meet the other conditions, as r_c is for uniform depth).
+
+For delta = 0 the cradle cone is the pitch plane, the lines are the concentric circles above
+and the solution is the closed form (a test checks it to 1e-9).
 
 **Pinion by local synthesis (Litvin; Litvin and Zhang, NASA CR-4342), per flank.** Chosen:
 cutter point radius, blade angle (and profile radius), machine root angle, machine centre to
@@ -50,7 +82,12 @@ patches at M (:func:`gearopt_plugins.face_milling_local.local_mesh`), all on the
 envelopes. The six equations are solved by Levenberg-Marquardt with finite-difference
 Jacobians, with the targets reached by continuation from the complementary settings (the
 gear's generating surface with the pinion's cutter radius), where the contact is already a
-point contact.
+point contact (the path direction, a direction mod 180 deg, taken the shorter way round).
+A tapered pinion is tilted by its own dedendum angle delta_1 (machine root angle = its root
+angle; start: sliding base b_m cos(delta_1) - A_m sin(delta_1), ratio of roll sin(gamma_1) /
+cos(delta_1)), and its default blade angle is the one that gives its flank the blank's
+pressure angle at its pitch point on its cradle's pitch cone (the gear's blade angle when
+delta_1 = 0).
 """
 
 from __future__ import annotations

@@ -227,6 +227,30 @@ def test_local_synthesis_closes_through_the_contact_engine(seed002, closed_loop,
     assert report.first_order_residual < 1e-8
 
 
+@pytest.fixture(scope="module")
+def closed_loop_tapered():
+    design = gearopt.load_design(SEED002_TAPERED)
+    opts = AnalysisOptions.from_conditions({}, design=design)
+    return design, contact_sides(meshed_pair(design, opts), opts)
+
+
+@pytest.mark.parametrize("side", ["drive", "coast"])
+def test_local_synthesis_closes_on_the_tapered_pair(closed_loop_tapered, side):
+    """The same closure on seed 002's pair with tapered depth (standard taper): each member
+    tilted by its dedendum angle, the gear from the blank, the pinion by local synthesis."""
+    design, sides = closed_loop_tapered
+    asked = tomllib.loads(SEED002_TAPERED.read_text())["synthesis"]
+    path = asked.get(side, {}).get("path_angle_deg", asked["path_angle_deg"])
+    tca = sides[side]
+    assert np.hypot(*tca.center_offset_mm) < 0.5
+    assert abs(tca.path_angle_deg - path) < 2.0
+    assert abs(tca.ellipse_major_axis_mm / asked["ellipse_major_axis_mm"] - 1.0) < 0.10
+    assert abs(tca.te_peak_to_peak_arcsec / abs(asked["te_level_arcsec"]) - 1.0) < 0.10
+    assert not tca.edge_contact
+    report = {r.targets.side: r for r in design.machine.synthesis}[side]
+    assert report.first_order_residual < 1e-8
+
+
 def test_synthesised_pinion_has_the_asked_backlash(seed002, closed_loop):
     """Both pinion flanks sit in one assembly: the circumferential backlash is the asked
     0.1 mm where a side's contact is at its M, plus the two parabolic TEs elsewhere (each at
