@@ -19,8 +19,40 @@ sin(gamma_2): the cradle is the crown gear. r_c: ``[synthesis] gear_cutter_radiu
 the standard cutter radius (Gleason's face-mill diameters 1.1 to 18 in) nearest to A_m, an
 assumption of this code, not a standard's rule. W: pi m_mn / 2 (equal thickness) or, when the
 pair gives ``mean_normal_chordal_thickness_mm``, pi m_mn minus the gear's (chordal read as
-circular: the two differ by about s^3 / (6 d^2), well below 1 um here). Tapered depth is not
-supported here yet (a :class:`NotAvailableError`).
+circular: the two differ by about s^3 / (6 d^2), well below 1 um here).
+
+**Tapered depth** (dedendum angle delta = gamma_2 - gamma_R > 0): machine root angle = root
+angle gamma_R, blank offset 0, machine centre to back 0, sliding base b_m cos(delta) - A_m
+sin(delta) (the root line in the tip plane, the pitch apex on the cradle axis: the blade tips
+sweep the root cone along the whole face), ratio of roll c1 = sin(gamma_2) / cos(delta): the
+work's pitch cone rolls without slip on the *cradle's pitch cone*, of half angle 90 deg -
+delta about the cradle axis, apex at the pitch apex (:class:`CradleCone`), the instantaneous
+axis the work's pitch generatrix nearest the cradle (x_m at centre roll). The two pitch cones
+are developable and roll on each other, so the gear flank's pitch line is the image, by that
+rolling isometry, of the curve where the blade's cone meets the cradle's pitch cone (each
+point of that curve is cut when it passes the instantaneous axis, where the relative velocity
+vanishes). In the common development (cone distance rho, polar angle psi cos(delta) on the
+cradle cone, theta sin(gamma_2) on the gear's) the spiral angle of a flank is the angle of
+that curve to the generatrix, and its pressure angle the angle between the blade cone's normal
+and the cradle cone's tangent plane there (:func:`pitch_line_point`, closed form). The tool is
+then solved (:func:`gear_tool`, Newton with complex-step Jacobian, from the uniform formulas
+with M projected on the tip plane) for radial setting, cradle angle, both point radii and both
+blade angles (and the cone distances of the two ends of the slot's normal), so that at the
+mean point, in the development:
+
+* the pressure angle of each flank at the cone distance A_m is the blank's;
+* the slot's normal -- the segment between the two pitch lines that makes equal angles with
+  both (their common normal where they are parallel; with tapered depth the slot widens toward
+  the heel, about 2 tan(alpha) sin(delta) cos(beta) per mm along it, so no segment is normal to
+  both) -- has length W and its midpoint at (A_m, 0): on the generatrix of centre roll;
+* the slot's centre line, the locus of those midpoints, has the spiral angle beta there (its
+  direction from the two lines' tangents and curvatures: d(chord . (t1 + t2)) = 0 gives the
+  ends' speeds);
+* the cutter axis lies r_c from M's projection on the tip plane, (A_m cos(delta), 0) (the
+  one-parameter family of cutters that meet the other conditions, as r_c is for uniform depth).
+
+For delta = 0 the cradle cone is the pitch plane, the lines are the concentric circles above
+and the solution is the closed form (a test checks it to 1e-9).
 
 **Pinion by local synthesis (Litvin; Litvin and Zhang, NASA CR-4342), per flank.** Chosen:
 cutter point radius, blade angle (and profile radius), machine root angle, machine centre to
@@ -50,7 +82,12 @@ patches at M (:func:`gearopt_plugins.face_milling_local.local_mesh`), all on the
 envelopes. The six equations are solved by Levenberg-Marquardt with finite-difference
 Jacobians, with the targets reached by continuation from the complementary settings (the
 gear's generating surface with the pinion's cutter radius), where the contact is already a
-point contact.
+point contact (the path direction, a direction mod 180 deg, taken the shorter way round).
+A tapered pinion is tilted by its own dedendum angle delta_1 (machine root angle = its root
+angle; start: sliding base b_m cos(delta_1) - A_m sin(delta_1), ratio of roll sin(gamma_1) /
+cos(delta_1)), and its default blade angle is the one that gives its flank the blank's
+pressure angle at its pitch point on its cradle's pitch cone (the gear's blade angle when
+delta_1 = 0).
 """
 
 from __future__ import annotations
@@ -66,7 +103,7 @@ from scipy.optimize import brentq, least_squares, root
 from gearopt.blank import Blank
 from gearopt.contact import Placement
 from gearopt.design import PairData
-from gearopt.errors import DesignError, NotAvailableError, SettingsError
+from gearopt.errors import DesignError, SettingsError
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.face_milling_family import FaceMillingFamily
@@ -239,16 +276,6 @@ def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, dict]:
 # --- the gear from its blank ---------------------------------------------------------------------
 
 
-def _uniform(blank: Blank) -> None:
-    for k, member in enumerate(("pinion", "gear")):
-        if abs(blank.root_angle_deg[k] - blank.pitch_angle_deg[k]) > 1e-9:
-            raise NotAvailableError(
-                "pair.root_angle_deg",
-                blank.root_angle_deg,
-                f"settings from the blank need uniform depth for now ({member} is tapered)",
-            )
-
-
 def default_cutter_radius_mm(blank: Blank) -> float:
     """The standard cutter radius nearest to the mean cone distance."""
     radii = np.array(STANDARD_CUTTER_RADII_IN) * 25.4
@@ -263,38 +290,236 @@ def slot_width_mm(pair: PairData) -> float:
     return pitch / 2.0 if thickness is None else pitch - thickness[1]
 
 
+@dataclass(frozen=True, kw_only=True)
+class CradleCone:
+    """The cradle's pitch cone of a member cut with machine root angle = root angle (module
+    docstring): apex on the cradle axis at ``z_m = apex_z_mm`` (minus the sliding base), half
+    angle 90 deg - ``dedendum_angle_rad`` about the cradle axis, opening toward the cradle.
+    A point of cone distance rho and azimuth psi (from x_m) is
+    ``(rho cos(delta) cos(psi), rho cos(delta) sin(psi), apex_z - rho sin(delta))``; its
+    development is the point of polar coordinates ``(rho, psi cos(delta))``."""
+
+    dedendum_angle_rad: float
+    apex_z_mm: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class PitchLinePoint:
+    """A blade cone's pitch line (its intersection with the cradle's pitch cone) at one cone
+    distance, developed: ``point`` (2,) in the plane, ``tangent`` (2,) unit, toward the heel,
+    ``sin_pressure`` the sine of the angle between the blade's normal and the cone's tangent
+    plane (the flank's pressure angle there). Arrays may be complex (complex-step
+    derivatives)."""
+
+    point: np.ndarray
+    tangent: np.ndarray
+    sin_pressure: Any
+
+
+def pitch_line_point(
+    cone: CradleCone,
+    *,
+    radial_setting_mm,
+    cradle_angle_rad,
+    point_radius_mm,
+    blade_angle_rad,
+    side: float,
+    cone_distance_mm,
+    branch: float = 1.0,
+) -> PitchLinePoint:
+    """The point of the blade cone (``side`` +1 outside blade, -1 inside; the edge's radius
+    ``r_p - side z tan(alpha)`` at height ``z <= 0`` below the tip plane) on the cradle's pitch
+    cone at a cone distance, its azimuth ``psi = q - branch acos(...)`` (``branch`` +1: the
+    intersection on the cradle-axis side of the cutter centre, the one near ``psi = 0`` for
+    q > 0). Complex-safe in every length and angle (no comparisons on them)."""
+    d = cone.dedendum_angle_rad
+    cd, sd = math.cos(d), math.sin(d)
+    rho = cone_distance_mm
+    sr, q = radial_setting_mm, cradle_angle_rad
+    z = cone.apex_z_mm - rho * sd
+    ta = np.tan(blade_angle_rad)
+    big_r = point_radius_mm - side * z * ta
+    k = (rho**2 * cd**2 + sr**2 - big_r**2) / (2.0 * rho * cd * sr)
+    psi = q - branch * np.arccos(k)
+    cp, sp = np.cos(psi), np.sin(psi)
+    # the blade's normal n (not oriented) at the point, the cone's normal nc, its generatrix g
+    ct = (rho * cd * cp - sr * np.cos(q)) / big_r
+    st = (rho * cd * sp - sr * np.sin(q)) / big_r
+    ca, sa = np.cos(blade_angle_rad), np.sin(blade_angle_rad)
+    n = np.array([ca * ct, ca * st, side * sa])
+    nc = np.array([sd * cp, sd * sp, cd + 0.0 * cp])
+    g = np.array([cd * cp, cd * sp, -sd + 0.0 * cp])
+    e_psi = np.array([-sp, cp, 0.0 * cp])
+    t = np.cross(nc, n)
+    t_g, t_psi = t @ g, t @ e_psi
+    orient = 1.0 if np.real(t_g) > 0.0 else -1.0
+    t_g, t_psi = orient * t_g, orient * t_psi
+    norm = np.sqrt(t_g**2 + t_psi**2)
+    phi = psi * cd
+    cf, sf = np.cos(phi), np.sin(phi)
+    return PitchLinePoint(
+        point=rho * np.array([cf, sf]),
+        tangent=np.array([t_g * cf - t_psi * sf, t_g * sf + t_psi * cf]) / norm,
+        sin_pressure=side * (n @ nc),
+    )
+
+
+#: unknowns of the gear's tool: radial setting, cradle angle, point radii (outside, inside
+#: blade), blade angles (outside, inside), the cone distances of the slot's normal's ends
+_GEAR_STEP = np.array([5.0, 0.05, 2.0, 2.0, 0.02, 0.02, 2.0, 2.0])
+#: cone-distance step (mm) of the central differences of a pitch line's tangent
+_FD_STEP_MM = 0.01
+
+
+def gear_tool(
+    *,
+    cone: CradleCone,
+    mean_cone_distance_mm: float,
+    spiral_angle_rad: float,
+    pressure_angle_rad: float,
+    slot_width_mm: float,
+    cutter_radius_mm: float,
+) -> dict:
+    """The gear's spread-blade tool from the blank (module docstring): ``radial_setting_mm``,
+    ``cradle_angle_rad``, ``point_radius_mm`` and ``blade_angle_rad`` ``(outside, inside)``,
+    and the developed ends of the slot's normal at the mean point (``ends``). Solved by Newton
+    (complex-step Jacobian) from the uniform-depth formulas, exact for delta = 0."""
+    am, beta, alpha, width, rc = (
+        mean_cone_distance_mm,
+        spiral_angle_rad,
+        pressure_angle_rad,
+        slot_width_mm,
+        cutter_radius_mm,
+    )
+    d = cone.dedendum_angle_rad
+    mean_xy = np.array([am * math.cos(d), 0.0])  # the mean pitch point, projected on z_m = 0
+    depth = -(cone.apex_z_mm - am * math.sin(d))  # its depth below the tip plane
+    centre = mean_xy + rc * np.array([-math.sin(beta), math.cos(beta)])
+    reach = depth * math.tan(alpha)
+    toward = np.array([math.sin(beta), -math.cos(beta)])  # from the cutter centre outward at M
+    ends0 = [np.array([am, 0.0]) + side * 0.5 * width * toward for side in (1.0, -1.0)]
+    x0 = np.array(
+        [
+            math.hypot(*centre),
+            math.atan2(centre[1], centre[0]),
+            rc + 0.5 * width - reach,
+            rc - 0.5 * width + reach,
+            alpha,
+            alpha,
+            math.hypot(*ends0[0]),
+            math.hypot(*ends0[1]),
+        ]
+    )
+    sides = (1.0, -1.0)
+    branch = 1.0 if x0[1] > 0.0 else -1.0
+
+    def line(x, k, rho):
+        return pitch_line_point(
+            cone,
+            radial_setting_mm=x[0],
+            cradle_angle_rad=x[1],
+            point_radius_mm=x[2 + k],
+            blade_angle_rad=x[4 + k],
+            side=sides[k],
+            cone_distance_mm=rho,
+            branch=branch,
+        )
+
+    def jet(x, k, rho):
+        """Point, unit tangent and curvature vector dT/dsigma of a developed pitch line."""
+        lo, mid, hi = (line(x, k, rho + e) for e in (-_FD_STEP_MM, 0.0, _FD_STEP_MM))
+        dpoint = hi.point - lo.point
+        return mid.point, mid.tangent, (hi.tangent - lo.tangent) / np.sqrt(dpoint @ dpoint)
+
+    def residual(xs, idx):
+        rows = []
+        for x in xs:
+            (d1, t1, k1), (d2, t2, k2) = jet(x, 0, x[6]), jet(x, 1, x[7])
+            mid = 0.5 * (d1 + d2)
+            chord = d1 - d2
+            length = np.sqrt(chord @ chord)
+            bis = t1 + t2
+            # the centre line (the midpoints' locus) where the normal moves on: d(chord . bis)
+            # = 0 gives dsigma1 : dsigma2 = (t2 . bis - chord . k2) : (t1 . bis + chord . k1)
+            centre = t1 * (t2 @ bis - chord @ k2) + t2 * (t1 @ bis + chord @ k1)
+            centre = centre / np.sqrt(centre @ centre)
+            at_am = [line(x, k, am) for k in (0, 1)]  # pressure angles at the mean cone distance
+            cx, cy = x[0] * np.cos(x[1]) - mean_xy[0], x[0] * np.sin(x[1])
+            rows.append(
+                [
+                    (mid[0] - am) / am,
+                    mid[1] / am,
+                    (length - width) / am,
+                    chord @ bis / am,  # the normal makes equal angles with both lines
+                    centre[1] * math.cos(beta) - centre[0] * math.sin(beta),
+                    at_am[0].sin_pressure - math.sin(alpha),
+                    at_am[1].sin_pressure - math.sin(alpha),
+                    (np.sqrt(cx * cx + cy * cy) - rc) / am,
+                ]
+            )
+        return np.array(rows)
+
+    sol = newton(residual, x0[None], tol=1e-15, max_iter=40, max_step=_GEAR_STEP)
+    if not sol.all_converged or np.any(np.isnan(sol.x)):
+        raise SettingsError(
+            "synthesis.gear_cutter_radius_mm",
+            rc,
+            "no spread-blade tool meets the blank's spiral angle, pressure angle and slot width "
+            "at the mean point with this cutter radius (Newton did not converge)",
+        )
+    x = sol.x[0]
+    out, inn = line(x, 0, x[6]), line(x, 1, x[7])
+    return {
+        "radial_setting_mm": float(x[0]),
+        "cradle_angle_rad": float(x[1]),
+        "point_radius_mm": (float(x[2]), float(x[3])),
+        "blade_angle_rad": (float(x[4]), float(x[5])),
+        "ends": (np.real(out.point), np.real(inn.point)),
+    }
+
+
 def gear_flanks_from_blank(pair: PairData, cutter_radius_mm: float | None = None) -> dict:
     """The gear's ``{flank: {key: value}}`` settings (module docstring)."""
     blank = pair.blank
-    _uniform(blank)
     rc = default_cutter_radius_mm(blank) if cutter_radius_mm is None else cutter_radius_mm
-    beta = math.radians(blank.mean_spiral_angle_deg)
     am = blank.mean_cone_distance_mm
-    cx, cy = am - rc * math.sin(beta), rc * math.cos(beta)
     width = slot_width_mm(pair)
     b = blank.mean_dedendum_mm[1]
-    alpha = blank.pressure_angle_deg
-    reach = b * math.tan(math.radians(alpha))
+    alpha = math.radians(blank.pressure_angle_deg)
+    gamma = math.radians(blank.pitch_angle_deg[1])
+    delta = math.radians(blank.dedendum_angle_deg[1])
+    sliding = b * math.cos(delta) - am * math.sin(delta)
+    reach = b * math.cos(delta) * math.tan(alpha)
     if rc - width / 2.0 - reach <= 0.0:
         raise DesignError(
             "synthesis.gear_cutter_radius_mm",
             rc,
             "too small for the slot: the inside blade's point radius would not be positive",
         )
-    gamma = math.radians(blank.pitch_angle_deg[1])
+    tool = gear_tool(
+        cone=CradleCone(dedendum_angle_rad=delta, apex_z_mm=-sliding),
+        mean_cone_distance_mm=am,
+        spiral_angle_rad=math.radians(blank.mean_spiral_angle_deg),
+        pressure_angle_rad=alpha,
+        slot_width_mm=width,
+        cutter_radius_mm=rc,
+    )
     common = dict(
-        blade_pressure_angle_deg=alpha,
-        radial_setting_mm=math.hypot(cx, cy),
-        cradle_angle_deg=math.degrees(math.atan2(cy, cx)),
+        radial_setting_mm=tool["radial_setting_mm"],
+        cradle_angle_deg=math.degrees(tool["cradle_angle_rad"]),
         machine_root_angle_deg=blank.root_angle_deg[1],
         machine_center_to_back_mm=0.0,
-        sliding_base_mm=b,
+        sliding_base_mm=sliding,
         blank_offset_mm=0.0,
-        ratio_of_roll=math.sin(gamma),
+        ratio_of_roll=math.sin(gamma) / math.cos(delta),
     )
     return {
-        "concave": {**common, "cutter_point_radius_mm": rc + width / 2.0 - reach},
-        "convex": {**common, "cutter_point_radius_mm": rc - width / 2.0 + reach},
+        flank: {
+            **common,
+            "blade_pressure_angle_deg": math.degrees(tool["blade_angle_rad"][k]),
+            "cutter_point_radius_mm": tool["point_radius_mm"][k],
+        }
+        for k, flank in enumerate(("concave", "convex"))
     }
 
 
@@ -334,6 +559,9 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     frame = ToothFrame.from_blank(blank)
     s1 = frame.toe_mm + targets.mean_point_face_mm
     h1 = frame.root_mm + targets.mean_point_profile_mm
+    taper = blank.depth_taper(0)
+    if taper is not None:  # the pattern's profile coordinate is t (DepthTaper): h at s1
+        h1 = float(taper.height_mm(s1, h1))
     g1, g2 = (math.radians(a) for a in blank.pitch_angle_deg)
     big_l1 = s1 * math.cos(g1) - h1 * math.sin(g1)
     big_r1 = s1 * math.sin(g1) + h1 * math.cos(g1)
@@ -408,59 +636,108 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     )
 
 
+def _pitch_depth_mm(blank: Blank, index: int) -> float:
+    """Depth of the member's mean pitch point below the tip plane when its root line lies in
+    it (machine root angle = root angle): b_m cos(delta)."""
+    return blank.mean_dedendum_mm[index] * math.cos(math.radians(blank.dedendum_angle_deg[index]))
+
+
+def _blade_radius_at_pitch_mm(flank_settings: Mapping, flank: str, depth_mm: float) -> float:
+    """A blade's radius at the depth of the pitch point (outside blade: concave flank)."""
+    side = 1.0 if flank == "concave" else -1.0
+    alpha = math.radians(flank_settings["blade_pressure_angle_deg"])
+    return flank_settings["cutter_point_radius_mm"] + side * depth_mm * math.tan(alpha)
+
+
 def pinion_start(pair: PairData, gear_flanks: dict, flank: str, chosen: Mapping) -> dict:
     """The complementary settings of a pinion flank with the chosen cutter: the gear's
-    generating surface seen from the pinion (same radial setting and cradle angle), the cutter
-    centre moved along the line to the gear flank's mean point so the chosen radius passes
-    through it (uniform depth)."""
+    generating surface seen from the pinion (the same cutter centre relative to the mean
+    pitch point projected on the tip plane), the centre moved along the line to the gear
+    flank's mean point so the chosen radius passes through it; the pinion tilted by its
+    chosen machine root angle: the root line in the tip plane at A_m (sliding base) and the
+    ratio of roll of rolling without slip on the cradle's pitch cone,
+    c1 = sin(gamma_1) / cos(gamma_1 - gamma_m)."""
     blank = pair.blank
+    am = blank.mean_cone_distance_mm
     gear_flank = "concave" if flank == "convex" else "convex"
     g = gear_flanks[gear_flank]
-    b1, b2 = blank.mean_dedendum_mm
-    alpha2 = math.radians(g["blade_pressure_angle_deg"])
-    side2 = 1.0 if gear_flank == "concave" else -1.0
-    r2 = g["cutter_point_radius_mm"] + side2 * b2 * math.tan(alpha2)  # at the pitch plane
+    r2 = _blade_radius_at_pitch_mm(g, gear_flank, _pitch_depth_mm(blank, 1))
     q2 = math.radians(g["cradle_angle_deg"])
     centre = g["radial_setting_mm"] * np.array([math.cos(q2), math.sin(q2)])
-    mean = np.array([blank.mean_cone_distance_mm, 0.0])
-    toward = (mean - centre) / np.linalg.norm(mean - centre)
+    delta2 = math.radians(blank.dedendum_angle_deg[1])
+    mean2 = np.array([am * math.cos(delta2), 0.0])
+    toward = (mean2 - centre) / np.linalg.norm(mean2 - centre)
+    gamma1 = math.radians(blank.pitch_angle_deg[0])
+    tilt = math.radians(chosen["machine_root_angle_deg"]) - gamma1  # -delta_1 at the root angle
+    b1 = blank.mean_dedendum_mm[0]
+    depth1 = b1 * math.cos(tilt)
+    mean1 = np.array([am * math.cos(tilt), 0.0])
+    r1 = _blade_radius_at_pitch_mm(chosen, flank, depth1)
     point = centre + r2 * toward
-    alpha1 = math.radians(chosen["blade_pressure_angle_deg"])
-    side1 = 1.0 if flank == "concave" else -1.0
-    r1 = chosen["cutter_point_radius_mm"] + side1 * b1 * math.tan(alpha1)
-    c1 = point - r1 * toward
+    c1 = point - r1 * toward + (mean1 - mean2)
     return dict(
         radial_setting_mm=float(np.hypot(*c1)),
         cradle_angle_deg=math.degrees(math.atan2(c1[1], c1[0])),
         blank_offset_mm=0.0,
-        sliding_base_mm=b1
+        sliding_base_mm=depth1
+        + am * math.sin(tilt)
         + chosen["machine_center_to_back_mm"]
         * math.sin(math.radians(chosen["machine_root_angle_deg"])),
-        ratio_of_roll=math.sin(math.radians(blank.pitch_angle_deg[0])),
+        ratio_of_roll=math.sin(gamma1) / math.cos(tilt),
         roll_c2=0.0,
     )
 
 
 def default_chosen(pair: PairData, gear_flanks: dict, flank: str) -> dict:
-    """Defaults of the chosen pinion inputs: the mating gear blade's angle, the gear radius
-    at the pitch plane made :data:`DEFAULT_RADIUS_MISMATCH` smaller (convex) or larger
-    (concave), machine root angle = root angle, machine centre to back 0."""
+    """Defaults of the chosen pinion inputs: the mating gear blade's angle (a tilted pinion:
+    the blade angle that gives the blank's pressure angle at its pitch point), the gear blade's
+    radius at its pitch point made :data:`DEFAULT_RADIUS_MISMATCH` smaller (convex) or larger
+    (concave) at the pinion's pitch point, machine root angle = root angle (the pinion tilted
+    by its dedendum angle), machine centre to back 0."""
     blank = pair.blank
     gear_flank = "concave" if flank == "convex" else "convex"
     g = gear_flanks[gear_flank]
     alpha = g["blade_pressure_angle_deg"]
-    ta = math.tan(math.radians(alpha))
-    side2 = 1.0 if gear_flank == "concave" else -1.0
-    r2 = g["cutter_point_radius_mm"] + side2 * blank.mean_dedendum_mm[1] * ta
+    r2 = _blade_radius_at_pitch_mm(g, gear_flank, _pitch_depth_mm(blank, 1))
     side1 = 1.0 if flank == "concave" else -1.0
     r1 = r2 * (1.0 + side1 * DEFAULT_RADIUS_MISMATCH)
-    return dict(
-        cutter_point_radius_mm=r1 - side1 * blank.mean_dedendum_mm[0] * ta,
+    depth1 = _pitch_depth_mm(blank, 0)
+    chosen = dict(
+        cutter_point_radius_mm=r1 - side1 * depth1 * math.tan(math.radians(alpha)),
         blade_pressure_angle_deg=alpha,
         blade_profile_radius_mm=math.inf,
         machine_root_angle_deg=blank.root_angle_deg[0],
         machine_center_to_back_mm=0.0,
     )
+    delta1 = math.radians(blank.dedendum_angle_deg[0])
+    if delta1 == 0.0:
+        return chosen
+    # tilted pinion: the blade angle that gives its flank the blank's pressure angle at its
+    # pitch point of A_m on its cradle's pitch cone (the complementary start's cutter centre)
+    start = pinion_start(pair, gear_flanks, flank, chosen)
+    am = blank.mean_cone_distance_mm
+    cone = CradleCone(dedendum_angle_rad=delta1, apex_z_mm=-start["sliding_base_mm"])
+    target = math.sin(math.radians(blank.pressure_angle_deg))
+
+    def miss(a):
+        return (
+            pitch_line_point(
+                cone,
+                radial_setting_mm=start["radial_setting_mm"],
+                cradle_angle_rad=math.radians(start["cradle_angle_deg"]),
+                point_radius_mm=r1 - side1 * depth1 * math.tan(a),
+                blade_angle_rad=a,
+                side=side1,
+                cone_distance_mm=am,
+            ).sin_pressure
+            - target
+        )
+
+    a = math.radians(alpha)
+    a = brentq(miss, a - 0.1, a + 0.1, xtol=1e-14)
+    chosen["blade_pressure_angle_deg"] = math.degrees(a)
+    chosen["cutter_point_radius_mm"] = r1 - side1 * depth1 * math.tan(a)
+    return chosen
 
 
 _SCALES = np.array([1.0, 0.01, 1.0, 1.0, 0.01, 0.01])  # mm, rad, mm, mm, c1 and c2 (x c1)
@@ -487,7 +764,6 @@ def synthesize_pinion_flank(
     other side touched at its M at pinion angle 0 (the report's ``gear_turn_rad``), so that
     both flanks sit in one assembly."""
     blank = pair.blank
-    _uniform(blank)
     gear_flank = "concave" if flank == "convex" else "convex"
     placement = Placement(shaft_angle_deg=pair.shaft_angle_deg)
     mean = _mean_point(pair, gear_specs[gear_flank], gear_flank, targets, placement)

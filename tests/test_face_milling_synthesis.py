@@ -9,18 +9,26 @@ import tomllib
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq, fsolve, minimize_scalar
 
 import gearopt
 from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_backlash
-from gearopt.design import parse_design
+from gearopt.design import Design, _pair_from_table, parse_design
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
 from gearopt.flank import FlankGrid
-from gearopt_plugins.face_milling import FaceMilling, _family
+from gearopt_plugins import face_milling_synthesis as fs
+from gearopt_plugins.face_milling import (
+    FaceMilling,
+    FaceMillingMachine,
+    FaceMillingMember,
+    _family,
+    _parse_flank,
+)
 
 from .conftest import STUDIES
 
 SEED002 = STUDIES / "seed002_pair.toml"
+SEED002_TAPERED = STUDIES / "seed002_pair_tapered.toml"
 
 
 @pytest.fixture(scope="module")
@@ -28,64 +36,113 @@ def seed002():
     return gearopt.load_design(SEED002)
 
 
-@pytest.fixture(scope="module")
-def gear_flanks(seed002):
-    return FaceMilling().generate_flanks(
-        seed002, member="gear", grid=FlankGrid(n_face=25, n_profile=13)
+def _gear_from_blank(path):
+    """A design whose gear has the settings from its blank (the pinion: a copy, unused)."""
+    pair = _pair_from_table(tomllib.loads(path.read_text())["pair"])
+    given = fs.gear_flanks_from_blank(pair)
+    gear = FaceMillingMember(
+        **{f: _parse_flank(given[f], f"gear.{f}", pair, "gear", f) for f in given}
     )
+    machine = FaceMillingMachine(pinion=gear, gear=gear)
+    return Design(pair=pair, model="face-milling", machine=machine)
 
 
-def _pitch_line_circle(fm, blank, member_index):
-    """The flank's line on the pitch cone (exact envelope points), developed into the plane
-    (polar angle x sin(gamma)) and fitted by a circle: ``(centre, radius, rms residual)``."""
-    s = blank.mean_cone_distance_mm + np.linspace(-8.0, 8.0, 17)
-    p = fm.surface.geometry_at(s, np.zeros_like(s))["point"]
-    gamma = math.radians(blank.pitch_angle_deg[member_index])
-    psi = np.unwrap(np.arctan2(p[:, 1], p[:, 0])) * math.sin(gamma)
-    x, y = s * np.cos(psi), s * np.sin(psi)
-    # Kasa fit: x^2 + y^2 = 2 a x + 2 b y + c
-    a, b, c = np.linalg.lstsq(
-        np.stack([2 * x, 2 * y, np.ones_like(x)], 1), x**2 + y**2, rcond=None
-    )[0]
-    radius = math.sqrt(c + a * a + b * b)
-    rms = float(np.sqrt(np.mean((np.hypot(x - a, y - b) - radius) ** 2)))
-    return np.array([a, b]), radius, rms
-
-
-def test_gear_from_blank_spiral_angle_and_slot_width_on_the_generated_gear(seed002, gear_flanks):
-    """Each flank's pitch line, developed, is a circle about one centre (spread blade); the
-    slot's centre line (the mean radius) has the blank's spiral angle at A_m within 0.01 deg
-    and the slot between the flanks is the blank's normal width (half the normal pitch) within
-    1 um, measured on the exact envelopes."""
-    blank = seed002.blank
-    fits = {f: _pitch_line_circle(fm, blank, 1) for f, fm in gear_flanks.items()}
-    for flank, (_, _, rms) in fits.items():
-        assert rms < 1e-6, flank
-    (c_v, r_v, _), (c_x, r_x, _) = fits["concave"], fits["convex"]
-    # the concave flank of tooth 0 is its slot's flank turned by whole pitches: turn it back
-    step = 2.0 * math.pi / blank.gear_teeth * math.sin(math.radians(blank.pitch_angle_deg[1]))
-    k = round((math.atan2(c_x[1], c_x[0]) - math.atan2(c_v[1], c_v[0])) / step)
-    rot = np.array(
-        [[math.cos(k * step), -math.sin(k * step)], [math.sin(k * step), math.cos(k * step)]]
+@pytest.fixture(scope="module", params=["uniform", "tapered"])
+def blank_gear(request):
+    """(design, generated gear flanks) of seed 002's pair, uniform and tapered depth."""
+    design = _gear_from_blank(SEED002 if request.param == "uniform" else SEED002_TAPERED)
+    flanks = FaceMilling().generate_flanks(
+        design, member="gear", grid=FlankGrid(n_face=25, n_profile=13)
     )
-    c_v = rot @ c_v
-    assert np.linalg.norm(c_v - c_x) < 1e-5
-    width = r_v - r_x
-    assert abs(width - 0.5 * math.pi * blank.mean_normal_module_mm) < 1e-3
-    r_m, centre = 0.5 * (r_v + r_x), 0.5 * (c_v + c_x)
+    return design, flanks
+
+
+def _developed(fm, blank, s, turn_rad=0.0):
+    """Points of the gear flank on its pitch cone at cone distances ``s`` (exact envelope),
+    developed into the plane (polar angle x sin(gamma), radius = cone distance) and turned
+    there by ``turn_rad``: ``(n, 2)``."""
+    s = np.atleast_1d(np.asarray(s, float))
+    taper = blank.depth_taper(1)
+    t = np.zeros_like(s) if taper is None else taper.profile_of(s, 0.0)
+    p = fm.surface.geometry_at(s, t)["point"]
+    psi = np.arctan2(p[:, 1], p[:, 0]) * math.sin(math.radians(blank.pitch_angle_deg[1]))
+    psi = psi + turn_rad
+    r = np.linalg.norm(p, axis=1)
+    return np.stack([r * np.cos(psi), r * np.sin(psi)], -1)
+
+
+def _slot_turn(flanks, blank):
+    """The developed turn that brings tooth 0's concave flank back to the convex flank's slot
+    (whole pitches; the concave line then lies on the convex line's -psi side, less than a
+    pitch away)."""
     am = blank.mean_cone_distance_mm
-    beta = math.degrees(math.asin((am**2 + r_m**2 - centre @ centre) / (2.0 * am * r_m)))
+    step = 2.0 * math.pi / blank.gear_teeth * math.sin(math.radians(blank.pitch_angle_deg[1]))
+    dv = _developed(flanks["concave"], blank, am)[0]
+    dx = _developed(flanks["convex"], blank, am)[0]
+    return -step * math.ceil((math.atan2(dv[1], dv[0]) - math.atan2(dx[1], dx[0])) / step)
+
+
+def _slot_normal(flanks, blank, turn_rad, centre_mm, step_mm=1e-3):
+    """The slot's normal whose midpoint lies at cone distance ``centre_mm``: the segment
+    between the two developed pitch lines that makes equal angles with both (their common
+    normal where they are parallel), found by Newton on the two ends' cone distances:
+    ``(concave end, convex end, concave tangent, convex tangent)``."""
+
+    def ends(x):
+        out = []
+        for flank, s, turn in (("concave", x[0], turn_rad), ("convex", x[1], 0.0)):
+            d = _developed(flanks[flank], blank, [s - step_mm, s, s + step_mm], turn)
+            out.append((d[1], (d[2] - d[0]) / np.linalg.norm(d[2] - d[0])))
+        return out
+
+    def equations(x):
+        (a, ta), (b, tb) = ends(x)
+        return [np.linalg.norm(0.5 * (a + b)) - centre_mm, (a - b) @ (ta + tb)]
+
+    half = 0.5 * blank.mean_normal_module_mm
+    x = fsolve(equations, [centre_mm + half, centre_mm - half], xtol=1e-12)
+    (a, ta), (b, tb) = ends(x)
+    return a, b, ta, tb
+
+
+def _signed_angle_deg(u, v):
+    return math.degrees(math.atan2(u[0] * v[1] - u[1] * v[0], u @ v))
+
+
+def test_gear_from_blank_spiral_angle_and_slot_width_on_the_generated_gear(blank_gear):
+    """The slot between the gear's two pitch lines, developed: its normal at the mean point
+    (the segment making equal angles with both lines, the common normal where they are
+    parallel) is the blank's slot width within 1 um; its midpoint lies on the generatrix of
+    centre roll (polar angle 0); the slot's centre line (the midpoints' locus) has the
+    blank's spiral angle at A_m within 0.01 deg. All on the exact envelopes."""
+    design, flanks = blank_gear
+    blank = design.blank
+    am = blank.mean_cone_distance_mm
+    turn = _slot_turn(flanks, blank)
+    a, b, _, _ = _slot_normal(flanks, blank, turn, am)
+    assert abs(np.linalg.norm(a - b) - fs.slot_width_mm(design.pair)) < 1e-3
+    mid = 0.5 * (a + b)
+    assert abs(math.atan2(mid[1], mid[0])) * am < 1e-3  # mm along the arc
+    step = 0.05
+    ahead = sum(_slot_normal(flanks, blank, turn, am + step)[:2]) / 2.0
+    behind = sum(_slot_normal(flanks, blank, turn, am - step)[:2]) / 2.0
+    beta = _signed_angle_deg(mid, ahead - behind)
     assert abs(beta - blank.mean_spiral_angle_deg) < 0.01
 
 
-def test_gear_from_blank_pressure_angles_at_the_mean_point(seed002, gear_flanks):
+def test_gear_from_blank_pressure_angles_at_the_mean_point(blank_gear):
     """The flank normal's angle to the pitch cone's tangent plane at the pitch point of A_m:
     the blank's 25 deg on both flanks within 0.01 deg."""
-    blank = seed002.blank
+    design, flanks = blank_gear
+    blank = design.blank
     gamma = math.radians(blank.pitch_angle_deg[1])
-    for flank, fm in gear_flanks.items():
-        geo = fm.surface.geometry_at(np.array(blank.mean_cone_distance_mm), np.array(0.0))
+    am = blank.mean_cone_distance_mm
+    taper = blank.depth_taper(1)
+    t = 0.0 if taper is None else float(taper.profile_of(am, 0.0))
+    for flank, fm in flanks.items():
+        geo = fm.surface.geometry_at(np.array(am), np.array(t))
         p, n = geo["point"], geo["normal"]
+        assert abs(math.hypot(p[0], p[1]) - am * math.sin(gamma)) < 1e-9  # on the pitch cone
         theta = math.atan2(p[1], p[0])
         cone = np.array(
             [math.cos(gamma) * math.cos(theta), math.cos(gamma) * math.sin(theta), -math.sin(gamma)]
@@ -94,14 +151,38 @@ def test_gear_from_blank_pressure_angles_at_the_mean_point(seed002, gear_flanks)
         assert abs(alpha - blank.pressure_angle_deg) < 0.01, (flank, alpha)
 
 
+def test_gear_from_blank_reduces_to_the_uniform_formulas():
+    """Uniform depth (delta = 0): the solved tool is the closed form of the module docstring
+    (the cutter circle of radius r_c through M tangent at beta, blades W/2 either side)."""
+    design = gearopt.load_design(SEED002)
+    blank = design.blank
+    given = fs.gear_flanks_from_blank(design.pair)
+    rc = fs.default_cutter_radius_mm(blank)
+    beta = math.radians(blank.mean_spiral_angle_deg)
+    am = blank.mean_cone_distance_mm
+    cx, cy = am - rc * math.sin(beta), rc * math.cos(beta)
+    width = fs.slot_width_mm(design.pair)
+    reach = blank.mean_dedendum_mm[1] * math.tan(math.radians(blank.pressure_angle_deg))
+    for flank, side in (("concave", 1.0), ("convex", -1.0)):
+        g = given[flank]
+        assert abs(g["radial_setting_mm"] - math.hypot(cx, cy)) < 1e-9
+        assert abs(g["cradle_angle_deg"] - math.degrees(math.atan2(cy, cx))) < 1e-9
+        assert abs(g["cutter_point_radius_mm"] - (rc + side * (width / 2.0 - reach))) < 1e-9
+        assert abs(g["blade_pressure_angle_deg"] - blank.pressure_angle_deg) < 1e-9
+        assert abs(g["sliding_base_mm"] - blank.mean_dedendum_mm[1]) < 1e-9
+        assert abs(g["ratio_of_roll"] - math.sin(math.radians(blank.pitch_angle_deg[1]))) < 1e-12
+
+
 @pytest.mark.parametrize("flank", ["concave", "convex"])
-def test_gear_from_blank_cuts_the_dedendum_deep(seed002, flank):
+def test_gear_from_blank_cuts_the_dedendum_deep(blank_gear, flank):
     """The blade tips' sweep (u = 0, every cutter angle and roll) reaches down to the root
-    cone at the mean cone distance and not below: its lowest height there is -b within 1 um."""
-    blank = seed002.blank
+    cone at the mean cone distance and not below: its lowest height there (normal to the
+    pitch generatrix) is -b_m within 1 um."""
+    design, _ = blank_gear
+    blank = design.blank
     gamma = math.radians(blank.pitch_angle_deg[1])
     am = blank.mean_cone_distance_mm
-    family = _family(seed002, "gear", (flank,))
+    family = _family(design, "gear", (flank,))
     start = family.pitch_row(np.array([am]))[0, 0]
 
     def coords(theta, phi):
@@ -143,6 +224,30 @@ def test_local_synthesis_closes_through_the_contact_engine(seed002, closed_loop,
     assert abs(tca.te_peak_to_peak_arcsec / abs(asked["te_level_arcsec"]) - 1.0) < 0.10
     assert not tca.edge_contact
     report = {r.targets.side: r for r in seed002.machine.synthesis}[side]
+    assert report.first_order_residual < 1e-8
+
+
+@pytest.fixture(scope="module")
+def closed_loop_tapered():
+    design = gearopt.load_design(SEED002_TAPERED)
+    opts = AnalysisOptions.from_conditions({}, design=design)
+    return design, contact_sides(meshed_pair(design, opts), opts)
+
+
+@pytest.mark.parametrize("side", ["drive", "coast"])
+def test_local_synthesis_closes_on_the_tapered_pair(closed_loop_tapered, side):
+    """The same closure on seed 002's pair with tapered depth (standard taper): each member
+    tilted by its dedendum angle, the gear from the blank, the pinion by local synthesis."""
+    design, sides = closed_loop_tapered
+    asked = tomllib.loads(SEED002_TAPERED.read_text())["synthesis"]
+    path = asked.get(side, {}).get("path_angle_deg", asked["path_angle_deg"])
+    tca = sides[side]
+    assert np.hypot(*tca.center_offset_mm) < 0.5
+    assert abs(tca.path_angle_deg - path) < 2.0
+    assert abs(tca.ellipse_major_axis_mm / asked["ellipse_major_axis_mm"] - 1.0) < 0.10
+    assert abs(tca.te_peak_to_peak_arcsec / abs(asked["te_level_arcsec"]) - 1.0) < 0.10
+    assert not tca.edge_contact
+    report = {r.targets.side: r for r in design.machine.synthesis}[side]
     assert report.first_order_residual < 1e-8
 
 
