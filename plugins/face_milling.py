@@ -545,7 +545,11 @@ class FaceMilling(BaseMachineModel):
             raise DesignError("te_target", rule="the design has no [te_target] table")
         if side not in SIDE_FLANKS:
             raise DesignError("side", side, f"must be one of {sorted(SIDE_FLANKS)}")
-        result = inverse_tca(design, design.te_target, side=side)
+        mean = None
+        for report in design.machine.synthesis:  # M of the local synthesis, when there is one
+            if report.targets.side == side:
+                mean = (report.targets.mean_point_face_mm, report.targets.mean_point_profile_mm)
+        result = inverse_tca(design, design.te_target, side=side, mean_point_mm=mean)
         table = machine_table(design.machine)
         flank = SIDE_FLANKS[side][0]
         values = table["pinion"][flank]
@@ -564,6 +568,8 @@ class FaceMilling(BaseMachineModel):
             "iterations": result.iterations,
             "positions": len(result.u_rad),
             "fit_residual_arcsec": result.fit_residual_arcsec,
+            "contact_interval_deg": [math.degrees(v) for v in result.interval_rad],
+            "contact_ratio": result.contact_ratio(design.pair.pinion_teeth),
             "work_angle_range_deg": [
                 math.degrees(float(result.phi_p_rad.min())),
                 math.degrees(float(result.phi_p_rad.max())),

@@ -63,6 +63,10 @@ class InverseTCA:
         Largest |phi_c - fit| over the data, arcsec of cradle.
     u_rad
         The pinion rotations (direction of motion) of the data.
+    interval_rad
+        ``(start, end)``: the pinion rotations (from phi1_0, direction of motion) where the
+        contact of the fitted pair, continued beyond the data, leaves either blank (face width,
+        root and face cones): the contact ratio is ``(end - start)`` over the angular pitch.
     """
 
     roll: tuple[float, ...]
@@ -73,6 +77,11 @@ class InverseTCA:
     phi_c_rad: NDArray
     fit_residual_arcsec: float
     u_rad: NDArray
+    interval_rad: tuple[float, float]
+
+    def contact_ratio(self, pinion_teeth: int) -> float:
+        """The interval over the angular pitch."""
+        return (self.interval_rad[1] - self.interval_rad[0]) * pinion_teeth / (2.0 * math.pi)
 
 
 def _rot(angle):
@@ -97,7 +106,7 @@ def _poly(coef, x):
 class _Pair:
     """The pinion tool, the gear, their placement and the reference contact."""
 
-    def __init__(self, design: Design, side: str) -> None:
+    def __init__(self, design: Design, side: str, mean_point_mm=None) -> None:
         from gearopt_plugins.face_milling import _family
 
         pinion_flank, gear_flank = SIDE_FLANKS[side]
@@ -112,7 +121,8 @@ class _Pair:
         spec = design.machine.pinion.flank(pinion_flank)
         self.base_roll = np.array([0.0, *spec.roll])
         self.zero = np.zeros(1, int)
-        self._reference(design, blank)
+        self.blank = blank
+        self._reference(design, blank, mean_point_mm)
 
     def pinion_point(self, q, cradle):
         geo = self.pinion.geometry(q, np.zeros(q.shape[:-1], int), cradle=cradle)
@@ -126,6 +136,25 @@ class _Pair:
         geo = self.gear.geometry(q, np.zeros(q.shape[:-1], int))
         f = self.gear.axial_radial_meshing(q, np.zeros(q.shape[:-1], int))[2]
         return _mirror(geo["point"], self.hand2), _mirror(geo["normal"], self.hand2), f
+
+    def margin_mm(self, x) -> NDArray:
+        """How far inside both blanks the contact points of unknowns ``x`` ``(N, 7)`` lie
+        (mm; negative outside): the least distance to the toe, heel, root and face lines in
+        each member's axial plane."""
+        out = []
+        for index, (family, q) in enumerate(((self.pinion, x[:, 0:3]), (self.gear, x[:, 4:7]))):
+            big_l, big_r, _ = family.axial_radial_meshing(q, np.zeros(len(q), int))
+            g = math.radians(self.blank.pitch_angle_deg[index])
+            s = big_l * math.cos(g) + big_r * math.sin(g)
+            h = -big_l * math.sin(g) + big_r * math.cos(g)
+            b = self.blank
+            out += [
+                s - b.inner_cone_distance_mm,
+                b.outer_cone_distance_mm - s,
+                h + b.dedendum_at_mm(index, s),
+                b.addendum_at_mm(index, s) - h,
+            ]
+        return np.min(np.stack(out), axis=0)
 
     def equations(self, x, phi1, psi, roll_slope=None):
         """Residuals ``(N, 7)`` of the seven equations at unknowns ``x`` ``(N, 7)``:
@@ -152,13 +181,15 @@ class _Pair:
             axis=-1,
         )
 
-    def _reference(self, design, blank) -> None:
-        """The contact at the pinion point generated at centre roll nearest the flank centre:
-        (phi1_0, psi_0), the sense of rotation, the starting unknowns."""
+    def _reference(self, design, blank, mean_point_mm) -> None:
+        """The contact at the pinion point generated at centre roll nearest M (pattern
+        coordinates; default the flank centre): (phi1_0, psi_0), the sense of rotation, the
+        starting unknowns."""
         frame = ToothFrame.from_blank(blank)
         g1 = math.radians(blank.pitch_angle_deg[0])
-        s1 = frame.toe_mm + frame.centre_mm[0]
-        h1 = frame.root_mm + frame.centre_mm[1]
+        face, profile = frame.centre_mm if mean_point_mm is None else mean_point_mm
+        s1 = frame.toe_mm + face
+        h1 = frame.root_mm + profile
         start1 = self.pinion.pitch_row(np.array([s1]))[0, 0]
         sol = _solve_nodes(self.pinion, np.array([s1]), np.array([h1]), start1, g1)
         q1 = sol.x[0]
@@ -210,26 +241,27 @@ def inverse_tca(
     degree: int = 6,
     max_iterations: int = 40,
     tol: float = 1e-12,
+    mean_point_mm: tuple[float, float] | None = None,
 ) -> InverseTCA:
     """The roll coefficients of the pinion's ``side`` flank that realise ``target`` (module
     docstring). Raises :class:`SettingsError` when the tangency has no solution at some
-    position (the target asks for contact the geometry cannot give)."""
-    pair = _Pair(design, side)
+    position (the target asks for contact the geometry cannot give). ``mean_point_mm``: the
+    reference point M in pattern coordinates (default the flank centre)."""
+    pair = _Pair(design, side, mean_point_mm)
     s = pair.sense
     u = np.linspace(-target.mesh_in_rad, target.mesh_in_rad, positions)
-    lag = -target.delta_rad(u)
-    phi1 = pair.phi1_0 + s * u
-    psi = pair.psi_0 - pair.ratio * s * u + s * lag
     coef = np.zeros(degree + 1)
     coef[: len(pair.base_roll)] = pair.base_roll[: degree + 1]
     steps = (1.0, 0.05, 0.05, 0.05, 1.0, 0.05, 0.05)
 
-    def solve(x0, coef, rows=None):
-        rows = np.arange(positions) if rows is None else rows
+    def solve(x0, coef, at):
+        """The seven equations at the rotations ``at`` (one row each)."""
+        lag = -target.delta_rad(at)
+        phi1 = pair.phi1_0 + s * at
+        psi = pair.psi_0 - pair.ratio * s * at + s * lag
 
         def residual(z, idx):
-            at = rows[idx]
-            return pair.equations(z, phi1[at], psi[at], lambda phi: _poly(coef, phi)[1])
+            return pair.equations(z, phi1[idx], psi[idx], lambda phi: _poly(coef, phi)[1])
 
         return newton(residual, x0, tol=1e-13, max_iter=60, max_step=steps)
 
@@ -241,7 +273,7 @@ def inverse_tca(
         last = [mid]
         for k in order:  # one row at a time: continuation, linear extrapolation
             guess = x[last[-1]] if len(last) < 2 else 2.0 * x[last[-1]] - x[last[-2]]
-            sol = solve(guess[None], coef, rows=np.array([k]))
+            sol = solve(guess[None], coef, u[k : k + 1])
             if not sol.all_converged:
                 raise SettingsError(
                     "te_target",
@@ -255,7 +287,7 @@ def inverse_tca(
     iteration = 0
     while iteration < max_iterations:
         iteration += 1
-        sol = solve(x, coef)
+        sol = solve(x, coef, u)
         if not sol.all_converged:
             raise SettingsError(
                 "te_target", rule="the inverse TCA lost the contact while its roll was refitted"
@@ -269,6 +301,7 @@ def inverse_tca(
         if change < tol:
             break
     fit = np.polynomial.polynomial.polyval(phi_p, coef)
+    ends = tuple(_interval_end(pair, solve, coef, u, x, way) for way in (-1, 1))
     return InverseTCA(
         roll=tuple(float(c) for c in coef[1:]) + (0.0,) * (6 - degree),
         cradle_shift_deg=math.degrees(coef[0]),
@@ -278,4 +311,47 @@ def inverse_tca(
         phi_c_rad=phi_c,
         fit_residual_arcsec=float(np.max(np.abs(fit - phi_c)) * ARCSEC),
         u_rad=u,
+        interval_rad=ends,
     )
+
+
+def _interval_end(pair, solve, coef, u, x, way: int, step: float = 0.01) -> float:
+    """Where the contact, followed from u = 0 toward ``way`` (+1 or -1), leaves a blank: the
+    first sign change of the blank margin, continued beyond the data if need be, refined by
+    bisection to 1e-7 rad."""
+    mid = len(u) // 2
+    rows = range(mid, len(u)) if way > 0 else range(mid, -1, -1)
+    margin = pair.margin_mm(x)
+    last = mid
+    for k in rows:
+        if margin[k] <= 0.0:
+            break
+        last = k
+    u_in, x_in = float(u[last]), x[last]
+    if last == (len(u) - 1 if way > 0 else 0):  # still inside at the end of the data
+        previous = x[last - way]
+        while True:
+            guess = 2.0 * x_in - previous
+            sol = solve(guess[None], coef, np.array([u_in + way * step]))
+            if not sol.all_converged or abs(u_in) > 1.0:
+                raise SettingsError(
+                    "te_target",
+                    u_in,
+                    "the contact does not leave the flanks (rad from the reference)",
+                )
+            if pair.margin_mm(sol.x)[0] <= 0.0:
+                u_out = u_in + way * step
+                break
+            previous, x_in, u_in = x_in, sol.x[0], u_in + way * step
+    else:
+        u_out = float(u[last + way])
+    while abs(u_out - u_in) > 1e-7:
+        middle = 0.5 * (u_in + u_out)
+        sol = solve(x_in[None], coef, np.array([middle]))
+        if not sol.all_converged:
+            raise SettingsError("te_target", middle, "contact lost near the flank's edge")
+        if pair.margin_mm(sol.x)[0] > 0.0:
+            u_in, x_in = middle, sol.x[0]
+        else:
+            u_out = middle
+    return 0.5 * (u_in + u_out)
