@@ -121,9 +121,12 @@ Root reach: the blade's tip (the plane z_m = 0) must reach the root line (the ro
 generatrix nearest the cradle at centre roll) at the toe and at the heel, else a
 ``DesignError`` names ``sliding_base_mm``.
 
-Not in this slice: a blade tip (edge) radius (``blade_tip_radius_mm`` other than 0 raises
-``NotAvailableError``), settings from the blank (``basic_settings`` reports the settings as
-given), a published settings summary.
+Settings from the blank and local synthesis: a design with a ``[synthesis]`` table
+(:meth:`FaceMilling.synthesize`, :mod:`gearopt_plugins.face_milling_synthesis`); a designed
+TE by inverse TCA: :meth:`FaceMilling.realise_te_target`
+(:mod:`gearopt_plugins.face_milling_inverse`). Not yet: a blade tip (edge) radius
+(``blade_tip_radius_mm`` other than 0 raises ``NotAvailableError``) and a check against a
+published settings summary (none readable was found).
 """
 
 from __future__ import annotations

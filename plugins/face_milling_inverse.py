@@ -34,7 +34,7 @@ from gearopt.contact import Placement
 from gearopt.design import Design
 from gearopt.errors import SettingsError
 from gearopt.mesh import ToothFrame
-from gearopt.solve import newton
+from gearopt.solve import complex_step_jacobian, newton
 from gearopt.te_target import ARCSEC, TETarget
 from gearopt_plugins.face_milling_local import _solve_nodes
 
@@ -122,6 +122,7 @@ class _Pair:
         self.base_roll = np.array([0.0, *spec.roll])
         self.zero = np.zeros(1, int)
         self.blank = blank
+        self.region = None
         self._reference(design, blank, mean_point_mm)
 
     def pinion_point(self, q, cradle):
@@ -137,10 +138,34 @@ class _Pair:
         f = self.gear.axial_radial_meshing(q, np.zeros(q.shape[:-1], int))[2]
         return _mirror(geo["point"], self.hand2), _mirror(geo["normal"], self.hand2), f
 
-    def margin_mm(self, x) -> NDArray:
+    def fold(self, x, coef) -> NDArray:
+        """``(N, 2)`` determinants of the envelope equations (L, R, f) in the generating
+        parameters of the pinion (with the roll ``coef``) and of the gear at the contact
+        points of ``x``: each changes sign where its flank folds (the limit line of the
+        envelope, below which the tool undercuts)."""
+        out = []
+        for family, q, roll in (
+            (self.pinion, x[:, 0:3], coef),
+            (self.gear, x[:, 4:7], None),
+        ):
+
+            def lrf(z, idx, family=family, roll=roll):
+                zero = np.zeros(len(z), int)
+                if roll is None:
+                    return np.stack(family.axial_radial_meshing(z, zero), -1)
+                big_l, big_r, _ = family.axial_radial_meshing(z, zero)
+                value, slope = _poly(roll, z[:, 2])
+                f = family.geometry(z, zero, cradle=(value, slope))["meshing"]
+                return np.stack([big_l / self.scale, big_r / self.scale, f], -1)
+
+            out.append(np.linalg.det(complex_step_jacobian(lrf, q)))
+        return np.stack(out, -1)
+
+    def margin_mm(self, x, coef=None) -> NDArray:
         """How far inside both blanks the contact points of unknowns ``x`` ``(N, 7)`` lie
         (mm; negative outside): the least distance to the toe, heel, root and face lines in
-        each member's axial plane."""
+        each member's axial plane; with ``coef`` (the pinion's roll) also negative beyond a
+        flank's fold (the sign of :meth:`fold` against its sign at the reference)."""
         out = []
         for index, (family, q) in enumerate(((self.pinion, x[:, 0:3]), (self.gear, x[:, 4:7]))):
             big_l, big_r, _ = family.axial_radial_meshing(q, np.zeros(len(q), int))
@@ -154,7 +179,17 @@ class _Pair:
                 h + b.dedendum_at_mm(index, s),
                 b.addendum_at_mm(index, s) - h,
             ]
-        return np.min(np.stack(out), axis=0)
+        margin = np.min(np.stack(out), axis=0)
+        if self.region is not None:  # the pinion flank as generated (it ends above its fold)
+            big_l, big_r, _ = self.pinion.axial_radial_meshing(x[:, 0:3], np.zeros(len(x), int))
+            g = math.radians(self.blank.pitch_angle_deg[0])
+            s = big_l * math.cos(g) + big_r * math.sin(g)
+            h = -big_l * math.sin(g) + big_r * math.cos(g)
+            margin = np.where(self.region(s, h), margin, -1.0)
+        if coef is not None:
+            folded = np.any(self.fold(x, coef) * self.fold_sign <= 0.0, axis=-1)
+            margin = np.where(folded, -1.0, margin)
+        return margin
 
     def equations(self, x, phi1, psi, roll_slope=None):
         """Residuals ``(N, 7)`` of the seven equations at unknowns ``x`` ``(N, 7)``:
@@ -242,12 +277,17 @@ def inverse_tca(
     max_iterations: int = 40,
     tol: float = 1e-12,
     mean_point_mm: tuple[float, float] | None = None,
+    pinion_region=None,
 ) -> InverseTCA:
     """The roll coefficients of the pinion's ``side`` flank that realise ``target`` (module
     docstring). Raises :class:`SettingsError` when the tangency has no solution at some
     position (the target asks for contact the geometry cannot give). ``mean_point_mm``: the
-    reference point M in pattern coordinates (default the flank centre)."""
+    reference point M in pattern coordinates (default the flank centre). ``pinion_region``:
+    ``(s, h) -> bool``, where the pinion flank is generated (e.g. a FlankMap's ``inside``,
+    the region the contact engine uses): the contact interval then also ends where the contact
+    leaves it."""
     pair = _Pair(design, side, mean_point_mm)
+    pair.region = pinion_region
     s = pair.sense
     u = np.linspace(-target.mesh_in_rad, target.mesh_in_rad, positions)
     coef = np.zeros(degree + 1)
@@ -321,7 +361,8 @@ def _interval_end(pair, solve, coef, u, x, way: int, step: float = 0.01) -> floa
     bisection to 1e-7 rad."""
     mid = len(u) // 2
     rows = range(mid, len(u)) if way > 0 else range(mid, -1, -1)
-    margin = pair.margin_mm(x)
+    pair.fold_sign = np.sign(pair.fold(x[mid : mid + 1], coef)[0])
+    margin = pair.margin_mm(x, coef)
     last = mid
     for k in rows:
         if margin[k] <= 0.0:
@@ -339,7 +380,7 @@ def _interval_end(pair, solve, coef, u, x, way: int, step: float = 0.01) -> floa
                     u_in,
                     "the contact does not leave the flanks (rad from the reference)",
                 )
-            if pair.margin_mm(sol.x)[0] <= 0.0:
+            if pair.margin_mm(sol.x, coef)[0] <= 0.0:
                 u_out = u_in + way * step
                 break
             previous, x_in, u_in = x_in, sol.x[0], u_in + way * step
@@ -350,7 +391,7 @@ def _interval_end(pair, solve, coef, u, x, way: int, step: float = 0.01) -> floa
         sol = solve(x_in[None], coef, np.array([middle]))
         if not sol.all_converged:
             raise SettingsError("te_target", middle, "contact lost near the flank's edge")
-        if pair.margin_mm(sol.x)[0] > 0.0:
+        if pair.margin_mm(sol.x, coef)[0] > 0.0:
             u_in, x_in = middle, sol.x[0]
         else:
             u_out = middle
