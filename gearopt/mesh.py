@@ -426,15 +426,15 @@ def tooth_contacts(
             _, first, inv = np.unique(key, return_index=True, return_inverse=True)
             uu = u.ravel()[first]
             ext = np.concatenate([uu.min() - step * EXTEND, uu.max() + step * EXTEND])
-            windows.append((u, ids, inv, len(rows_u), len(first), len(ext)))
+            windows.append((u, ids, inv, len(rows_u), len(first)))
             rows_side += [k] * (len(first) + len(ext))
             rows_u += list(uu) + list(ext)
         side_rows = np.array(rows_side, np.intp)
         main = joint.sample(side_rows, sense[side_rows] * np.array(rows_u))
         out = []
-        for k, (u, ids, inv, start, count, n_ext) in enumerate(windows):
+        for k, (u, ids, inv, start, count) in enumerate(windows):
             st = _Side(k, fields[k], _slice(main, slice(start, start + count)), u, ids, inv)
-            st.interval_sample = _slice(main, slice(start, start + count + n_ext))
+            st.interval_sample = _slice(main, slice(start, start + count + 2 * len(EXTEND)))
             out.append(st)
         return out
 
@@ -451,67 +451,61 @@ def tooth_contacts(
                 req += [(st.index, x) for x in beyond[~known]]
         return req
 
-    def near_batch(states, it):
-        """The contact-interval and hand-over evaluations of step ``it``, all sides:
-        ``((side, phi, s, h), owners)``, or None when there are none."""
-        rows, owners = [], []
+    def evaluate(states, full, beyond=()):
+        """One joint evaluation of every side's pending refinements started from nearby
+        contact points (contact-interval ends, hand-over), the extra positions of the sides
+        ``full`` (node fields and refined minima: hand-over, TE peak, mean point M and its
+        neighbours) and the ``beyond`` rows ``(side, v)``; returns the beyond rows' sample."""
+        f_side, f_v = [], []
+        for st in full:
+            f_side += [st.index] * 6
+            f_v += _extra_angles(st, t, p1, step)
+        f_side += [r[0] for r in beyond]
+        f_v += [r[1] for r in beyond]
+        n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for st in states:
-            for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
-                rows.append((st.index, v, s, h))
+            for v, s, h, tag in st.requests:
+                n_side.append(st.index)
+                n_v.append(v)
+                n_s.append(s)
+                n_h.append(h)
                 owners.append((st, tag))
-        if not rows:
-            return None
-        side_arr = np.array([r[0] for r in rows], np.intp)
-        v, s, h = (np.array([r[k] for r in rows]) for k in (1, 2, 3))
-        return (side_arr, sense[side_arr] * v, s, h), owners
-
-    def extra_rows(states):
-        """The extra positions of each side: hand-over (both pairs), TE peak, mean point M and
-        its neighbours for the path direction."""
-        extra_v = []
-        for st in states:
-            start, end = st.interval
-            if st.v_star is None:  # flat TE (line contact): centred on the contact interval
-                st.v_star = 0.5 * (start + end) + 0.5 * p1
-                st.g_hand = float(np.max(st.g.min(axis=1)))
-            v_mid = st.v_star - 0.5 * p1
-            dv = 0.25 * step
-            extra_v.append(
-                [
-                    st.v_star,
-                    st.v_star - p1,
-                    _peak_guess(st, t, p1, step),
-                    v_mid,
-                    v_mid - dv,
-                    v_mid + dv,
-                ]
-            )
-        extra_v = np.array(extra_v)
-        ex_side = np.repeat(np.arange(n_sides), extra_v.shape[1])
-        return ex_side, sense[ex_side] * extra_v.ravel()
+            st.requests = []
+        f_side = np.array(f_side, np.intp)
+        f_phi = sense[f_side] * np.array(f_v)
+        sample = answers = None
+        if owners:
+            n_side = np.array(n_side, np.intp)
+            near = (n_side, sense[n_side] * np.array(n_v), np.array(n_s), np.array(n_h))
+            if f_side.size:
+                sample, answers = joint.sample(f_side, f_phi, near=near)
+            else:
+                answers = joint.minimum_near(*near)
+            for k, (st, tag) in enumerate(owners):
+                st.answers[tag] = tuple(a[k] for a in answers)
+        elif f_side.size:
+            sample = joint.sample(f_side, f_phi)
+        for j, st in enumerate(full):
+            st.ex = _slice(sample, slice(6 * j, 6 * j + 6))
+        return _slice(sample, slice(6 * len(full), None)) if beyond else None
 
     def begin(states):
         for st in states:
+            st.ex, st.answers, st.requests = None, {}, []
             _start_interval(st)
-            _start_handover(st, t, p1)
+            _start_handover(st, t, p1, step)
 
+    # the contact intervals' ends (bisection on the edge flag, its candidate points evaluated
+    # at once), the first hand-over evaluations and, where the hand-over is guessed from
+    # smooth lags, the extra positions, with the pairs beyond the windows: one joint evaluation
     states = main_sample(np.zeros(n_sides))
     begin(states)
     req = beyond_requests(states)
-    more = answers = None
-    if req:
-        # the first contact-interval and hand-over evaluations go along (their answers stand
-        # unless a window is recentred below)
-        ext_side = np.array([r[0] for r in req], np.intp)
-        ext_phi = sense[ext_side] * np.array([r[1] for r in req])
-        batch = near_batch(states, 0)
-        if batch is None:
-            more = joint.sample(ext_side, ext_phi)
-        else:
-            more, answers = joint.sample(ext_side, ext_phi, near=batch[0])
+    more = evaluate(states, [st for st in states if _extras_due(st)], req)
     # the mesh centre of each side: the relative angle of least lag over everything sampled;
     # a window not centred on it (the contact moved by misalignment) is centred and resampled
     centres = np.zeros(n_sides)
+    ext_side = np.array([r[0] for r in req], np.intp)
     for st in states:
         v = st.interval_sample.phi_rad * st.field.sense
         g = st.interval_sample.minimum_rad
@@ -528,34 +522,44 @@ def tooth_contacts(
     if np.any(centres != 0.0):
         states = main_sample(centres)
         begin(states)
-        answers = None
-
-    # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
-    # all sides batched into shared calls; the last step's go along with the extra positions
-    # once the hand-overs are solved
-    extras = None
-    for it in range(3):
-        batch = near_batch(states, it)
-        if batch is None:
-            break
-        if it == 0 and answers is not None:
-            pass
-        elif it == 2 and all(st.v_star is not None for st in states):
-            extras, answers = joint.sample(*extra_rows(states), near=batch[0])
-        else:
-            answers = joint.minimum_near(*batch[0])
-        for k, (st, tag) in enumerate(batch[1]):
-            st.answers[tag] = tuple(a[k] for a in answers)
+        evaluate(states, [st for st in states if _extras_due(st)])
+    # the contact intervals' ends, the hand-overs' further steps (edge contact, or a poor first
+    # guess) and the extra positions still missing (a flat TE is centred on its contact
+    # interval)
+    while True:
         for st in states:
-            _interval_update(st)
-            _handover_update(st, it, p1)
-    if extras is None:
-        extras = joint.sample(*extra_rows(states))
-    out = []
-    for st, name in zip(states, sides, strict=True):
-        ex = _slice(extras, slice(st.index * 6, st.index * 6 + 6))
-        out.append(_assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation))
-    return out
+            _interval_finish(st)
+            _handover_step(st, p1)
+        due = [st for st in states if st.ex is None and _extras_due(st)]
+        if not due and not any(st.requests for st in states):
+            break
+        evaluate(states, due)
+    return [
+        _assemble(st, name, st.ex, t, p1, frame, pairs, compound_um, separation)
+        for st, name in zip(states, sides, strict=True)
+    ]
+
+
+def _extras_due(st) -> bool:
+    """Whether a side's extra positions can be evaluated: its hand-over is settled or guessed
+    from smooth lags, or (no hand-over) its contact interval is known."""
+    ho = st.ho
+    if ho is None:
+        return st.interval_done
+    return ho.get("done", False) or ho["mode"] == "fit"
+
+
+def _extra_angles(st, t, p1, step) -> list[float]:
+    """The extra positions of a side: the hand-over (both pairs), the TE peak, the mean point
+    M and its neighbours for the path direction; a flat TE (line contact, no hand-over) is
+    centred on the contact interval."""
+    if st.v_star is None:
+        start, end = st.interval
+        st.v_star = 0.5 * (start + end) + 0.5 * p1
+        st.g_hand = float(np.max(st.g.min(axis=1)))
+    v_mid = st.v_star - 0.5 * p1
+    dv = 0.25 * step
+    return [st.v_star, st.v_star - p1, _peak_guess(st, t, p1, step), v_mid, v_mid - dv, v_mid + dv]
 
 
 def _peak_guess(st, t, p1, step) -> float:
@@ -573,19 +577,23 @@ def _peak_guess(st, t, p1, step) -> float:
     return float(v_peak)
 
 
+BISECTIONS = 3  # contact-interval ends to an eighth of a position step
+
+
 def _start_interval(st) -> None:
     """Bracket the relative angles between which a pair's contact stays inside the flanks
-    (not at an edge) from the samples; bisection follows (warm-started Newton)."""
+    (not at an edge) from the samples, and ask for the points a bisection of each open bracket
+    can visit (warm-started Newton), all at once."""
     sample = getattr(st, "interval_sample", st.sample)
     v = sample.phi_rad * st.field.sense
     inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
     order = np.argsort(v)
     v, inner = v[order], inner[order]
-    st.answers = {}
+    st.interval_done = False
     if not inner.any():  # edge contact only: no interval, centred on the least lag
         gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
         best = float(v[np.argmin(gs)])
-        st.interval, st.bisect = (best, best), 0
+        st.interval, st.bisect, st.interval_done = (best, best), False, True
         return
     # the unbroken run of interior samples around the least lag (the mesh centre), or the
     # longest run when the least lag is itself at an edge
@@ -601,40 +609,47 @@ def _start_interval(st) -> None:
     st.ci_open = np.array([lo_k > 0, hi_k < len(v) - 1])
     cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
     st.ci_s, st.ci_h = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-    st.bisect = 3
+    st.bisect, st.interval_done = True, False
     st.interval = (float(st.ci_a[0]), float(st.ci_a[1]))
+    parts = 2**BISECTIONS
+    for e in np.flatnonzero(st.ci_open):
+        a, b = st.ci_a[e], st.ci_b[e]
+        for j in range(1, parts):
+            st.requests.append((a + (b - a) * j / parts, st.ci_s[e], st.ci_h[e], ("ci", e, j)))
 
 
-def _interval_requests(st):
-    if st.bisect <= 0:
-        return []
-    m = 0.5 * (st.ci_a + st.ci_b)
-    return [(m[e], st.ci_s[e], st.ci_h[e], ("ci", e)) for e in (0, 1)]
-
-
-def _interval_update(st) -> None:
-    if st.bisect <= 0:
+def _interval_finish(st) -> None:
+    """Bisect each open bracket on the answers of its candidate points: the end is the middle
+    of the last bracket, the contact point the last inside one's."""
+    if st.interval_done:
         return
-    m = 0.5 * (st.ci_a + st.ci_b)
-    for e in (0, 1):
-        value, s1, h1, edge = st.answers.pop(("ci", e))
-        inside = np.isfinite(value) and not edge
-        if st.ci_open[e]:
-            if inside:
-                st.ci_a[e] = m[e]
+    st.interval_done = True
+    parts = 2**BISECTIONS
+    for e in np.flatnonzero(st.ci_open):
+        a, b = st.ci_a[e], st.ci_b[e]
+        ja, jb = 0, parts
+        for _ in range(BISECTIONS):
+            m = (ja + jb) // 2
+            value, s1, h1, edge = st.answers[("ci", e, m)]
+            if np.isfinite(value) and not edge:
+                ja = m
                 st.ci_s[e], st.ci_h[e] = s1, h1
             else:
-                st.ci_b[e] = m[e]
-    st.bisect -= 1
+                jb = m
+        st.ci_a[e], st.ci_b[e] = a + (b - a) * ja / parts, a + (b - a) * jb / parts
     ends = np.where(st.ci_open, 0.5 * (st.ci_a + st.ci_b), st.ci_a)
     st.interval = (float(ends[0]), float(ends[1]))
 
 
-def _start_handover(st, t, p1) -> None:
+def _start_handover(st, t, p1, step) -> None:
     """Find a forward switch of the carrying pair (the next pair, one id lower, takes over)
-    whose two pairs' lag difference D changes sign: it brackets the hand-over, solved by a
-    secant step, the parabola through three differences and a last secant step. Without one
-    the TE is flat (line contact) and the cycle is centred on the contact interval."""
+    whose two pairs' lag difference D changes sign: it brackets the hand-over. Where the
+    samples around both pairs' ends of the bracket are interior contacts, the first guess is
+    the crossing of the two pairs' interpolated lags, checked by evaluations at it and an
+    eighth of a step to either side (:func:`_handover_step`); otherwise (edge contact: the lags
+    are not smooth) a secant step, the parabola through three differences and a last secant
+    step. Without a bracket the TE is flat (line contact) and the cycle is centred on the
+    contact interval."""
     st.v_star, st.g_hand, st.ho = None, None, None
     g, ids, pair_id = st.g, st.ids, st.pair_id
     n = len(t)
@@ -651,36 +666,107 @@ def _start_handover(st, t, p1) -> None:
         if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
             lo, hi = t[k] + leave * p1, t[k + 1] + leave * p1
             cs, ch = st.cs, st.ch
-            starts = (
-                0.5 * (cs[k, col_l[0][0]] + cs[k + 1, col_l[1][0]]),
-                0.5 * (ch[k, col_l[0][0]] + ch[k + 1, col_l[1][0]]),
-                0.5 * (cs[k, col_i[0][0]] + cs[k + 1, col_i[1][0]]),
-                0.5 * (ch[k, col_i[0][0]] + ch[k + 1, col_i[1][0]]),
-            )
+            ends = [
+                ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
+                for c in (col_l, col_i)
+            ]
             x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
-            st.ho = {"lo": lo, "hi": hi, "d_lo": d_lo, "d_hi": d_hi, "starts": starts, "x": x0}
-            st.v_star = float(x0)
+            st.ho = {"lo": lo, "hi": hi, "d_lo": d_lo, "d_hi": d_hi, "x0": x0, "ends": ends}
+            st.ho["delta"] = step / 8.0
+            guess = _crossing(st, lo, hi, x0, p1, step)
+            if guess is None:
+                _ask_iteration(st, x0, p1)
+            else:
+                st.ho["round"] = 0
+                _ask_fit(st, guess, p1)
             return
 
 
-def _handover_requests(st, it, p1):
-    if st.ho is None or it > 1 or st.ho.get("done"):
-        return []
-    s_l, h_l, s_i, h_i = st.ho["starts"]
-    x = st.ho["x"]
-    return [(x, s_l, h_l, ("ho", 0)), (x - p1, s_i, h_i, ("ho", 1))]
-
-
-def _handover_update(st, it, p1) -> None:
+def _ask_fit(st, x, p1) -> None:
+    """Evaluations of a hand-over guess ``x``: both pairs at ``x`` (the extra positions) and a
+    delta to either side, started from the contact points interpolated along the bracket."""
     ho = st.ho
-    if ho is None or it > 1 or ho.get("done"):
+    ho["mode"], ho["x"], st.v_star, st.ex = "fit", float(x), float(x), None
+    f = (x - ho["lo"]) / (ho["hi"] - ho["lo"])
+    for pair, shift in ((0, 0.0), (1, -p1)):
+        (s0, h0), (s1, h1) = ho["ends"][pair]
+        s, h = (1.0 - f) * s0 + f * s1, (1.0 - f) * h0 + f * h1
+        for sign in (-1, 1):
+            st.requests.append((x + shift + sign * ho["delta"], s, h, ("ho", pair, sign)))
+
+
+def _ask_iteration(st, x, p1) -> None:
+    """An evaluation of both pairs at ``x`` for the iteration on the bracket (started from the
+    middle of each pair's contact points at the bracket's ends)."""
+    ho = st.ho
+    ho["mode"], ho["x"], st.v_star = "iterate", float(x), float(x)
+    ho.setdefault("round", 0)
+    for pair, shift in ((0, 0.0), (1, -p1)):
+        (s0, h0), (s1, h1) = ho["ends"][pair]
+        st.requests.append((x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ("ho", pair, 0)))
+
+
+def _crossing(st, lo, hi, secant, p1, step) -> float | None:
+    """Where the lag of the leaving pair G(x) meets the incoming pair's G(x - p1) in
+    [lo, hi], both interpolated (Lagrange, cubic) through the four nearest samples of G; None
+    when any of them is missing or not an interior contact (the lags are smooth only there)."""
+    sample = st.interval_sample
+    v = sample.phi_rad * st.field.sense
+    mid = 0.5 * (lo + hi)
+    fits = []
+    for centre in (mid, mid - p1):
+        near = np.argsort(np.abs(v - centre))[:4]
+        z = (v[near] - centre) / step
+        g = sample.minimum_rad[near]
+        if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or sample.edge[near].any():
+            return None
+        fits.append(np.linalg.solve(np.vander(z), g))
+    roots = np.roots(np.polysub(*fits))
+    half = 0.5 * (hi - lo) / step
+    real = roots.real[(np.abs(roots.imag) <= 1e-9) & (np.abs(roots.real) <= half)]
+    if not real.size:
+        return None
+    z0 = (secant - mid) / step
+    return float(mid + step * real[np.argmin(np.abs(real - z0))])
+
+
+def _handover_step(st, p1) -> None:
+    """Take in a hand-over's evaluations, if they are in: ask for the next ones, or settle
+    ``v_star`` (and the lag there, ``g_hand``, when it is interpolated)."""
+    ho = st.ho
+    if ho is None or ho.get("done"):
         return
-    d = float(st.answers.pop(("ho", 0))[0] - st.answers.pop(("ho", 1))[0])
+    if ho["mode"] == "fit":
+        tags = [("ho", pair, sign) for pair in (0, 1) for sign in (-1, 1)]
+        if st.ex is None or not all(tag in st.answers for tag in tags):
+            return
+        got = [st.answers.pop(tag) for tag in tags]
+        gl = np.array([got[0][0], st.ex.minimum_rad[0], got[1][0]])
+        gi = np.array([got[2][0], st.ex.minimum_rad[1], got[3][0]])
+        interior = np.all(np.isfinite(gl)) and np.all(np.isfinite(gi))
+        interior = interior and not (st.ex.edge[:2].any() or any(a[3] for a in got))
+        z = _parabola_root(gl - gi) if interior else math.inf
+        x = ho["x"] + ho["delta"] * z
+        if abs(z) <= 2.0 and ho["lo"] <= x <= ho["hi"]:
+            ho["done"] = True
+            st.v_star = float(x)
+            st.g_hand = float(max(_parabola_at(gl, z), _parabola_at(gi, z)))
+        elif np.isfinite(z) and ho["round"] < 2:  # a poor guess: evaluated anew
+            ho["round"] += 1
+            _ask_fit(st, min(max(x, ho["lo"]), ho["hi"]), p1)
+        else:  # not smooth there after all: the iteration on the bracket
+            st.ex = None
+            ho["round"] = 0
+            _ask_iteration(st, ho["x0"], p1)
+        return
+    if not (("ho", 0, 0) in st.answers and ("ho", 1, 0) in st.answers):
+        return
+    d = float(st.answers.pop(("ho", 0, 0))[0] - st.answers.pop(("ho", 1, 0))[0])
     if not np.isfinite(d):
         ho["done"] = True
         return
     lo, hi, d_lo, d_hi = ho["lo"], ho["hi"], ho["d_lo"], ho["d_hi"]
-    if it == 0:
+    if ho["round"] == 0:
         x0 = ho["x"]
         ho["x0"], ho["d0"] = x0, d
         a, b, c = _parabola(lo - x0, hi - x0, d_lo, d, d_hi)
@@ -688,8 +774,8 @@ def _handover_update(st, it, p1) -> None:
         roots = np.real(roots[np.isreal(roots)]) + x0
         ho["bracket"] = (lo, x0) if d > 0.0 else (x0, hi)
         good = roots[(roots >= ho["bracket"][0]) & (roots <= ho["bracket"][1])]
-        ho["x"] = float(good[0]) if good.size else x0
-        st.v_star = ho["x"]
+        ho["round"] = 1
+        _ask_iteration(st, float(good[0]) if good.size else x0, p1)
     else:
         x0, d0, x1 = ho["x0"], ho["d0"], ho["x"]
         if d != d0:  # one last secant step between the two best points
@@ -704,6 +790,26 @@ def _parabola(xa: float, xb: float, ya: float, y0: float, yb: float):
     sa, sb = (ya - y0) / xa, (yb - y0) / xb
     a = (sb - sa) / (xb - xa)
     return a, sa - a * xa, y0
+
+
+def _parabola_root(d: NDArray) -> float:
+    """The root nearest 0 of the parabola through (-1, d0), (0, d1), (1, d2) (inf if none)."""
+    a = 0.5 * (d[0] + d[2]) - d[1]
+    b = 0.5 * (d[2] - d[0])
+    c = d[1]
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0 or (a == 0.0 and b == 0.0):
+        return math.inf
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    roots = [c / q] if q != 0.0 else []
+    if a != 0.0:
+        roots.append(q / a)
+    return min(roots, key=abs, default=math.inf)
+
+
+def _parabola_at(y: NDArray, z: float) -> float:
+    """The parabola through (-1, y0), (0, y1), (1, y2) at z."""
+    return float(y[1] + 0.5 * (y[2] - y[0]) * z + (0.5 * (y[0] + y[2]) - y[1]) * z * z)
 
 
 def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> ToothContact:
