@@ -661,7 +661,9 @@ class _Engine:
         edge = np.zeros(len(phi), bool)
         rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
         near_out = None
-        if rows.size or near is not None:
+        if near is not None and not rows.size:
+            near_out = self.near(*near)
+        elif rows.size or near is not None:
             f0, s, h = f0.copy(), s.copy(), h.copy()
             f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
                 side[rows],

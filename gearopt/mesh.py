@@ -454,14 +454,29 @@ def tooth_contacts(
     def evaluate(states, full, beyond=()):
         """One joint evaluation of every side's pending refinements started from nearby
         contact points (contact-interval ends, hand-over), the extra positions of the sides
-        ``full`` (node fields and refined minima: hand-over, TE peak, mean point M and its
-        neighbours) and the ``beyond`` rows ``(side, v)``; returns the beyond rows' sample."""
-        f_side, f_v = [], []
+        ``full`` (hand-over, TE peak, mean point M and its neighbours) and the ``beyond`` rows
+        ``(side, v)``; returns the beyond rows' sample. Where the hand-over is guessed from
+        smooth lags, the extra positions' minima are refined from the contact points
+        interpolated along the samples and only M's rows take node fields; otherwise each
+        takes node fields and a refined minimum."""
+        f_side, f_v, f_refine = [], [], []
         for st in full:
-            f_side += [st.index] * 6
-            f_v += _extra_angles(st, t, p1, step)
+            angles = _extra_angles(st, t, p1, step)
+            st.near_extras = _fit_mode(st)
+            if st.near_extras:
+                f_side += [st.index] * 3
+                f_v += angles[3:]
+                f_refine += [False] * 3
+                for j, v in enumerate(angles):
+                    st.requests.append((v, *_contact_at(st, v), ("ex", j)))
+            else:
+                f_side += [st.index] * 6
+                f_v += angles
+                f_refine += [True] * 6
+            st.ex_phi = st.field.sense * np.array(angles)
         f_side += [r[0] for r in beyond]
         f_v += [r[1] for r in beyond]
+        f_refine += [True] * len(beyond)
         n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for st in states:
             for v, s, h, tag in st.requests:
@@ -473,21 +488,28 @@ def tooth_contacts(
             st.requests = []
         f_side = np.array(f_side, np.intp)
         f_phi = sense[f_side] * np.array(f_v)
+        f_refine = np.array(f_refine, bool)
         sample = answers = None
         if owners:
             n_side = np.array(n_side, np.intp)
             near = (n_side, sense[n_side] * np.array(n_v), np.array(n_s), np.array(n_h))
             if f_side.size:
-                sample, answers = joint.sample(f_side, f_phi, near=near)
+                sample, answers = joint.sample(f_side, f_phi, refine=f_refine, near=near)
             else:
                 answers = joint.minimum_near(*near)
             for k, (st, tag) in enumerate(owners):
                 st.answers[tag] = tuple(a[k] for a in answers)
         elif f_side.size:
             sample = joint.sample(f_side, f_phi)
-        for j, st in enumerate(full):
-            st.ex = _slice(sample, slice(6 * j, 6 * j + 6))
-        return _slice(sample, slice(6 * len(full), None)) if beyond else None
+        start = 0
+        for st in full:
+            if st.near_extras:
+                st.ex = _near_extras(st, _slice(sample, slice(start, start + 3)))
+                start += 3
+            else:
+                st.ex = _slice(sample, slice(start, start + 6))
+                start += 6
+        return _slice(sample, slice(start, None)) if beyond else None
 
     def begin(states):
         for st in states:
@@ -547,6 +569,46 @@ def _extras_due(st) -> bool:
     if ho is None:
         return st.interval_done
     return ho.get("done", False) or ho["mode"] == "fit"
+
+
+def _fit_mode(st) -> bool:
+    """Whether a side's hand-over is being checked at a guess from smooth lags."""
+    return st.ho is not None and not st.ho.get("done") and st.ho["mode"] == "fit"
+
+
+def _contact_at(st, v: float) -> tuple[float, float]:
+    """A start for a refinement at relative angle ``v``: the contact point interpolated
+    (linearly in v) between the nearest samples in contact on either side."""
+    sample = st.interval_sample
+    if not hasattr(st, "path"):
+        ok = np.isfinite(sample.minimum_rad)
+        vs = sample.phi_rad[ok] * st.field.sense
+        order = np.argsort(vs)
+        st.path = (
+            vs[order],
+            sample.contact_face_mm[ok][order],
+            sample.contact_profile_mm[ok][order],
+        )
+    vs, cs, ch = st.path
+    return float(np.interp(v, vs, cs)), float(np.interp(v, vs, ch))
+
+
+def _near_extras(st, mean: FieldSample) -> FieldSample:
+    """The extra positions' sample from their refined minima (answers ``("ex", j)``) and the
+    node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
+    got = [st.answers.pop(("ex", j)) for j in range(6)]
+    blank = np.full((3,) + mean.clearance_rad.shape[1:], np.inf)
+    ones = np.ones_like(blank)
+    return FieldSample(
+        phi_rad=st.ex_phi,
+        clearance_rad=np.concatenate([blank, mean.clearance_rad]),
+        normal_factor_mm=np.concatenate([ones, mean.normal_factor_mm]),
+        radius_mm=np.concatenate([ones, mean.radius_mm]),
+        minimum_rad=np.array([a[0] for a in got], float),
+        contact_face_mm=np.array([a[1] for a in got], float),
+        contact_profile_mm=np.array([a[2] for a in got], float),
+        edge=np.array([a[3] for a in got], bool),
+    )
 
 
 def _extra_angles(st, t, p1, step) -> list[float]:
@@ -745,6 +807,7 @@ def _handover_step(st, p1) -> None:
         gi = np.array([got[2][0], st.ex.minimum_rad[1], got[3][0]])
         interior = np.all(np.isfinite(gl)) and np.all(np.isfinite(gi))
         interior = interior and not (st.ex.edge[:2].any() or any(a[3] for a in got))
+        interior = interior and bool(np.all(np.isfinite(st.ex.minimum_rad)))
         z = _parabola_root(gl - gi) if interior else math.inf
         x = ho["x"] + ho["delta"] * z
         if abs(z) <= 2.0 and ho["lo"] <= x <= ho["hi"]:
