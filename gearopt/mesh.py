@@ -735,7 +735,7 @@ def _start_handover(st, t, p1, step) -> None:
             x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
             st.ho = {"lo": lo, "hi": hi, "d_lo": d_lo, "d_hi": d_hi, "x0": x0, "ends": ends}
             st.ho["delta"] = step / 8.0
-            guess = _crossing(st, lo, hi, x0, p1, step)
+            guess = _crossing(st, lo, hi, p1, step)
             if guess is None:
                 _ask_iteration(st, x0, p1)
             else:
@@ -768,7 +768,7 @@ def _ask_iteration(st, x, p1) -> None:
         st.requests.append((x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ("ho", pair, 0)))
 
 
-def _crossing(st, lo, hi, secant, p1, step) -> float | None:
+def _crossing(st, lo, hi, p1, step) -> float | None:
     """Where the lag of the leaving pair G(x) meets the incoming pair's G(x - p1) in
     [lo, hi], both interpolated (Lagrange, cubic) through the four nearest samples of G; None
     when any of them is missing or not an interior contact (the lags are smooth only there)."""
@@ -782,14 +782,48 @@ def _crossing(st, lo, hi, secant, p1, step) -> float | None:
         g = sample.minimum_rad[near]
         if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or sample.edge[near].any():
             return None
-        fits.append(np.linalg.solve(np.vander(z), g))
-    roots = np.roots(np.polysub(*fits))
+        fits.append((z.tolist(), g.tolist()))
+
+    def difference(x: float) -> float:
+        return _lagrange(*fits[0], x) - _lagrange(*fits[1], x)
+
     half = 0.5 * (hi - lo) / step
-    real = roots.real[(np.abs(roots.imag) <= 1e-9) & (np.abs(roots.real) <= half)]
-    if not real.size:
+    root = _illinois(difference, -half, half)
+    return None if root is None else mid + step * root
+
+
+def _lagrange(z: list, g: list, x: float) -> float:
+    """The polynomial through the points (z, g) at x."""
+    total = 0.0
+    for i, (zi, gi) in enumerate(zip(z, g, strict=True)):
+        term = gi
+        for j, zj in enumerate(z):
+            if j != i:
+                term *= (x - zj) / (zi - zj)
+        total += term
+    return total
+
+
+def _illinois(func, a: float, b: float, tol: float = 1e-12) -> float | None:
+    """A root of ``func`` in [a, b] by the Illinois method (None without a sign change)."""
+    fa, fb = func(a), func(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if fa * fb > 0.0:
         return None
-    z0 = (secant - mid) / step
-    return float(mid + step * real[np.argmin(np.abs(real - z0))])
+    for _ in range(100):
+        c = b - fb * (b - a) / (fb - fa)
+        fc = func(c)
+        if fc == 0.0 or abs(c - b) <= tol:
+            return c
+        if fc * fb < 0.0:
+            a, fa = b, fb
+        else:
+            fa *= 0.5
+        b, fb = c, fc
+    return b
 
 
 def _handover_step(st, p1) -> None:
