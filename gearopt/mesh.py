@@ -274,23 +274,26 @@ def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
     return np.array([minor[0], minor[1]])
 
 
-def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
-    """Extent of {separation < compound} along the line through ``point`` perpendicular to
-    ``direction``, by bilinear interpolation of the node field (sampled at 2001 points; from
-    the middle outward, the first sample out of the zone on each side bounds it)."""
-    perp = np.array([-direction[1], direction[0]])
+def _widths(sep_mm: NDArray, compound_mm, face_mm, profile_mm, points, directions) -> NDArray:
+    """Extent of {separation < compound} along the line through ``points[k]`` perpendicular
+    to ``directions[k]`` on the field ``sep_mm[k]`` (``(K, n_f, n_p)``), for K lines at once,
+    by bilinear interpolation of the node field (sampled at 2001 points; from the middle
+    outward, the first sample out of the zone on each side bounds it)."""
+    points, directions = np.asarray(points, float), np.asarray(directions, float)
+    n_lines = len(sep_mm)
+    perp = np.stack([-directions[:, 1], directions[:, 0]], axis=1)
     reach = float(face_mm[-1] - face_mm[0] + profile_mm[-1] - profile_mm[0])
     tau = np.linspace(-reach, reach, 2001)
     big = 10.0 * compound_mm
     f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
+    flat, n_p, size = f.ravel(), f.shape[2], f.shape[1] * f.shape[2]
 
-    flat, n_p = f.ravel(), f.shape[1]
-
-    def value(k):
-        """The interpolated separation minus the compound at the samples ``k``."""
+    def value(line, k):
+        """The interpolated separation minus the compound at the samples ``k`` of lines
+        ``line``."""
         tk = tau[k]
-        s = point[0] + tk * perp[0]
-        h = point[1] + tk * perp[1]
+        s = points[line, 0] + tk * perp[line, 0]
+        h = points[line, 1] + tk * perp[line, 1]
         inside = (s >= face_mm[0]) & (s <= face_mm[-1])
         inside &= (h >= profile_mm[0]) & (h <= profile_mm[-1])
         i = np.minimum(np.maximum(np.searchsorted(face_mm, s) - 1, 0), len(face_mm) - 2)
@@ -298,7 +301,7 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
         s0, h0 = face_mm[i], profile_mm[j]
         u = np.minimum(np.maximum((s - s0) / (face_mm[i + 1] - s0), 0.0), 1.0)
         v = np.minimum(np.maximum((h - h0) / (profile_mm[j + 1] - h0), 0.0), 1.0)
-        at = i * n_p + j
+        at = line * size + i * n_p + j
         val = (
             (1 - u) * (1 - v) * flat[at]
             + u * (1 - v) * flat[at + n_p]
@@ -313,24 +316,36 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
     # from the middle outward on each side: every 25th sample, then all of them up to the
     # first coarse one out of the zone (or to the end), each side's first sample out bounds it
     ways = (np.arange(centre, len(tau)), np.arange(centre, -1, -1))
-    coarse = [w[::25] for w in ways]
-    val = value(np.concatenate(coarse))
-    if val[0] >= 0.0:
-        return 0.0
-    hits = np.split(val >= 0.0, [len(coarse[0])])
+    coarse = np.concatenate([w[::25] for w in ways])
+    n_coarse = len(coarse) // 2
+    lines = np.repeat(np.arange(n_lines), len(coarse))
+    val = value(lines, np.tile(coarse, n_lines)).reshape(n_lines, 2, n_coarse)
+    hits = val >= 0.0
     spans = [
-        w if not h.any() else w[: 25 * np.argmax(h) + 1] for w, h in zip(ways, hits, strict=True)
+        ways[w] if not hits[k, w].any() else ways[w][: 25 * np.argmax(hits[k, w]) + 1]
+        for k in range(n_lines)
+        for w in (0, 1)
     ]
-    fine = np.split(value(np.concatenate(spans)), [len(spans[0])])
-    ends = []
-    for span, v, edge in zip(spans, fine, (tau[-1], tau[0]), strict=True):
-        out = np.flatnonzero(v >= 0.0)
-        if not out.size:
-            ends.append(edge)
+    fine_lines = np.repeat(np.repeat(np.arange(n_lines), 2), [len(a) for a in spans])
+    fine = np.split(
+        value(fine_lines, np.concatenate(spans)), np.cumsum([len(a) for a in spans])[:-1]
+    )
+    width = np.zeros(n_lines)
+    for k in range(n_lines):
+        if val[k, 0, 0] >= 0.0:
             continue
-        k_in, k_out, a, b = span[out[0] - 1], span[out[0]], v[out[0] - 1], v[out[0]]
-        ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
-    return float(ends[0] - ends[1])
+        ends = []
+        for span, v, edge in zip(
+            spans[2 * k : 2 * k + 2], fine[2 * k : 2 * k + 2], (tau[-1], tau[0]), strict=True
+        ):
+            out = np.flatnonzero(v >= 0.0)
+            if not out.size:
+                ends.append(edge)
+                continue
+            k_in, k_out, a, b = span[out[0] - 1], span[out[0]], v[out[0] - 1], v[out[0]]
+            ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
+        width[k] = ends[0] - ends[1]
+    return width
 
 
 def _slice(sample: FieldSample, rows) -> FieldSample:
@@ -556,9 +571,29 @@ def tooth_contacts(
         if not due and not any(st.requests for st in states):
             break
         evaluate(states, due)
+    return _contacts(
+        [
+            _assemble(st, name, st.ex, t, p1, frame, pairs, compound_um, separation)
+            for st, name in zip(states, sides, strict=True)
+        ],
+        compound_um * 1e-3,
+    )
+
+
+def _contacts(parts, compound_mm) -> list[ToothContact]:
+    """The ToothContacts of :func:`_assemble`'s parts, every side's pattern width (across the
+    path at M) and contact-ellipse major axis (along the zone's long axis at M) measured at
+    once."""
+    fields = [f for lines, _ in parts for f in lines[:2]]
+    points = [lines[2] for lines, _ in parts for _ in (0, 1)]
+    directions = [d for lines, _ in parts for d in lines[3:]]
+    face, profile = parts[0][1]["face_mm"], parts[0][1]["profile_mm"]
+    widths = _widths(np.stack(fields), compound_mm, face, profile, points, directions)
     return [
-        _assemble(st, name, st.ex, t, p1, frame, pairs, compound_um, separation)
-        for st, name in zip(states, sides, strict=True)
+        ToothContact(
+            **kw, width_mm=float(widths[2 * k]), ellipse_major_axis_mm=float(widths[2 * k + 1])
+        )
+        for k, (_, kw) in enumerate(parts)
     ]
 
 
@@ -909,8 +944,10 @@ def _parabola_at(y: NDArray, z: float) -> float:
     return float(y[1] + 0.5 * (y[2] - y[0]) * z + (0.5 * (y[0] + y[2]) - y[1]) * z * z)
 
 
-def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> ToothContact:
-    """One side's ToothContact from its samples and extra evaluations."""
+def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation):
+    """One side's ToothContact from its samples and extra evaluations, but for its two widths:
+    ``(lines, fields)`` with ``lines`` = ``(pattern, zone at M, M, path direction, minor axis)``
+    (:func:`_contacts` measures every side's at once)."""
     field = st.field
     positions = len(t)
     rows = np.arange(positions)
@@ -941,9 +978,9 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     norm = float(np.hypot(*direction))
     direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
     # the pattern's width: the extent of the whole pattern across the path at M
-    width = _width(pattern * 1e-3, compound_mm, face, profile, mean_point, direction)
+    # and the contact ellipse's major axis: measured with every side's (:func:`_widths`)
     minor = _minor_axis(ex_sep[3], compound_mm, face, profile)
-    major = _width(ex_sep[3], compound_mm, face, profile, mean_point, minor)
+    lines = (pattern * 1e-3, ex_sep[3], mean_point, direction, minor)
     # bias: the contact line's extension along the face from the pair's entry into contact to
     # its exit (seed 003 section 6): the contact points at the ends of its contact interval
     ends = getattr(st, "ci_s", None)
@@ -952,7 +989,7 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     centre = frame.centre_mm
     handovers = st.v_star + p1 * np.arange(-12, 13)
     handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
-    return ToothContact(
+    return lines, dict(
         side=name,
         phi1_deg=np.degrees(t),
         te_arcsec=te,
@@ -969,8 +1006,6 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
         pattern_um=pattern,
         face_mm=face,
         profile_mm=profile,
-        width_mm=width,
-        ellipse_major_axis_mm=major,
         bias_mm=bias,
         center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),
         mean_point_mm=mean_point,
