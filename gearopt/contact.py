@@ -551,9 +551,10 @@ class _Engine:
         cell = np.multiply(index[0], n_cols, out=_work("cell", shape, np.intp))
         cell += index[1]
         cell += rows.gear_offset
-        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape))
+        # (mode="clip": the cells are valid; the default "raise" buffers ``out``)
+        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape), mode="clip")
         gap = hermite_cells(c, None, uv[0], uv[1])
-        valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool))
+        valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool), mode="clip")
         valid &= inside[0]
         valid &= inside[1]
         gap -= theta
