@@ -325,6 +325,7 @@ class _Engine:
     """
 
     _AROUND_ROWS = 32  # batches up to this many rows evaluate the stencils of all cut-backs
+    _JOINT_ROWS = 16  # node fields of up to this many rows: all sides in one evaluation
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
@@ -509,17 +510,24 @@ class _Engine:
         factor -= m[0] * out[1]
         return gap, valid, radius, np.abs(factor, out=factor)
 
-    def _node_clearance(self, rows: _Rows, side: int, count: int):
-        """:meth:`_clearance` of the first ``count`` node-table points of ``side`` (with the
-        normal factor) on ``rows`` (``(m, 1)``), every array in scratch space (:func:`_work`):
-        the results are overwritten by the next call."""
+    def _node_clearance(self, rows: _Rows, side, count: int):
+        """:meth:`_clearance` of the first ``count`` node-table points of ``side`` (an index, or
+        one per row) with the normal factor on ``rows`` (``(m, 1)``), every array in scratch
+        space (:func:`_work`): the results are overwritten by the next call."""
         shape = (rows.turn.shape[0], count)
-        x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+        if np.ndim(side):  # one side per row
+            x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+            nx, ny = self.node_nxy[0, side, :count], self.node_nxy[1, side, :count]
+            z, nz = self.node_z[:, side, :count], self.node_nz[:, side, :count]
+        else:  # one side: its tables broadcast over the rows
+            x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+            nx, ny = self.node_nxy[0, side, :count], self.node_nxy[1, side, :count]
+            z, nz = self.node_z[:, side, None, :count], self.node_nz[:, side, None, :count]
         out, tmp = _work("out", (4,) + shape), _work("tmp", (4,) + shape)
         np.multiply(rows.kx, x, out=out)
         np.multiply(rows.ky, y, out=tmp)
         out += tmp
-        out += self.node_z[:, side, None, :count]
+        out += z
         radius = _work("radius", shape)
         np.multiply(out[0], out[0], out=radius)
         np.multiply(out[1], out[1], out=tmp[0])
@@ -528,10 +536,10 @@ class _Engine:
         theta = np.arctan2(out[1], out[0], out=_work("theta", shape))
         # the normal factor |m x q| with m the turned normal
         m = tmp[:2]
-        np.multiply(rows.kx[:2], self.node_nxy[0, side, :count], out=m)
-        np.multiply(rows.ky[:2], self.node_nxy[1, side, :count], out=tmp[2:])
+        np.multiply(rows.kx[:2], nx, out=m)
+        np.multiply(rows.ky[:2], ny, out=tmp[2:])
         m += tmp[2:]
-        m += self.node_nz[:, side, None, :count]
+        m += nz
         factor = np.multiply(m[1], out[0], out=_work("factor", shape))
         np.multiply(m[0], out[1], out=tmp[2])
         factor -= tmp[2]
@@ -637,14 +645,26 @@ class _Engine:
         fac = np.zeros((n, size))
         rad = np.zeros((n, size))
         # each side's rows on its own generated nodes (its node tables broadcast over rows),
-        # put back onto the grid (off-mask nodes +inf)
-        for k in np.unique(side):
+        # put back onto the grid (off-mask nodes +inf); a few rows of several sides go in one
+        # evaluation, each row with its side's node tables
+        sides = np.unique(side)
+        joint = len(sides) > 1 and n <= self._JOINT_ROWS
+        if joint:
+            out = self._node_clearance(
+                self._rows(side[:, None], phi[:, None], angle[:, None]),
+                side,
+                self.node_index.shape[1],
+            )
+        for k in sides:
             count = int(self.node_real[k].sum())
             nodes = self.node_index[k, :count]
             rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
-            delta, valid, radius, factor = self._node_clearance(
-                self._rows(k, phi[rows, None], angle[rows, None]), k, count
-            )
+            if joint:
+                delta, valid, radius, factor = (a[rows, :count] for a in out)
+            else:
+                delta, valid, radius, factor = self._node_clearance(
+                    self._rows(k, phi[rows, None], angle[rows, None]), k, count
+                )
             if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
                 at = (slice(rows[0], rows[-1] + 1), nodes)
             else:
