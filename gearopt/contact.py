@@ -450,13 +450,14 @@ class _Engine:
         limit, n_cols = table
         uv = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
         np.fmin(uv, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=uv)
-        index = uv.astype(np.intp)
-        np.subtract(xy, index, out=uv)
+        np.trunc(uv, out=uv)  # the cell's corner, in floats (no integer casts but one)
+        corner = uv[0] * n_cols
+        corner += uv[1]
+        cell = corner.astype(np.intp)
+        cell += offset
+        np.subtract(xy, uv, out=uv)
         inside = uv >= 0.0
         inside &= uv <= 1.0
-        cell = index[0] * n_cols
-        cell += index[1]
-        cell += offset
         return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
 
     def _rows(self, side, phi, angle) -> _Rows:
@@ -551,14 +552,15 @@ class _Engine:
         limit, n_cols = self._gear_table
         uv = np.fmax(xy, 0.0, out=tmp[:2])
         np.fmin(uv, limit[:, None, None], out=uv)
-        index = _work("index", (2,) + shape, np.intp)
-        np.copyto(index, uv, casting="unsafe")
-        np.subtract(xy, index, out=uv)
+        np.trunc(uv, out=uv)
+        corner = np.multiply(uv[0], n_cols, out=tmp[2])
+        corner += uv[1]
+        cell = _work("cell", shape, np.intp)
+        np.copyto(cell, corner, casting="unsafe")
+        cell += rows.gear_offset
+        np.subtract(xy, uv, out=uv)
         inside = np.greater_equal(uv, 0.0, out=_work("inside", (2,) + shape, bool))
         inside &= np.less_equal(uv, 1.0, out=_work("inside2", (2,) + shape, bool))
-        cell = np.multiply(index[0], n_cols, out=_work("cell", shape, np.intp))
-        cell += index[1]
-        cell += rows.gear_offset
         # (mode="clip": the cells are valid; the default "raise" buffers ``out``)
         c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape), mode="clip")
         gap = hermite_cells(c, None, uv[0], uv[1])
