@@ -292,6 +292,36 @@ def _work(name: str, shape, dtype=float) -> NDArray:
     return buf[:size].reshape(shape)
 
 
+def _field_tables(field) -> dict:
+    """A field's own node tables, kept on it (a field is not changed once made): its pinion
+    flank's generated nodes (flat indices), their points and normals (components apart), the
+    refinable nodes (two cells above the lowest generated ones) and cells, the grid's cell
+    size."""
+    tables = field.__dict__.get("_tables")
+    if tables is None:
+        pinion = field.pinion
+        nodes = np.flatnonzero(pinion.mask.ravel())
+        pts = pinion.points_mm.reshape(-1, 3)[nodes]
+        nrm = pinion.normals.reshape(-1, 3)[nodes]
+        keep = pinion.mask.copy()
+        for _ in range(2):
+            below = np.zeros_like(keep)
+            below[:, 1:] = keep[:, :-1]
+            keep &= below
+        tables = field.__dict__["_tables"] = {
+            "nodes": nodes,
+            "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
+            "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
+            "keep": keep.ravel(),
+            "cells": (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel(),
+            "cell_mm": (
+                float(np.mean(np.diff(pinion.face_mm))),
+                float(np.mean(np.diff(pinion.profile_mm))),
+            ),
+        }
+    return tables
+
+
 class _Rows:
     """Per-row constants of the clearance (:meth:`_Engine._rows`): the coefficients of x and y
     in the four linear outputs (``kx``, ``ky``, each ``(4, ...)``), the gear's ideal turn, the
@@ -353,8 +383,8 @@ class _Engine:
         self.turn0 = np.array([f.phase_rad - f._shift for f in fields])
         g = math.radians(first.pinion.pitch_angle_deg)
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
-        self.ds = float(np.mean(np.diff(first.pinion.face_mm)))
-        self.dh = float(np.mean(np.diff(first.pinion.profile_mm)))
+        tables = [_field_tables(f) for f in fields]
+        self.ds, self.dh = tables[0]["cell_mm"]
         # mm of normal separation per rad of gear rotation, typical of each side (a fixed
         # tolerance in rad for the refinement's edge test)
         scale = np.array([getattr(f, "_factor_mm", None) or 50.0 for f in fields])
@@ -363,37 +393,24 @@ class _Engine:
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
         # the generated pinion nodes of each side, padded to one count (padding: the first
         # generated node again, its result dropped); components stored apart, contiguous
-        masks = [f.pinion.mask.ravel() for f in fields]
-        count = max(int(m.sum()) for m in masks)
-        index = np.zeros((len(fields), count), np.intp)
-        for k, m in enumerate(masks):
-            nodes = np.flatnonzero(m)
-            index[k, : nodes.size] = nodes
-            index[k, nodes.size :] = nodes[0]
-        self.node_index = index
-        self.node_real = np.arange(count)[None, :] < np.array([m.sum() for m in masks])[:, None]
-        pts = [f.pinion.points_mm.reshape(-1, 3)[index[k]] for k, f in enumerate(fields)]
-        nrm = [f.pinion.normals.reshape(-1, 3)[index[k]] for k, f in enumerate(fields)]
+        sizes = [t["nodes"].size for t in tables]
+        count = max(sizes)
+        pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
+        self.node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
+        self.node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
         self.points = tuple(
-            np.ascontiguousarray(np.stack([p[:, a] for p in pts])) for a in range(3)
+            np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)])
+            for a in range(3)
         )
         self.normals = tuple(
-            np.ascontiguousarray(np.stack([p[:, a] for p in nrm])) for a in range(3)
+            np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
+            for a in range(3)
         )
         # the interpolant is poor in the lowest generated cells (the envelope's fold):
         # refinements stay two cells above them
-        keeps = []
-        for f in fields:
-            keep = f.pinion.mask.copy()
-            for _ in range(2):
-                below = np.zeros_like(keep)
-                below[:, 1:] = keep[:, :-1]
-                keep &= below
-            keeps.append(keep)
-        self.refine_nodes = np.stack([k.ravel() for k in keeps])
-        cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
-        self.refine_cells = np.concatenate([c.ravel() for c in cells])
-        self.pinion_cells = cells[0].size
+        self.refine_nodes = np.stack([t["keep"] for t in tables])
+        self.refine_cells = np.concatenate([t["cells"] for t in tables])
+        self.pinion_cells = tables[0]["cells"].size
         self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
         self.gear_cells = first.gear._lookup[8].size
         self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
