@@ -308,8 +308,11 @@ def _field_tables(field) -> dict:
             below = np.zeros_like(keep)
             below[:, 1:] = keep[:, :-1]
             keep &= below
+        slot = np.full(pinion.mask.size, -1, np.intp)
+        slot[nodes] = np.arange(nodes.size)
         tables = field.__dict__["_tables"] = {
             "nodes": nodes,
+            "slot": slot,
             "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
             "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
             "keep": keep.ravel(),
@@ -391,13 +394,18 @@ class _Engine:
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
-        # the generated pinion nodes of each side, padded to one count (padding: the first
-        # generated node again, its result dropped); components stored apart, contiguous
+        # the generated pinion nodes of each side, padded to one count with at least one more
+        # (padding: the first generated node again, its result dropped); components stored
+        # apart, contiguous
         sizes = [t["nodes"].size for t in tables]
-        count = max(sizes)
+        count = max(sizes) + 1
         pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
         self.node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
         self.node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
+        # each grid node's column in its side's node tables (off-mask: the padding after them)
+        self.node_slot = np.stack(
+            [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
+        )
         self.points = tuple(
             np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)])
             for a in range(3)
@@ -660,12 +668,11 @@ class _Engine:
         side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
         n, size = len(phi), self.shape[0] * self.shape[1]
-        field_ = np.full((n, size), np.inf)
-        fac = np.zeros((n, size))
-        rad = np.zeros((n, size))
-        # each side's rows on its own generated nodes (its node tables broadcast over rows),
-        # put back onto the grid (off-mask nodes +inf); a few rows of several sides go in one
-        # evaluation, each row with its side's node tables
+        field_, fac, rad = np.empty((n, size)), np.empty((n, size)), np.empty((n, size))
+        # each side's rows on its own generated nodes (its node tables broadcast over rows)
+        # and a padding node, the grid gathered from them (off-mask nodes take the padding
+        # node, set to +inf); a few rows of several sides go in one evaluation, each row with
+        # its side's node tables
         sides = np.unique(side)
         joint = len(sides) > 1 and n <= self._JOINT_ROWS
         if joint:
@@ -676,21 +683,28 @@ class _Engine:
             )
         for k in sides:
             count = int(self.node_real[k].sum())
-            nodes = self.node_index[k, :count]
             rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
             if joint:
-                delta, valid, radius, factor = (a[rows, :count] for a in out)
+                delta, valid, radius, factor = (a[rows, : count + 1] for a in out)
             else:
                 delta, valid, radius, factor = self._node_clearance(
-                    self._rows(k, phi[rows, None], angle[rows, None]), k, count
+                    self._rows(k, phi[rows, None], angle[rows, None]), k, count + 1
                 )
+            values = np.where(valid, delta, np.inf)
+            values[:, count] = np.inf
+            factor[:, count] = 0.0
+            radius[:, count] = 0.0
+            slot = self.node_slot[k]
             if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
-                at = (slice(rows[0], rows[-1] + 1), nodes)
+                block = slice(rows[0], rows[-1] + 1)
+                for dest, src in ((field_, values), (fac, factor), (rad, radius)):
+                    np.take(src, slot, axis=1, out=dest[block], mode="clip")
             else:
-                at = (rows[:, None], nodes)
-            field_[at] = np.where(valid, delta, np.inf)
-            fac[at] = factor
-            rad[at] = radius
+                field_[rows], fac[rows], rad[rows] = (
+                    values[:, slot],
+                    factor[:, slot],
+                    radius[:, slot],
+                )
         shape = (n,) + self.shape
         field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
