@@ -13,19 +13,25 @@ Definitions used by the outputs:
   position, in the pinion's direction of motion (``phi1_deg``);
 - at each position the ``pairs`` tooth pairs nearest the mesh centre; the carrying pair is the
   one on which the gear lags least;
-- hand-over: where the TE curves of two successive pairs intersect, solved (Illinois method)
-  on the clearance field, not read off the samples; peak-to-peak TE = the TE maximum (refined
-  by parabolas) minus the TE at the hand-over, or minus a lower sampled value if any;
+- hand-over: where the TE curves of two successive pairs intersect, solved on the clearance
+  field, not read off the samples: where the samples around it are interior contacts (smooth
+  lags), guessed where the cubic interpolants of the two pairs' sampled lags cross, then the
+  root of the parabola through the lag differences evaluated at the guess and an eighth of a
+  step to either side (a guess further off is evaluated anew); otherwise (edge contact) a
+  secant step, the parabola through three differences and a last secant step; peak-to-peak
+  TE = the TE maximum (refined by parabolas) minus the TE at the hand-over, or minus a lower
+  sampled value if any;
 - instantaneous contact zone: the nodes within the marking compound of the mating flank; the
   contact path is the zone's centroid (weights ``compound - separation``, so a paraboloid's
   centroid is its vertex and a line contact's is its middle) along the carrying pair's cycle;
 - mean contact point M: the path point midway between the carrying pair's hand-overs; bias =
   the contact line's extension along the face (seed 003 section 6): the face coordinate of the
   contact point where the pair leaves contact inside the flanks minus where it enters (the ends
-  of its contact interval, found by bisection to an eighth of a position step; the carrying
-  cycle's ends when the contact never leaves the flanks' interior); width = extent of the zone
-  at M perpendicular to the path; ``center_offset_mm`` = M minus the flank centre C
-  (the mean cone distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
+  of its contact interval, found by bisection to an eighth of a position step, the points it
+  can visit evaluated at once; the carrying cycle's ends when the contact never leaves the
+  flanks' interior); width = extent of the zone at M perpendicular to the path;
+  ``center_offset_mm`` = M minus the flank centre C (the mean cone distance, mid working
+  depth: h = (a1 - a2) / 2 with a the mean addenda);
 - contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
   at an edge), over the angular pitch (sampled on beyond the analysed range when a pair is
   still in contact at its ends, up to 1.5 pitches more).
@@ -743,10 +749,12 @@ def _start_handover(st, t, p1, step) -> None:
     whose two pairs' lag difference D changes sign: it brackets the hand-over. Where the
     samples around both pairs' ends of the bracket are interior contacts, the first guess is
     the crossing of the two pairs' interpolated lags, checked by evaluations at it and an
-    eighth of a step to either side (:func:`_handover_step`); otherwise (edge contact: the lags
-    are not smooth) a secant step, the parabola through three differences and a last secant
-    step. Without a bracket the TE is flat (line contact) and the cycle is centred on the
-    contact interval."""
+    eighth of a step to either side (:func:`_handover_step`: the root of the parabola through
+    the three lag differences stands within a tenth of that from the guess, is evaluated anew
+    once if further); otherwise (edge contact: the lags are not smooth), or if the guesses do
+    not settle, a secant step, the parabola through three differences and a last secant step.
+    Without a bracket the TE is flat (line contact) and the cycle is centred on the contact
+    interval."""
     st.v_star, st.g_hand, st.ho = None, None, None
     g, ids, pair_id = st.g, st.ids, st.pair_id
     n = len(t)
@@ -879,11 +887,13 @@ def _handover_step(st, p1) -> None:
         interior = interior and bool(np.all(np.isfinite(st.ex.minimum_rad)))
         z = _parabola_root(gl - gi) if interior else math.inf
         x = ho["x"] + ho["delta"] * z
-        if abs(z) <= 2.0 and ho["lo"] <= x <= ho["hi"]:
+        # the root within a tenth of a delta of the guess: the extra positions (M among them)
+        # stand; further off: the root is evaluated anew once
+        if abs(z) <= 0.1 and ho["lo"] <= x <= ho["hi"]:
             ho["done"] = True
             st.v_star = float(x)
             st.g_hand = float(max(_parabola_at(gl, z), _parabola_at(gi, z)))
-        elif np.isfinite(z) and ho["round"] < 2:  # a poor guess: evaluated anew
+        elif abs(z) <= 2.0 and ho["round"] == 0:
             ho["round"] += 1
             _ask_fit(st, min(max(x, ho["lo"]), ho["hi"]), p1)
         else:  # not smooth there after all: the iteration on the bracket
