@@ -35,6 +35,7 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 
 from __future__ import annotations
 
+import ctypes
 import math
 import threading
 from dataclasses import dataclass, field
@@ -276,6 +277,24 @@ class JointField:
 
 
 _WORK = threading.local()
+_HEAP = {"kept": False}
+
+
+def _keep_heap() -> None:
+    """Ask glibc (once per process) to keep freed memory for reuse: the analyses allocate and
+    free arrays of a few hundred kB at every call, which with glibc's default thresholds
+    (128 kB until its own adjustment, which only a freed larger block triggers) are mapped and
+    returned to the system each time and faulted in again (some 500 page faults a TCA).
+    Elsewhere (no ``mallopt``) nothing is done."""
+    if _HEAP["kept"]:
+        return
+    _HEAP["kept"] = True
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return
+    mallopt(-3, 16 << 20)  # M_MMAP_THRESHOLD: blocks below 16 MiB come from the heap
+    mallopt(-1, 64 << 20)  # M_TRIM_THRESHOLD: the heap's free top kept up to 64 MiB
 
 
 def _work(name: str, shape, dtype=float) -> NDArray:
@@ -365,6 +384,7 @@ class _Engine:
     )
 
     def __init__(self, fields) -> None:
+        _keep_heap()
         first = fields[0]
         for f in fields[1:]:
             same = (

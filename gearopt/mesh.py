@@ -234,19 +234,23 @@ def _separation_mm(
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
     (one per row), on the sample's rows ``rows``."""
     factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
-    with np.errstate(invalid="ignore"):  # inf - inf: a row with nothing on the flanks
-        extra = sample.clearance_rad[rows] - reference_rad.reshape(-1, 1, 1)
-        finite = np.isfinite(extra)
+    reference = reference_rad.reshape(-1, 1, 1)
+    # (NaN, then +inf: inf - inf, a row with nothing on the flanks; inf * 0, off the flanks)
+    with np.errstate(invalid="ignore"):
+        if isinstance(rows, slice):
+            extra = sample.clearance_rad[rows] - reference
+        else:  # a gathered copy, worked on in place
+            extra = sample.clearance_rad[rows]
+            extra -= reference
         extra *= factor[rows]
-        extra[~finite] = np.inf
-        return extra
+    np.copyto(extra, np.inf, where=np.isnan(extra))
+    return extra
 
 
 def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
     """Weighted centroids (weights compound - separation) of each row's zone; NaN-free: a row
     without a zone reports its least-separated node."""
-    w = np.clip(compound_mm - sep_mm, 0.0, None)
-    w = np.where(np.isfinite(w), w, 0.0)
+    w = np.clip(compound_mm - sep_mm, 0.0, None)  # (finite: separations are never NaN)
     total = w.sum(axis=(1, 2))
     s = np.broadcast_to(face_mm[:, None], sep_mm.shape[1:])
     h = np.broadcast_to(profile_mm[None, :], sep_mm.shape[1:])
@@ -262,8 +266,7 @@ def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
     """Unit vector of the zone's minor axis (weighted second moments), in (face, profile);
     along the face for a zone without extent (no node, or one: its moments are rounding
     noise, whose eigenvectors would point anywhere)."""
-    w = np.clip(compound_mm - sep_mm, 0.0, None)
-    w = np.where(np.isfinite(w), w, 0.0)
+    w = np.clip(compound_mm - sep_mm, 0.0, None)  # (finite: separations are never NaN)
     if np.count_nonzero(w) <= 1:
         return np.array([1.0, 0.0])
     s = np.broadcast_to(face_mm[:, None], w.shape)
@@ -465,11 +468,13 @@ def tooth_contacts(
         req = []
         for st in states:
             v = st.interval_sample.phi_rad * st.field.sense
+            known = set(np.round(v / p1 * 1e9).tolist())
             for slot, sign in ((0, -1.0), (pairs - 1, 1.0)):
-                at_end = np.flatnonzero(st.carrying == slot)
-                beyond = st.u[at_end, slot] + sign * p1
-                known = np.isin(np.round(beyond / p1 * 1e9), np.round(v / p1 * 1e9))
-                req += [(st.index, x) for x in beyond[~known]]
+                beyond = st.u[st.carrying == slot, slot] + sign * p1
+                keys = np.round(beyond / p1 * 1e9).tolist()
+                req += [
+                    (st.index, x) for x, key in zip(beyond, keys, strict=True) if key not in known
+                ]
         return req
 
     def evaluate(states, full, beyond=()):
