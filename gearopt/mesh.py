@@ -818,8 +818,8 @@ def _ask_iteration(st, x, p1) -> None:
 
 def _crossing(st, lo, hi, p1, step) -> float | None:
     """Where the lag of the leaving pair G(x) meets the incoming pair's G(x - p1) in
-    [lo, hi], both interpolated (Lagrange, cubic) through the four nearest samples of G; None
-    when any of them is missing or not an interior contact (the lags are smooth only there)."""
+    [lo, hi], both interpolated (cubic) through the four nearest samples of G; None when any
+    of them is missing or not an interior contact (the lags are smooth only there)."""
     sample = st.interval_sample
     v = sample.phi_rad * st.field.sense
     mid = 0.5 * (lo + hi)
@@ -830,26 +830,33 @@ def _crossing(st, lo, hi, p1, step) -> float | None:
         g = sample.minimum_rad[near]
         if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or sample.edge[near].any():
             return None
-        fits.append((z.tolist(), g.tolist()))
+        fits.append(_newton_form(z.tolist(), g.tolist()))
+    (za, ca), (zb, cb) = fits
 
     def difference(x: float) -> float:
-        return _lagrange(*fits[0], x) - _lagrange(*fits[1], x)
+        return _newton_value(za, ca, x) - _newton_value(zb, cb, x)
 
     half = 0.5 * (hi - lo) / step
     root = _illinois(difference, -half, half)
     return None if root is None else mid + step * root
 
 
-def _lagrange(z: list, g: list, x: float) -> float:
-    """The polynomial through the points (z, g) at x."""
-    total = 0.0
-    for i, (zi, gi) in enumerate(zip(z, g, strict=True)):
-        term = gi
-        for j, zj in enumerate(z):
-            if j != i:
-                term *= (x - zj) / (zi - zj)
-        total += term
-    return total
+def _newton_form(z: list, g: list) -> tuple[list, list]:
+    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
+    for :func:`_newton_value`."""
+    c = list(g)
+    for j in range(1, len(z)):
+        for i in range(len(z) - 1, j - 1, -1):
+            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
+    return z, c
+
+
+def _newton_value(z: list, c: list, x: float) -> float:
+    """The polynomial of :func:`_newton_form` at x (nested multiplication)."""
+    value = c[-1]
+    for i in range(len(c) - 2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
 
 
 def _illinois(func, a: float, b: float, tol: float = 1e-12) -> float | None:
