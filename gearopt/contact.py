@@ -35,6 +35,7 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 
 from __future__ import annotations
 
+import ctypes
 import math
 import threading
 from dataclasses import dataclass, field
@@ -276,6 +277,24 @@ class JointField:
 
 
 _WORK = threading.local()
+_HEAP = {"kept": False}
+
+
+def _keep_heap() -> None:
+    """Ask glibc (once per process) to keep freed memory for reuse: the analyses allocate and
+    free arrays of a few hundred kB at every call, which with glibc's default thresholds
+    (128 kB until its own adjustment, which only a freed larger block triggers) are mapped and
+    returned to the system each time and faulted in again (some 500 page faults a TCA).
+    Elsewhere (no ``mallopt``) nothing is done."""
+    if _HEAP["kept"]:
+        return
+    _HEAP["kept"] = True
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return
+    mallopt(-3, 16 << 20)  # M_MMAP_THRESHOLD: blocks below 16 MiB come from the heap
+    mallopt(-1, 64 << 20)  # M_TRIM_THRESHOLD: the heap's free top kept up to 64 MiB
 
 
 def _work(name: str, shape, dtype=float) -> NDArray:
@@ -290,6 +309,39 @@ def _work(name: str, shape, dtype=float) -> NDArray:
     if buf is None or buf.size < size or buf.dtype != dtype:
         buf = store[name] = np.empty(size, dtype)
     return buf[:size].reshape(shape)
+
+
+def _field_tables(field) -> dict:
+    """A field's own node tables, kept on it (a field is not changed once made): its pinion
+    flank's generated nodes (flat indices), their points and normals (components apart), the
+    refinable nodes (two cells above the lowest generated ones) and cells, the grid's cell
+    size."""
+    tables = field.__dict__.get("_tables")
+    if tables is None:
+        pinion = field.pinion
+        nodes = np.flatnonzero(pinion.mask.ravel())
+        pts = pinion.points_mm.reshape(-1, 3)[nodes]
+        nrm = pinion.normals.reshape(-1, 3)[nodes]
+        keep = pinion.mask.copy()
+        for _ in range(2):
+            below = np.zeros_like(keep)
+            below[:, 1:] = keep[:, :-1]
+            keep &= below
+        slot = np.full(pinion.mask.size, -1, np.intp)
+        slot[nodes] = np.arange(nodes.size)
+        tables = field.__dict__["_tables"] = {
+            "nodes": nodes,
+            "slot": slot,
+            "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
+            "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
+            "keep": keep.ravel(),
+            "cells": (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel(),
+            "cell_mm": (
+                float(np.mean(np.diff(pinion.face_mm))),
+                float(np.mean(np.diff(pinion.profile_mm))),
+            ),
+        }
+    return tables
 
 
 class _Rows:
@@ -325,12 +377,14 @@ class _Engine:
     """
 
     _AROUND_ROWS = 32  # batches up to this many rows evaluate the stencils of all cut-backs
+    _JOINT_ROWS = 16  # node fields of up to this many rows: all sides in one evaluation
     _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     _STENCIL = np.array(
         [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)], float
     )
 
     def __init__(self, fields) -> None:
+        _keep_heap()
         first = fields[0]
         for f in fields[1:]:
             same = (
@@ -352,47 +406,39 @@ class _Engine:
         self.turn0 = np.array([f.phase_rad - f._shift for f in fields])
         g = math.radians(first.pinion.pitch_angle_deg)
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
-        self.ds = float(np.mean(np.diff(first.pinion.face_mm)))
-        self.dh = float(np.mean(np.diff(first.pinion.profile_mm)))
+        tables = [_field_tables(f) for f in fields]
+        self.ds, self.dh = tables[0]["cell_mm"]
         # mm of normal separation per rad of gear rotation, typical of each side (a fixed
         # tolerance in rad for the refinement's edge test)
         scale = np.array([getattr(f, "_factor_mm", None) or 50.0 for f in fields])
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
-        # the generated pinion nodes of each side, padded to one count (padding: the first
-        # generated node again, its result dropped); components stored apart, contiguous
-        masks = [f.pinion.mask.ravel() for f in fields]
-        count = max(int(m.sum()) for m in masks)
-        index = np.zeros((len(fields), count), np.intp)
-        for k, m in enumerate(masks):
-            nodes = np.flatnonzero(m)
-            index[k, : nodes.size] = nodes
-            index[k, nodes.size :] = nodes[0]
-        self.node_index = index
-        self.node_real = np.arange(count)[None, :] < np.array([m.sum() for m in masks])[:, None]
-        pts = [f.pinion.points_mm.reshape(-1, 3)[index[k]] for k, f in enumerate(fields)]
-        nrm = [f.pinion.normals.reshape(-1, 3)[index[k]] for k, f in enumerate(fields)]
+        # the generated pinion nodes of each side, padded to one count with at least one more
+        # (padding: the first generated node again, its result dropped); components stored
+        # apart, contiguous
+        sizes = [t["nodes"].size for t in tables]
+        count = max(sizes) + 1
+        pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
+        self.node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
+        self.node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
+        # each grid node's column in its side's node tables (off-mask: the padding after them)
+        self.node_slot = np.stack(
+            [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
+        )
         self.points = tuple(
-            np.ascontiguousarray(np.stack([p[:, a] for p in pts])) for a in range(3)
+            np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)])
+            for a in range(3)
         )
         self.normals = tuple(
-            np.ascontiguousarray(np.stack([p[:, a] for p in nrm])) for a in range(3)
+            np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
+            for a in range(3)
         )
         # the interpolant is poor in the lowest generated cells (the envelope's fold):
         # refinements stay two cells above them
-        keeps = []
-        for f in fields:
-            keep = f.pinion.mask.copy()
-            for _ in range(2):
-                below = np.zeros_like(keep)
-                below[:, 1:] = keep[:, :-1]
-                keep &= below
-            keeps.append(keep)
-        self.refine_nodes = np.stack([k.ravel() for k in keeps])
-        cells = [k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:] for k in keeps]
-        self.refine_cells = np.concatenate([c.ravel() for c in cells])
-        self.pinion_cells = cells[0].size
+        self.refine_nodes = np.stack([t["keep"] for t in tables])
+        self.refine_cells = np.concatenate([t["cells"] for t in tables])
+        self.pinion_cells = tables[0]["cells"].size
         self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
         self.gear_cells = first.gear._lookup[8].size
         self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
@@ -473,13 +519,14 @@ class _Engine:
         limit, n_cols = table
         uv = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
         np.fmin(uv, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=uv)
-        index = uv.astype(np.intp)
-        np.subtract(xy, index, out=uv)
+        np.trunc(uv, out=uv)  # the cell's corner, in floats (no integer casts but one)
+        corner = uv[0] * n_cols
+        corner += uv[1]
+        cell = corner.astype(np.intp)
+        cell += offset
+        np.subtract(xy, uv, out=uv)
         inside = uv >= 0.0
         inside &= uv <= 1.0
-        cell = index[0] * n_cols
-        cell += index[1]
-        cell += offset
         return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
 
     def _rows(self, side, phi, angle) -> _Rows:
@@ -534,17 +581,24 @@ class _Engine:
         factor -= m[0] * out[1]
         return gap, valid, radius, np.abs(factor, out=factor)
 
-    def _node_clearance(self, rows: _Rows, side: int, count: int):
-        """:meth:`_clearance` of the first ``count`` node-table points of ``side`` (with the
-        normal factor) on ``rows`` (``(m, 1)``), every array in scratch space (:func:`_work`):
-        the results are overwritten by the next call."""
+    def _node_clearance(self, rows: _Rows, side, count: int):
+        """:meth:`_clearance` of the first ``count`` node-table points of ``side`` (an index, or
+        one per row) with the normal factor on ``rows`` (``(m, 1)``), every array in scratch
+        space (:func:`_work`): the results are overwritten by the next call."""
         shape = (rows.turn.shape[0], count)
-        x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+        if np.ndim(side):  # one side per row
+            x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+            nx, ny = self.node_nxy[0, side, :count], self.node_nxy[1, side, :count]
+            z, nz = self.node_z[:, side, :count], self.node_nz[:, side, :count]
+        else:  # one side: its tables broadcast over the rows
+            x, y = self.node_xy[0, side, :count], self.node_xy[1, side, :count]
+            nx, ny = self.node_nxy[0, side, :count], self.node_nxy[1, side, :count]
+            z, nz = self.node_z[:, side, None, :count], self.node_nz[:, side, None, :count]
         out, tmp = _work("out", (4,) + shape), _work("tmp", (4,) + shape)
         np.multiply(rows.kx, x, out=out)
         np.multiply(rows.ky, y, out=tmp)
         out += tmp
-        out += self.node_z[:, side, None, :count]
+        out += z
         radius = _work("radius", shape)
         np.multiply(out[0], out[0], out=radius)
         np.multiply(out[1], out[1], out=tmp[0])
@@ -553,10 +607,10 @@ class _Engine:
         theta = np.arctan2(out[1], out[0], out=_work("theta", shape))
         # the normal factor |m x q| with m the turned normal
         m = tmp[:2]
-        np.multiply(rows.kx[:2], self.node_nxy[0, side, :count], out=m)
-        np.multiply(rows.ky[:2], self.node_nxy[1, side, :count], out=tmp[2:])
+        np.multiply(rows.kx[:2], nx, out=m)
+        np.multiply(rows.ky[:2], ny, out=tmp[2:])
         m += tmp[2:]
-        m += self.node_nz[:, side, None, :count]
+        m += nz
         factor = np.multiply(m[1], out[0], out=_work("factor", shape))
         np.multiply(m[0], out[1], out=tmp[2])
         factor -= tmp[2]
@@ -569,17 +623,19 @@ class _Engine:
         limit, n_cols = self._gear_table
         uv = np.fmax(xy, 0.0, out=tmp[:2])
         np.fmin(uv, limit[:, None, None], out=uv)
-        index = _work("index", (2,) + shape, np.intp)
-        np.copyto(index, uv, casting="unsafe")
-        np.subtract(xy, index, out=uv)
+        np.trunc(uv, out=uv)
+        corner = np.multiply(uv[0], n_cols, out=tmp[2])
+        corner += uv[1]
+        cell = _work("cell", shape, np.intp)
+        np.copyto(cell, corner, casting="unsafe")
+        cell += rows.gear_offset
+        np.subtract(xy, uv, out=uv)
         inside = np.greater_equal(uv, 0.0, out=_work("inside", (2,) + shape, bool))
         inside &= np.less_equal(uv, 1.0, out=_work("inside2", (2,) + shape, bool))
-        cell = np.multiply(index[0], n_cols, out=_work("cell", shape, np.intp))
-        cell += index[1]
-        cell += rows.gear_offset
-        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape))
+        # (mode="clip": the cells are valid; the default "raise" buffers ``out``)
+        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape), mode="clip")
         gap = hermite_cells(c, None, uv[0], uv[1])
-        valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool))
+        valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool), mode="clip")
         valid &= inside[0]
         valid &= inside[1]
         gap -= theta
@@ -661,25 +717,43 @@ class _Engine:
         side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
         angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
         n, size = len(phi), self.shape[0] * self.shape[1]
-        field_ = np.full((n, size), np.inf)
-        fac = np.zeros((n, size))
-        rad = np.zeros((n, size))
-        # each side's rows on its own generated nodes (its node tables broadcast over rows),
-        # put back onto the grid (off-mask nodes +inf)
-        for k in np.unique(side):
-            count = int(self.node_real[k].sum())
-            nodes = self.node_index[k, :count]
-            rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
-            delta, valid, radius, factor = self._node_clearance(
-                self._rows(k, phi[rows, None], angle[rows, None]), k, count
+        field_, fac, rad = np.empty((n, size)), np.empty((n, size)), np.empty((n, size))
+        # each side's rows on its own generated nodes (its node tables broadcast over rows)
+        # and a padding node, the grid gathered from them (off-mask nodes take the padding
+        # node, set to +inf); a few rows of several sides go in one evaluation, each row with
+        # its side's node tables
+        sides = np.unique(side)
+        joint = len(sides) > 1 and n <= self._JOINT_ROWS
+        if joint:
+            out = self._node_clearance(
+                self._rows(side[:, None], phi[:, None], angle[:, None]),
+                side,
+                self.node_index.shape[1],
             )
-            if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
-                at = (slice(rows[0], rows[-1] + 1), nodes)
+        for k in sides:
+            count = int(self.node_real[k].sum())
+            rows = np.flatnonzero(side == k) if len(self.sense) > 1 else np.arange(n)
+            if joint:
+                delta, valid, radius, factor = (a[rows, : count + 1] for a in out)
             else:
-                at = (rows[:, None], nodes)
-            field_[at] = np.where(valid, delta, np.inf)
-            fac[at] = factor
-            rad[at] = radius
+                delta, valid, radius, factor = self._node_clearance(
+                    self._rows(k, phi[rows, None], angle[rows, None]), k, count + 1
+                )
+            values = np.where(valid, delta, np.inf)
+            values[:, count] = np.inf
+            factor[:, count] = 0.0
+            radius[:, count] = 0.0
+            slot = self.node_slot[k]
+            if rows[-1] - rows[0] == len(rows) - 1:  # (the usual case: a block of rows)
+                block = slice(rows[0], rows[-1] + 1)
+                for dest, src in ((field_, values), (fac, factor), (rad, radius)):
+                    np.take(src, slot, axis=1, out=dest[block], mode="clip")
+            else:
+                field_[rows], fac[rows], rad[rows] = (
+                    values[:, slot],
+                    factor[:, slot],
+                    radius[:, slot],
+                )
         shape = (n,) + self.shape
         field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)
@@ -690,7 +764,9 @@ class _Engine:
         edge = np.zeros(len(phi), bool)
         rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
         near_out = None
-        if rows.size or near is not None:
+        if near is not None and not rows.size:
+            near_out = self.near(*near)
+        elif rows.size or near is not None:
             f0, s, h = f0.copy(), s.copy(), h.copy()
             f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
                 side[rows],

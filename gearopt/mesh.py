@@ -13,19 +13,25 @@ Definitions used by the outputs:
   position, in the pinion's direction of motion (``phi1_deg``);
 - at each position the ``pairs`` tooth pairs nearest the mesh centre; the carrying pair is the
   one on which the gear lags least;
-- hand-over: where the TE curves of two successive pairs intersect, solved (Illinois method)
-  on the clearance field, not read off the samples; peak-to-peak TE = the TE maximum (refined
-  by parabolas) minus the TE at the hand-over, or minus a lower sampled value if any;
+- hand-over: where the TE curves of two successive pairs intersect, solved on the clearance
+  field, not read off the samples: where the samples around it are interior contacts (smooth
+  lags), guessed where the cubic interpolants of the two pairs' sampled lags cross, then the
+  root of the parabola through the lag differences evaluated at the guess and an eighth of a
+  step to either side (a guess further off is evaluated anew); otherwise (edge contact) a
+  secant step, the parabola through three differences and a last secant step; peak-to-peak
+  TE = the TE maximum (refined by parabolas) minus the TE at the hand-over, or minus a lower
+  sampled value if any;
 - instantaneous contact zone: the nodes within the marking compound of the mating flank; the
   contact path is the zone's centroid (weights ``compound - separation``, so a paraboloid's
   centroid is its vertex and a line contact's is its middle) along the carrying pair's cycle;
 - mean contact point M: the path point midway between the carrying pair's hand-overs; bias =
   the contact line's extension along the face (seed 003 section 6): the face coordinate of the
   contact point where the pair leaves contact inside the flanks minus where it enters (the ends
-  of its contact interval, found by bisection to an eighth of a position step; the carrying
-  cycle's ends when the contact never leaves the flanks' interior); width = extent of the zone
-  at M perpendicular to the path; ``center_offset_mm`` = M minus the flank centre C
-  (the mean cone distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
+  of its contact interval, found by bisection to an eighth of a position step, the points it
+  can visit evaluated at once; the carrying cycle's ends when the contact never leaves the
+  flanks' interior); width = extent of the zone at M perpendicular to the path;
+  ``center_offset_mm`` = M minus the flank centre C (the mean cone distance, mid working
+  depth: h = (a1 - a2) / 2 with a the mean addenda);
 - contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
   at an edge), over the angular pitch (sampled on beyond the analysed range when a pair is
   still in contact at its ends, up to 1.5 pitches more).
@@ -290,19 +296,23 @@ def _separation_mm(
     """Separation of every node from the mating flank with the gear at ``reference_rad`` lag
     (one per row), on the sample's rows ``rows``."""
     factor = sample.normal_factor_mm if separation == "normal" else sample.radius_mm
-    with np.errstate(invalid="ignore"):  # inf - inf: a row with nothing on the flanks
-        extra = sample.clearance_rad[rows] - reference_rad.reshape(-1, 1, 1)
-        finite = np.isfinite(extra)
+    reference = reference_rad.reshape(-1, 1, 1)
+    # (NaN, then +inf: inf - inf, a row with nothing on the flanks; inf * 0, off the flanks)
+    with np.errstate(invalid="ignore"):
+        if isinstance(rows, slice):
+            extra = sample.clearance_rad[rows] - reference
+        else:  # a gathered copy, worked on in place
+            extra = sample.clearance_rad[rows]
+            extra -= reference
         extra *= factor[rows]
-        extra[~finite] = np.inf
-        return extra
+    np.copyto(extra, np.inf, where=np.isnan(extra))
+    return extra
 
 
 def _centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
     """Weighted centroids (weights compound - separation) of each row's zone; NaN-free: a row
     without a zone reports its least-separated node."""
-    w = np.clip(compound_mm - sep_mm, 0.0, None)
-    w = np.where(np.isfinite(w), w, 0.0)
+    w = np.clip(compound_mm - sep_mm, 0.0, None)  # (finite: separations are never NaN)
     total = w.sum(axis=(1, 2))
     s = np.broadcast_to(face_mm[:, None], sep_mm.shape[1:])
     h = np.broadcast_to(profile_mm[None, :], sep_mm.shape[1:])
@@ -318,8 +328,7 @@ def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
     """Unit vector of the zone's minor axis (weighted second moments), in (face, profile);
     along the face for a zone without extent (no node, or one: its moments are rounding
     noise, whose eigenvectors would point anywhere)."""
-    w = np.clip(compound_mm - sep_mm, 0.0, None)
-    w = np.where(np.isfinite(w), w, 0.0)
+    w = np.clip(compound_mm - sep_mm, 0.0, None)  # (finite: separations are never NaN)
     if np.count_nonzero(w) <= 1:
         return np.array([1.0, 0.0])
     s = np.broadcast_to(face_mm[:, None], w.shape)
@@ -336,23 +345,26 @@ def _minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
     return np.array([minor[0], minor[1]])
 
 
-def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) -> float:
-    """Extent of {separation < compound} along the line through ``point`` perpendicular to
-    ``direction``, by bilinear interpolation of the node field (sampled at 2001 points; from
-    the middle outward, the first sample out of the zone on each side bounds it)."""
-    perp = np.array([-direction[1], direction[0]])
+def _widths(sep_mm: NDArray, compound_mm, face_mm, profile_mm, points, directions) -> NDArray:
+    """Extent of {separation < compound} along the line through ``points[k]`` perpendicular
+    to ``directions[k]`` on the field ``sep_mm[k]`` (``(K, n_f, n_p)``), for K lines at once,
+    by bilinear interpolation of the node field (sampled at 2001 points; from the middle
+    outward, the first sample out of the zone on each side bounds it)."""
+    points, directions = np.asarray(points, float), np.asarray(directions, float)
+    n_lines = len(sep_mm)
+    perp = np.stack([-directions[:, 1], directions[:, 0]], axis=1)
     reach = float(face_mm[-1] - face_mm[0] + profile_mm[-1] - profile_mm[0])
     tau = np.linspace(-reach, reach, 2001)
     big = 10.0 * compound_mm
     f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
+    flat, n_p, size = f.ravel(), f.shape[2], f.shape[1] * f.shape[2]
 
-    flat, n_p = f.ravel(), f.shape[1]
-
-    def value(k):
-        """The interpolated separation minus the compound at the samples ``k``."""
+    def value(line, k):
+        """The interpolated separation minus the compound at the samples ``k`` of lines
+        ``line``."""
         tk = tau[k]
-        s = point[0] + tk * perp[0]
-        h = point[1] + tk * perp[1]
+        s = points[line, 0] + tk * perp[line, 0]
+        h = points[line, 1] + tk * perp[line, 1]
         inside = (s >= face_mm[0]) & (s <= face_mm[-1])
         inside &= (h >= profile_mm[0]) & (h <= profile_mm[-1])
         i = np.minimum(np.maximum(np.searchsorted(face_mm, s) - 1, 0), len(face_mm) - 2)
@@ -360,7 +372,7 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
         s0, h0 = face_mm[i], profile_mm[j]
         u = np.minimum(np.maximum((s - s0) / (face_mm[i + 1] - s0), 0.0), 1.0)
         v = np.minimum(np.maximum((h - h0) / (profile_mm[j + 1] - h0), 0.0), 1.0)
-        at = i * n_p + j
+        at = line * size + i * n_p + j
         val = (
             (1 - u) * (1 - v) * flat[at]
             + u * (1 - v) * flat[at + n_p]
@@ -375,24 +387,36 @@ def _width(sep_mm: NDArray, compound_mm, face_mm, profile_mm, point, direction) 
     # from the middle outward on each side: every 25th sample, then all of them up to the
     # first coarse one out of the zone (or to the end), each side's first sample out bounds it
     ways = (np.arange(centre, len(tau)), np.arange(centre, -1, -1))
-    coarse = [w[::25] for w in ways]
-    val = value(np.concatenate(coarse))
-    if val[0] >= 0.0:
-        return 0.0
-    hits = np.split(val >= 0.0, [len(coarse[0])])
+    coarse = np.concatenate([w[::25] for w in ways])
+    n_coarse = len(coarse) // 2
+    lines = np.repeat(np.arange(n_lines), len(coarse))
+    val = value(lines, np.tile(coarse, n_lines)).reshape(n_lines, 2, n_coarse)
+    hits = val >= 0.0
     spans = [
-        w if not h.any() else w[: 25 * np.argmax(h) + 1] for w, h in zip(ways, hits, strict=True)
+        ways[w] if not hits[k, w].any() else ways[w][: 25 * np.argmax(hits[k, w]) + 1]
+        for k in range(n_lines)
+        for w in (0, 1)
     ]
-    fine = np.split(value(np.concatenate(spans)), [len(spans[0])])
-    ends = []
-    for span, v, edge in zip(spans, fine, (tau[-1], tau[0]), strict=True):
-        out = np.flatnonzero(v >= 0.0)
-        if not out.size:
-            ends.append(edge)
+    fine_lines = np.repeat(np.repeat(np.arange(n_lines), 2), [len(a) for a in spans])
+    fine = np.split(
+        value(fine_lines, np.concatenate(spans)), np.cumsum([len(a) for a in spans])[:-1]
+    )
+    width = np.zeros(n_lines)
+    for k in range(n_lines):
+        if val[k, 0, 0] >= 0.0:
             continue
-        k_in, k_out, a, b = span[out[0] - 1], span[out[0]], v[out[0] - 1], v[out[0]]
-        ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
-    return float(ends[0] - ends[1])
+        ends = []
+        for span, v, edge in zip(
+            spans[2 * k : 2 * k + 2], fine[2 * k : 2 * k + 2], (tau[-1], tau[0]), strict=True
+        ):
+            out = np.flatnonzero(v >= 0.0)
+            if not out.size:
+                ends.append(edge)
+                continue
+            k_in, k_out, a, b = span[out[0] - 1], span[out[0]], v[out[0] - 1], v[out[0]]
+            ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
+        width[k] = ends[0] - ends[1]
+    return width
 
 
 def _slice(sample: FieldSample, rows) -> FieldSample:
@@ -488,15 +512,15 @@ def tooth_contacts(
             _, first, inv = np.unique(key, return_index=True, return_inverse=True)
             uu = u.ravel()[first]
             ext = np.concatenate([uu.min() - step * EXTEND, uu.max() + step * EXTEND])
-            windows.append((u, ids, inv, len(rows_u), len(first), len(ext)))
+            windows.append((u, ids, inv, len(rows_u), len(first)))
             rows_side += [k] * (len(first) + len(ext))
             rows_u += list(uu) + list(ext)
         side_rows = np.array(rows_side, np.intp)
         main = joint.sample(side_rows, sense[side_rows] * np.array(rows_u))
         out = []
-        for k, (u, ids, inv, start, count, n_ext) in enumerate(windows):
+        for k, (u, ids, inv, start, count) in enumerate(windows):
             st = _Side(k, fields[k], _slice(main, slice(start, start + count)), u, ids, inv)
-            st.interval_sample = _slice(main, slice(start, start + count + n_ext))
+            st.interval_sample = _slice(main, slice(start, start + count + 2 * len(EXTEND)))
             out.append(st)
         return out
 
@@ -506,74 +530,92 @@ def tooth_contacts(
         req = []
         for st in states:
             v = st.interval_sample.phi_rad * st.field.sense
+            known = set(np.round(v / p1 * 1e9).tolist())
             for slot, sign in ((0, -1.0), (pairs - 1, 1.0)):
-                at_end = np.flatnonzero(st.carrying == slot)
-                beyond = st.u[at_end, slot] + sign * p1
-                known = np.isin(np.round(beyond / p1 * 1e9), np.round(v / p1 * 1e9))
-                req += [(st.index, x) for x in beyond[~known]]
+                beyond = st.u[st.carrying == slot, slot] + sign * p1
+                keys = np.round(beyond / p1 * 1e9).tolist()
+                req += [
+                    (st.index, x) for x, key in zip(beyond, keys, strict=True) if key not in known
+                ]
         return req
 
-    def near_batch(states, it):
-        """The contact-interval and hand-over evaluations of step ``it``, all sides:
-        ``((side, phi, s, h), owners)``, or None when there are none."""
-        rows, owners = [], []
+    def evaluate(states, full, beyond=()):
+        """One joint evaluation of every side's pending refinements started from nearby
+        contact points (contact-interval ends, hand-over), the extra positions of the sides
+        ``full`` (hand-over, TE peak, mean point M and its neighbours) and the ``beyond`` rows
+        ``(side, v)``; returns the beyond rows' sample. Where the hand-over is guessed from
+        smooth lags, the extra positions' minima are refined from the contact points
+        interpolated along the samples and only M's rows take node fields; otherwise each
+        takes node fields and a refined minimum."""
+        f_side, f_v, f_refine = [], [], []
+        for st in full:
+            angles = _extra_angles(st, t, p1, step)
+            st.near_extras = _fit_mode(st)
+            if st.near_extras:
+                f_side += [st.index] * 3
+                f_v += angles[3:]
+                f_refine += [False] * 3
+                for j, v in enumerate(angles):
+                    st.requests.append((v, *_contact_at(st, v), ("ex", j)))
+            else:
+                f_side += [st.index] * 6
+                f_v += angles
+                f_refine += [True] * 6
+            st.ex_phi = st.field.sense * np.array(angles)
+        f_side += [r[0] for r in beyond]
+        f_v += [r[1] for r in beyond]
+        f_refine += [True] * len(beyond)
+        n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for st in states:
-            for v, s, h, tag in _interval_requests(st) + _handover_requests(st, it, p1):
-                rows.append((st.index, v, s, h))
+            for v, s, h, tag in st.requests:
+                n_side.append(st.index)
+                n_v.append(v)
+                n_s.append(s)
+                n_h.append(h)
                 owners.append((st, tag))
-        if not rows:
-            return None
-        side_arr = np.array([r[0] for r in rows], np.intp)
-        v, s, h = (np.array([r[k] for r in rows]) for k in (1, 2, 3))
-        return (side_arr, sense[side_arr] * v, s, h), owners
-
-    def extra_rows(states):
-        """The extra positions of each side: hand-over (both pairs), TE peak, mean point M and
-        its neighbours for the path direction."""
-        extra_v = []
-        for st in states:
-            start, end = st.interval
-            if st.v_star is None:  # flat TE (line contact): centred on the contact interval
-                st.v_star = 0.5 * (start + end) + 0.5 * p1
-                st.g_hand = float(np.max(st.g.min(axis=1)))
-            v_mid = st.v_star - 0.5 * p1
-            dv = 0.25 * step
-            extra_v.append(
-                [
-                    st.v_star,
-                    st.v_star - p1,
-                    _peak_guess(st, t, p1, step),
-                    v_mid,
-                    v_mid - dv,
-                    v_mid + dv,
-                ]
-            )
-        extra_v = np.array(extra_v)
-        ex_side = np.repeat(np.arange(n_sides), extra_v.shape[1])
-        return ex_side, sense[ex_side] * extra_v.ravel()
+            st.requests = []
+        f_side = np.array(f_side, np.intp)
+        f_phi = sense[f_side] * np.array(f_v)
+        f_refine = np.array(f_refine, bool)
+        sample = answers = None
+        if owners:
+            n_side = np.array(n_side, np.intp)
+            near = (n_side, sense[n_side] * np.array(n_v), np.array(n_s), np.array(n_h))
+            if f_side.size:
+                sample, answers = joint.sample(f_side, f_phi, refine=f_refine, near=near)
+            else:
+                answers = joint.minimum_near(*near)
+            for k, (st, tag) in enumerate(owners):
+                st.answers[tag] = tuple(a[k] for a in answers)
+        elif f_side.size:
+            sample = joint.sample(f_side, f_phi)
+        start = 0
+        for st in full:
+            if st.near_extras:
+                st.ex = _near_extras(st, _slice(sample, slice(start, start + 3)))
+                start += 3
+            else:
+                st.ex = _slice(sample, slice(start, start + 6))
+                start += 6
+        return _slice(sample, slice(start, None)) if beyond else None
 
     def begin(states):
         for st in states:
+            st.ex, st.answers, st.requests = None, {}, []
             _start_interval(st)
-            _start_handover(st, t, p1)
+            _start_handover(st, t, p1, step)
 
+    # the contact intervals' ends (bisection on the edge flag, its candidate points evaluated
+    # at once), the first hand-over evaluations and, where the hand-over is guessed from
+    # smooth lags, the extra positions, with the pairs beyond the windows: one joint evaluation
     states = main_sample(np.zeros(n_sides))
     begin(states)
     req = beyond_requests(states)
-    more = answers = None
-    if req:
-        # the first contact-interval and hand-over evaluations go along (their answers stand
-        # unless a window is recentred below)
-        ext_side = np.array([r[0] for r in req], np.intp)
-        ext_phi = sense[ext_side] * np.array([r[1] for r in req])
-        batch = near_batch(states, 0)
-        if batch is None:
-            more = joint.sample(ext_side, ext_phi)
-        else:
-            more, answers = joint.sample(ext_side, ext_phi, near=batch[0])
+    more = evaluate(states, [st for st in states if _extras_due(st)], req)
     # the mesh centre of each side: the relative angle of least lag over everything sampled;
     # a window not centred on it (the contact moved by misalignment) is centred and resampled
     centres = np.zeros(n_sides)
+    ext_side = np.array([r[0] for r in req], np.intp)
     for st in states:
         v = st.interval_sample.phi_rad * st.field.sense
         g = st.interval_sample.minimum_rad
@@ -590,34 +632,104 @@ def tooth_contacts(
     if np.any(centres != 0.0):
         states = main_sample(centres)
         begin(states)
-        answers = None
-
-    # contact intervals (bisection on the edge flag) and hand-overs, their evaluations of
-    # all sides batched into shared calls; the last step's go along with the extra positions
-    # once the hand-overs are solved
-    extras = None
-    for it in range(3):
-        batch = near_batch(states, it)
-        if batch is None:
-            break
-        if it == 0 and answers is not None:
-            pass
-        elif it == 2 and all(st.v_star is not None for st in states):
-            extras, answers = joint.sample(*extra_rows(states), near=batch[0])
-        else:
-            answers = joint.minimum_near(*batch[0])
-        for k, (st, tag) in enumerate(batch[1]):
-            st.answers[tag] = tuple(a[k] for a in answers)
+        evaluate(states, [st for st in states if _extras_due(st)])
+    # the contact intervals' ends, the hand-overs' further steps (edge contact, or a poor first
+    # guess) and the extra positions still missing (a flat TE is centred on its contact
+    # interval)
+    while True:
         for st in states:
-            _interval_update(st)
-            _handover_update(st, it, p1)
-    if extras is None:
-        extras = joint.sample(*extra_rows(states))
-    out = []
-    for st, name in zip(states, sides, strict=True):
-        ex = _slice(extras, slice(st.index * 6, st.index * 6 + 6))
-        out.append(_assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation))
-    return out
+            _interval_finish(st)
+            _handover_step(st, p1)
+        due = [st for st in states if st.ex is None and _extras_due(st)]
+        if not due and not any(st.requests for st in states):
+            break
+        evaluate(states, due)
+    return _contacts(
+        [
+            _assemble(st, name, st.ex, t, p1, frame, pairs, compound_um, separation)
+            for st, name in zip(states, sides, strict=True)
+        ],
+        compound_um * 1e-3,
+    )
+
+
+def _contacts(parts, compound_mm) -> list[ToothContact]:
+    """The ToothContacts of :func:`_assemble`'s parts, every side's pattern width (across the
+    path at M) and contact-ellipse major axis (along the zone's long axis at M) measured at
+    once."""
+    fields = [f for lines, _ in parts for f in lines[:2]]
+    points = [lines[2] for lines, _ in parts for _ in (0, 1)]
+    directions = [d for lines, _ in parts for d in lines[3:]]
+    face, profile = parts[0][1]["face_mm"], parts[0][1]["profile_mm"]
+    widths = _widths(np.stack(fields), compound_mm, face, profile, points, directions)
+    return [
+        ToothContact(
+            **kw, width_mm=float(widths[2 * k]), ellipse_major_axis_mm=float(widths[2 * k + 1])
+        )
+        for k, (_, kw) in enumerate(parts)
+    ]
+
+
+def _extras_due(st) -> bool:
+    """Whether a side's extra positions can be evaluated: its hand-over is settled or guessed
+    from smooth lags, or (no hand-over) its contact interval is known."""
+    ho = st.ho
+    if ho is None:
+        return st.interval_done
+    return ho.get("done", False) or ho["mode"] == "fit"
+
+
+def _fit_mode(st) -> bool:
+    """Whether a side's hand-over is being checked at a guess from smooth lags."""
+    return st.ho is not None and not st.ho.get("done") and st.ho["mode"] == "fit"
+
+
+def _contact_at(st, v: float) -> tuple[float, float]:
+    """A start for a refinement at relative angle ``v``: the contact point interpolated
+    (linearly in v) between the nearest samples in contact on either side."""
+    sample = st.interval_sample
+    if not hasattr(st, "path"):
+        ok = np.isfinite(sample.minimum_rad)
+        vs = sample.phi_rad[ok] * st.field.sense
+        order = np.argsort(vs)
+        st.path = (
+            vs[order],
+            sample.contact_face_mm[ok][order],
+            sample.contact_profile_mm[ok][order],
+        )
+    vs, cs, ch = st.path
+    return float(np.interp(v, vs, cs)), float(np.interp(v, vs, ch))
+
+
+def _near_extras(st, mean: FieldSample) -> FieldSample:
+    """The extra positions' sample from their refined minima (answers ``("ex", j)``) and the
+    node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
+    got = [st.answers.pop(("ex", j)) for j in range(6)]
+    blank = np.full((3,) + mean.clearance_rad.shape[1:], np.inf)
+    ones = np.ones_like(blank)
+    return FieldSample(
+        phi_rad=st.ex_phi,
+        clearance_rad=np.concatenate([blank, mean.clearance_rad]),
+        normal_factor_mm=np.concatenate([ones, mean.normal_factor_mm]),
+        radius_mm=np.concatenate([ones, mean.radius_mm]),
+        minimum_rad=np.array([a[0] for a in got], float),
+        contact_face_mm=np.array([a[1] for a in got], float),
+        contact_profile_mm=np.array([a[2] for a in got], float),
+        edge=np.array([a[3] for a in got], bool),
+    )
+
+
+def _extra_angles(st, t, p1, step) -> list[float]:
+    """The extra positions of a side: the hand-over (both pairs), the TE peak, the mean point
+    M and its neighbours for the path direction; a flat TE (line contact, no hand-over) is
+    centred on the contact interval."""
+    if st.v_star is None:
+        start, end = st.interval
+        st.v_star = 0.5 * (start + end) + 0.5 * p1
+        st.g_hand = float(np.max(st.g.min(axis=1)))
+    v_mid = st.v_star - 0.5 * p1
+    dv = 0.25 * step
+    return [st.v_star, st.v_star - p1, _peak_guess(st, t, p1, step), v_mid, v_mid - dv, v_mid + dv]
 
 
 def _peak_guess(st, t, p1, step) -> float:
@@ -635,19 +747,23 @@ def _peak_guess(st, t, p1, step) -> float:
     return float(v_peak)
 
 
+BISECTIONS = 3  # contact-interval ends to an eighth of a position step
+
+
 def _start_interval(st) -> None:
     """Bracket the relative angles between which a pair's contact stays inside the flanks
-    (not at an edge) from the samples; bisection follows (warm-started Newton)."""
+    (not at an edge) from the samples, and ask for the points a bisection of each open bracket
+    can visit (warm-started Newton), all at once."""
     sample = getattr(st, "interval_sample", st.sample)
     v = sample.phi_rad * st.field.sense
     inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
     order = np.argsort(v)
     v, inner = v[order], inner[order]
-    st.answers = {}
+    st.interval_done = False
     if not inner.any():  # edge contact only: no interval, centred on the least lag
         gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
         best = float(v[np.argmin(gs)])
-        st.interval, st.bisect = (best, best), 0
+        st.interval, st.bisect, st.interval_done = (best, best), False, True
         return
     # the unbroken run of interior samples around the least lag (the mesh centre), or the
     # longest run when the least lag is itself at an edge
@@ -663,40 +779,49 @@ def _start_interval(st) -> None:
     st.ci_open = np.array([lo_k > 0, hi_k < len(v) - 1])
     cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
     st.ci_s, st.ci_h = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-    st.bisect = 3
+    st.bisect, st.interval_done = True, False
     st.interval = (float(st.ci_a[0]), float(st.ci_a[1]))
+    parts = 2**BISECTIONS
+    for e in np.flatnonzero(st.ci_open):
+        a, b = st.ci_a[e], st.ci_b[e]
+        for j in range(1, parts):
+            st.requests.append((a + (b - a) * j / parts, st.ci_s[e], st.ci_h[e], ("ci", e, j)))
 
 
-def _interval_requests(st):
-    if st.bisect <= 0:
-        return []
-    m = 0.5 * (st.ci_a + st.ci_b)
-    return [(m[e], st.ci_s[e], st.ci_h[e], ("ci", e)) for e in (0, 1)]
-
-
-def _interval_update(st) -> None:
-    if st.bisect <= 0:
+def _interval_finish(st) -> None:
+    """Bisect each open bracket on the answers of its candidate points: the end is the middle
+    of the last bracket, the contact point the last inside one's."""
+    if st.interval_done:
         return
-    m = 0.5 * (st.ci_a + st.ci_b)
-    for e in (0, 1):
-        value, s1, h1, edge = st.answers.pop(("ci", e))
-        inside = np.isfinite(value) and not edge
-        if st.ci_open[e]:
-            if inside:
-                st.ci_a[e] = m[e]
+    st.interval_done = True
+    parts = 2**BISECTIONS
+    for e in np.flatnonzero(st.ci_open):
+        a, b = st.ci_a[e], st.ci_b[e]
+        ja, jb = 0, parts
+        for _ in range(BISECTIONS):
+            m = (ja + jb) // 2
+            value, s1, h1, edge = st.answers[("ci", e, m)]
+            if np.isfinite(value) and not edge:
+                ja = m
                 st.ci_s[e], st.ci_h[e] = s1, h1
             else:
-                st.ci_b[e] = m[e]
-    st.bisect -= 1
+                jb = m
+        st.ci_a[e], st.ci_b[e] = a + (b - a) * ja / parts, a + (b - a) * jb / parts
     ends = np.where(st.ci_open, 0.5 * (st.ci_a + st.ci_b), st.ci_a)
     st.interval = (float(ends[0]), float(ends[1]))
 
 
-def _start_handover(st, t, p1) -> None:
+def _start_handover(st, t, p1, step) -> None:
     """Find a forward switch of the carrying pair (the next pair, one id lower, takes over)
-    whose two pairs' lag difference D changes sign: it brackets the hand-over, solved by a
-    secant step, the parabola through three differences and a last secant step. Without one
-    the TE is flat (line contact) and the cycle is centred on the contact interval."""
+    whose two pairs' lag difference D changes sign: it brackets the hand-over. Where the
+    samples around both pairs' ends of the bracket are interior contacts, the first guess is
+    the crossing of the two pairs' interpolated lags, checked by evaluations at it and an
+    eighth of a step to either side (:func:`_handover_step`: the root of the parabola through
+    the three lag differences stands within a tenth of that from the guess, is evaluated anew
+    once if further); otherwise (edge contact: the lags are not smooth), or if the guesses do
+    not settle, a secant step, the parabola through three differences and a last secant step.
+    Without a bracket the TE is flat (line contact) and the cycle is centred on the contact
+    interval."""
     st.v_star, st.g_hand, st.ho = None, None, None
     g, ids, pair_id = st.g, st.ids, st.pair_id
     n = len(t)
@@ -713,36 +838,151 @@ def _start_handover(st, t, p1) -> None:
         if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
             lo, hi = t[k] + leave * p1, t[k + 1] + leave * p1
             cs, ch = st.cs, st.ch
-            starts = (
-                0.5 * (cs[k, col_l[0][0]] + cs[k + 1, col_l[1][0]]),
-                0.5 * (ch[k, col_l[0][0]] + ch[k + 1, col_l[1][0]]),
-                0.5 * (cs[k, col_i[0][0]] + cs[k + 1, col_i[1][0]]),
-                0.5 * (ch[k, col_i[0][0]] + ch[k + 1, col_i[1][0]]),
-            )
+            ends = [
+                ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
+                for c in (col_l, col_i)
+            ]
             x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
-            st.ho = {"lo": lo, "hi": hi, "d_lo": d_lo, "d_hi": d_hi, "starts": starts, "x": x0}
-            st.v_star = float(x0)
+            st.ho = {"lo": lo, "hi": hi, "d_lo": d_lo, "d_hi": d_hi, "x0": x0, "ends": ends}
+            st.ho["delta"] = step / 8.0
+            guess = _crossing(st, lo, hi, p1, step)
+            if guess is None:
+                _ask_iteration(st, x0, p1)
+            else:
+                st.ho["round"] = 0
+                _ask_fit(st, guess, p1)
             return
 
 
-def _handover_requests(st, it, p1):
-    if st.ho is None or it > 1 or st.ho.get("done"):
-        return []
-    s_l, h_l, s_i, h_i = st.ho["starts"]
-    x = st.ho["x"]
-    return [(x, s_l, h_l, ("ho", 0)), (x - p1, s_i, h_i, ("ho", 1))]
-
-
-def _handover_update(st, it, p1) -> None:
+def _ask_fit(st, x, p1) -> None:
+    """Evaluations of a hand-over guess ``x``: both pairs at ``x`` (the extra positions) and a
+    delta to either side, started from the contact points interpolated along the bracket."""
     ho = st.ho
-    if ho is None or it > 1 or ho.get("done"):
+    ho["mode"], ho["x"], st.v_star, st.ex = "fit", float(x), float(x), None
+    f = (x - ho["lo"]) / (ho["hi"] - ho["lo"])
+    for pair, shift in ((0, 0.0), (1, -p1)):
+        (s0, h0), (s1, h1) = ho["ends"][pair]
+        s, h = (1.0 - f) * s0 + f * s1, (1.0 - f) * h0 + f * h1
+        for sign in (-1, 1):
+            st.requests.append((x + shift + sign * ho["delta"], s, h, ("ho", pair, sign)))
+
+
+def _ask_iteration(st, x, p1) -> None:
+    """An evaluation of both pairs at ``x`` for the iteration on the bracket (started from the
+    middle of each pair's contact points at the bracket's ends)."""
+    ho = st.ho
+    ho["mode"], ho["x"], st.v_star = "iterate", float(x), float(x)
+    ho.setdefault("round", 0)
+    for pair, shift in ((0, 0.0), (1, -p1)):
+        (s0, h0), (s1, h1) = ho["ends"][pair]
+        st.requests.append((x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ("ho", pair, 0)))
+
+
+def _crossing(st, lo, hi, p1, step) -> float | None:
+    """Where the lag of the leaving pair G(x) meets the incoming pair's G(x - p1) in
+    [lo, hi], both interpolated (cubic) through the four nearest samples of G; None when any
+    of them is missing or not an interior contact (the lags are smooth only there)."""
+    sample = st.interval_sample
+    v = sample.phi_rad * st.field.sense
+    mid = 0.5 * (lo + hi)
+    fits = []
+    for centre in (mid, mid - p1):
+        near = np.argsort(np.abs(v - centre))[:4]
+        z = (v[near] - centre) / step
+        g = sample.minimum_rad[near]
+        if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or sample.edge[near].any():
+            return None
+        fits.append(_newton_form(z.tolist(), g.tolist()))
+    (za, ca), (zb, cb) = fits
+
+    def difference(x: float) -> float:
+        return _newton_value(za, ca, x) - _newton_value(zb, cb, x)
+
+    half = 0.5 * (hi - lo) / step
+    root = _illinois(difference, -half, half)
+    return None if root is None else mid + step * root
+
+
+def _newton_form(z: list, g: list) -> tuple[list, list]:
+    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
+    for :func:`_newton_value`."""
+    c = list(g)
+    for j in range(1, len(z)):
+        for i in range(len(z) - 1, j - 1, -1):
+            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
+    return z, c
+
+
+def _newton_value(z: list, c: list, x: float) -> float:
+    """The polynomial of :func:`_newton_form` at x (nested multiplication)."""
+    value = c[-1]
+    for i in range(len(c) - 2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
+
+
+def _illinois(func, a: float, b: float, tol: float = 1e-12) -> float | None:
+    """A root of ``func`` in [a, b] by the Illinois method (None without a sign change)."""
+    fa, fb = func(a), func(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if fa * fb > 0.0:
+        return None
+    for _ in range(100):
+        c = b - fb * (b - a) / (fb - fa)
+        fc = func(c)
+        if fc == 0.0 or abs(c - b) <= tol:
+            return c
+        if fc * fb < 0.0:
+            a, fa = b, fb
+        else:
+            fa *= 0.5
+        b, fb = c, fc
+    return b
+
+
+def _handover_step(st, p1) -> None:
+    """Take in a hand-over's evaluations, if they are in: ask for the next ones, or settle
+    ``v_star`` (and the lag there, ``g_hand``, when it is interpolated)."""
+    ho = st.ho
+    if ho is None or ho.get("done"):
         return
-    d = float(st.answers.pop(("ho", 0))[0] - st.answers.pop(("ho", 1))[0])
+    if ho["mode"] == "fit":
+        tags = [("ho", pair, sign) for pair in (0, 1) for sign in (-1, 1)]
+        if st.ex is None or not all(tag in st.answers for tag in tags):
+            return
+        got = [st.answers.pop(tag) for tag in tags]
+        gl = np.array([got[0][0], st.ex.minimum_rad[0], got[1][0]])
+        gi = np.array([got[2][0], st.ex.minimum_rad[1], got[3][0]])
+        interior = np.all(np.isfinite(gl)) and np.all(np.isfinite(gi))
+        interior = interior and not (st.ex.edge[:2].any() or any(a[3] for a in got))
+        interior = interior and bool(np.all(np.isfinite(st.ex.minimum_rad)))
+        z = _parabola_root(gl - gi) if interior else math.inf
+        x = ho["x"] + ho["delta"] * z
+        # the root within a tenth of a delta of the guess: the extra positions (M among them)
+        # stand; further off: the root is evaluated anew once
+        if abs(z) <= 0.1 and ho["lo"] <= x <= ho["hi"]:
+            ho["done"] = True
+            st.v_star = float(x)
+            st.g_hand = float(max(_parabola_at(gl, z), _parabola_at(gi, z)))
+        elif abs(z) <= 2.0 and ho["round"] == 0:
+            ho["round"] += 1
+            _ask_fit(st, min(max(x, ho["lo"]), ho["hi"]), p1)
+        else:  # not smooth there after all: the iteration on the bracket
+            st.ex = None
+            ho["round"] = 0
+            _ask_iteration(st, ho["x0"], p1)
+        return
+    if not (("ho", 0, 0) in st.answers and ("ho", 1, 0) in st.answers):
+        return
+    d = float(st.answers.pop(("ho", 0, 0))[0] - st.answers.pop(("ho", 1, 0))[0])
     if not np.isfinite(d):
         ho["done"] = True
         return
     lo, hi, d_lo, d_hi = ho["lo"], ho["hi"], ho["d_lo"], ho["d_hi"]
-    if it == 0:
+    if ho["round"] == 0:
         x0 = ho["x"]
         ho["x0"], ho["d0"] = x0, d
         a, b, c = _parabola(lo - x0, hi - x0, d_lo, d, d_hi)
@@ -750,8 +990,8 @@ def _handover_update(st, it, p1) -> None:
         roots = np.real(roots[np.isreal(roots)]) + x0
         ho["bracket"] = (lo, x0) if d > 0.0 else (x0, hi)
         good = roots[(roots >= ho["bracket"][0]) & (roots <= ho["bracket"][1])]
-        ho["x"] = float(good[0]) if good.size else x0
-        st.v_star = ho["x"]
+        ho["round"] = 1
+        _ask_iteration(st, float(good[0]) if good.size else x0, p1)
     else:
         x0, d0, x1 = ho["x0"], ho["d0"], ho["x"]
         if d != d0:  # one last secant step between the two best points
@@ -768,8 +1008,30 @@ def _parabola(xa: float, xb: float, ya: float, y0: float, yb: float):
     return a, sa - a * xa, y0
 
 
-def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> ToothContact:
-    """One side's ToothContact from its samples and extra evaluations."""
+def _parabola_root(d: NDArray) -> float:
+    """The root nearest 0 of the parabola through (-1, d0), (0, d1), (1, d2) (inf if none)."""
+    a = 0.5 * (d[0] + d[2]) - d[1]
+    b = 0.5 * (d[2] - d[0])
+    c = d[1]
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0 or (a == 0.0 and b == 0.0):
+        return math.inf
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    roots = [c / q] if q != 0.0 else []
+    if a != 0.0:
+        roots.append(q / a)
+    return min(roots, key=abs, default=math.inf)
+
+
+def _parabola_at(y: NDArray, z: float) -> float:
+    """The parabola through (-1, y0), (0, y1), (1, y2) at z."""
+    return float(y[1] + 0.5 * (y[2] - y[0]) * z + (0.5 * (y[0] + y[2]) - y[1]) * z * z)
+
+
+def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation):
+    """One side's ToothContact from its samples and extra evaluations, but for its two widths:
+    ``(lines, fields)`` with ``lines`` = ``(pattern, zone at M, M, path direction, minor axis)``
+    (:func:`_contacts` measures every side's at once)."""
     field = st.field
     positions = len(t)
     rows = np.arange(positions)
@@ -800,9 +1062,9 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     norm = float(np.hypot(*direction))
     direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
     # the pattern's width: the extent of the whole pattern across the path at M
-    width = _width(pattern * 1e-3, compound_mm, face, profile, mean_point, direction)
+    # and the contact ellipse's major axis: measured with every side's (:func:`_widths`)
     minor = _minor_axis(ex_sep[3], compound_mm, face, profile)
-    major = _width(ex_sep[3], compound_mm, face, profile, mean_point, minor)
+    lines = (pattern * 1e-3, ex_sep[3], mean_point, direction, minor)
     # bias: the contact line's extension along the face from the pair's entry into contact to
     # its exit (seed 003 section 6): the contact points at the ends of its contact interval
     ends = getattr(st, "ci_s", None)
@@ -811,7 +1073,7 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
     centre = frame.centre_mm
     handovers = st.v_star + p1 * np.arange(-12, 13)
     handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
-    return ToothContact(
+    return lines, dict(
         side=name,
         phi1_deg=np.degrees(t),
         te_arcsec=te,
@@ -828,8 +1090,6 @@ def _assemble(st, name, ex, t, p1, frame, pairs, compound_um, separation) -> Too
         pattern_um=pattern,
         face_mm=face,
         profile_mm=profile,
-        width_mm=width,
-        ellipse_major_axis_mm=major,
         path_angle_deg=_gear_path_angle(field, ex, frame),
         bias_mm=bias,
         center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),

@@ -493,3 +493,32 @@ def test_near_rows_refined_alongside_a_sample_get_the_same_answers(aligned53):
     for got, want in zip(answers, expected, strict=True):
         assert np.array_equal(got, want)
     assert np.array_equal(sample.minimum_rad, alone.minimum_rad[:2])
+
+
+def test_hand_over_guessed_from_interpolated_lags_agrees_with_the_iteration(aligned53, monkeypatch):
+    # where the lags around a hand-over are interior contacts, the hand-over is guessed where
+    # the two pairs' interpolated lags cross and checked by evaluations around the guess; the
+    # iteration on the bracket (secant, parabola, secant on evaluated differences) must find
+    # the same hand-over, TE and mean point
+    import gearopt.mesh as mesh
+
+    pair = aligned53["pair"]
+    opts = AnalysisOptions()
+    guesses = []
+    crossing = mesh._crossing
+
+    def recorded(*args):
+        guesses.append(crossing(*args))
+        return guesses[-1]
+
+    monkeypatch.setattr(mesh, "_crossing", recorded)
+    fit = contact_sides(pair, opts)
+    assert len(guesses) == 2 and all(g is not None for g in guesses)  # both sides guessed
+    monkeypatch.setattr(mesh, "_crossing", lambda *args: None)
+    iterated = contact_sides(pair, opts)
+    for side in ("drive", "coast"):
+        a, b = fit[side], iterated[side]
+        assert a.handover_phi1_deg == pytest.approx(b.handover_phi1_deg, abs=1e-3)
+        assert a.te_peak_to_peak_arcsec == pytest.approx(b.te_peak_to_peak_arcsec, abs=1e-3)
+        assert a.te_arcsec == pytest.approx(b.te_arcsec, abs=1e-3)
+        assert a.mean_point_mm == pytest.approx(b.mean_point_mm, abs=1e-3)
