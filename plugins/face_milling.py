@@ -226,6 +226,7 @@ class FaceMillingFlank:
             sliding_base_mm=self.sliding_base_mm,
             roll=self.roll,
             index_rad=index_rad + math.radians(self.work_phase_deg),
+            tip_radius_mm=self.blade_tip_radius_mm,
         )
 
 
@@ -310,12 +311,20 @@ def _parse_flank(
             raise DesignError(
                 f"{where}.{key}", rule="required (in this flank's table or its member's)"
             )
-    tip = read_number(merged, "blade_tip_radius_mm", where, 0.0, ge=0.0)
-    if tip != 0.0:
-        raise NotAvailableError(
-            f"{where}.blade_tip_radius_mm", tip, "a blade tip (edge) radius is not supported yet"
-        )
     alpha = read_number(merged, "blade_pressure_angle_deg", where, gt=0.0, lt=45.0)
+    tip = read_number(merged, "blade_tip_radius_mm", where, 0.0, ge=0.0)
+    # the fillet must end on the blade below its pitch-line point (the mean dedendum above the
+    # tip plane, where a profile arc touches the straight blade): rho_t (1 - sin alpha) < b_m
+    tip_reach = blank.mean_dedendum_mm[index] / (1.0 - math.sin(math.radians(alpha)))
+    if tip >= tip_reach:
+        raise DesignError(
+            f"{where}.blade_tip_radius_mm",
+            tip,
+            f"the tip fillet (tangent to the tip plane and the edge) rises rho_t (1 - sin "
+            f"alpha) above the tip plane and must end below the blade's pitch-line point (the "
+            f"mean dedendum {blank.mean_dedendum_mm[index]:.3f} mm above it): rho_t must be "
+            f"< {tip_reach:.3f} mm",
+        )
     rp = read_number(merged, "cutter_point_radius_mm", where, gt=0.0)
     reach = depth * math.tan(math.radians(alpha))
     if flank == "convex" and rp <= reach:
