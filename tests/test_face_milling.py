@@ -12,7 +12,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
-from gearopt.errors import DesignError, GearoptError, NotAvailableError
+from gearopt.errors import DesignError, GearoptError
 from gearopt.testing import FlankContract
 from gearopt_plugins.face_milling import FaceMilling, _family
 from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
@@ -41,6 +41,18 @@ def _modified_text() -> str:
     return head + MODIFIED + "\n[machine.gear]" + rest
 
 
+#: the blade tip (edge) radius of the rounded-blade tests, mm (about 0.2 m_mn)
+TIP_RADIUS_MM = 1.0
+
+
+def _with_tip_radius(text: str, radius_mm: float = TIP_RADIUS_MM) -> str:
+    """A design text with ``blade_tip_radius_mm`` on every blade of both members."""
+    for member in MEMBERS:
+        header = f"[machine.{member}]\n"
+        text = text.replace(header, f"{header}blade_tip_radius_mm = {radius_mm!r}\n", 1)
+    return text
+
+
 @pytest.fixture(scope="module")
 def conjugate():
     return gearopt.load_design(CONJUGATE)
@@ -51,9 +63,11 @@ class TestFaceMillingContract(FlankContract):
     def machine_model(self):
         return FaceMilling()
 
-    @pytest.fixture(params=["conjugate", "modified"])
+    @pytest.fixture(params=["conjugate", "modified", "rounded", "rounded-modified"])
     def design_text(self, request):
-        return CONJUGATE.read_text() if request.param == "conjugate" else _modified_text()
+        text = CONJUGATE.read_text() if "modified" not in request.param else _modified_text()
+        # rounded: a blade tip radius on every blade (with the profile arcs and modified roll)
+        return _with_tip_radius(text) if request.param.startswith("rounded") else text
 
 
 # --- the conjugate control -----------------------------------------------------------------------
@@ -247,7 +261,9 @@ def test_concave_is_the_outside_blade_and_convex_the_inside_blade(conjugate):
         ("machine.pinion.sliding_base_mm", 3.0, DesignError, "cannot reach the root"),
         ("machine.gear.machine_center_to_back_mm", 2.0, DesignError, "cannot reach the root"),
         ("machine.gear.convex.cutter_point_radius_mm", 2.0, DesignError, "inside blade"),
-        ("machine.gear.blade_tip_radius_mm", 1.0, NotAvailableError, "not supported"),
+        ("machine.gear.blade_tip_radius_mm", -0.5, DesignError, ">= 0"),
+        ("machine.gear.blade_tip_radius_mm", 7.5, DesignError, "pitch-line point"),
+        ("machine.pinion.concave.blade_tip_radius_mm", 7.5, DesignError, "< 7.38"),
         ("machine.gear.blade_profile_radius_mm", 10.0, DesignError, "whole depths"),
         ("machine.gear.blade_profile_radius_mm", "round", DesignError, "inf"),
         ("machine.gear.blade_pressure_angle_deg", 50.0, DesignError, "blade_pressure_angle"),
