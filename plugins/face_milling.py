@@ -686,7 +686,12 @@ class FaceMilling(BaseMachineModel):
                 turn_rad=_tooth_turn_rad(design, member, flank, teeth),
                 notes=(
                     f"{BLADE_OF_FLANK[flank]} blade (face milling): r_p = "
-                    f"{spec.cutter_point_radius_mm:g} mm, c1 = {spec.ratio_of_roll:g}",
+                    f"{spec.cutter_point_radius_mm:g} mm, c1 = {spec.ratio_of_roll:g}"
+                    + (
+                        f", edge radius {spec.blade_tip_radius_mm:g} mm"
+                        if spec.blade_tip_radius_mm
+                        else ""
+                    ),
                 ),
             )
             if tool_pass:
