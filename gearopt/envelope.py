@@ -406,7 +406,8 @@ class EnvelopeSurface:
         """Parameters ``(n, 3)`` and convergence ``(n,)`` at grid coordinates, by plain Newton
         along the straight path (in grid coordinates) from a generated node, in ``steps`` steps
         (each from the previous solution): from the nearest node, then from the next nearest
-        (``tries`` in all) where the path crossed a fold."""
+        (``tries`` in all) where the path crossed a fold. A solution is accepted on the node's
+        sheet only (its Jacobian's sign unchanged: not past a fold of the envelope)."""
         n = len(face_mm)
         q_out, ok = np.zeros((n, 3)), np.zeros(n, bool)
         nodes = np.argwhere(self.mask)
@@ -426,13 +427,17 @@ class EnvelopeSurface:
             s0, t0 = self.face_mm[near[:, 0]], self.profile_mm[near[:, 1]]
             q = self.q[near[:, 0], near[:, 1]].astype(float)
             flank = np.full(len(q), self.index)
-            conv = np.ones(len(q), bool)
+            h0 = t0 if self.taper is None else self.taper.height_mm(s0, t0)
+            _, jac = _residual_and_jacobian(
+                self.family, q, flank, s0 * cg - h0 * sg, s0 * sg + h0 * cg
+            )
+            sheet = np.sign(np.linalg.det(jac))  # the generated node's side of any fold
             for k in range(1, steps + 1):
                 w = k / steps
                 sk = s0 + w * (face_mm[todo] - s0)
                 tk = t0 + w * (profile_mm[todo] - t0)
                 hk = tk if self.taper is None else self.taper.height_mm(sk, tk)
-                q, _, _, conv, _ = _newton(
+                q, _, jac, conv, _ = _newton(
                     self.family,
                     q,
                     flank,
@@ -443,6 +448,7 @@ class EnvelopeSurface:
                     give_up=(30, np.inf),
                     chords=False,
                 )
+            conv &= np.sign(np.linalg.det(jac)) == sheet  # not past a fold
             q_out[todo[conv]], ok[todo[conv]] = q[conv], True
         return q_out, ok
 
