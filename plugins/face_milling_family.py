@@ -2,7 +2,8 @@
 
 Frames and conventions are those of :mod:`gearopt_plugins.face_milling` (read its docstring
 first). Parameters ``q = (u, theta, phi_p)``: ``u`` the arc length along the blade's edge from
-its tip (0) toward the cutter body, ``theta`` the angle of the edge point about the cutter axis
+its tip (0, on the tip plane) toward the cutter body (along the tip fillet first when the blade
+has an edge radius, :func:`edge`), ``theta`` the angle of the edge point about the cutter axis
 in the cradle frame (the head cutter's own rotation does not change the cone its blades sweep),
 ``phi_p`` the work rotation from centre roll (rad); the cradle turns by
 ``phi_c = c1 phi_p + c2 phi_p^2 + ... + c6 phi_p^6``.
@@ -31,8 +32,9 @@ class CutterFlank:
     ``side`` = +1 for the outside blade (concave flank: the tooth material lies radially outside
     the edge), -1 for the inside blade (convex flank). ``curvature_per_mm`` = 1 / profile radius
     (0: straight edge), the arc tangent to the straight edge at arc length ``tangent_mm`` from
-    the tip (the pitch-line point). ``roll`` = (c1, ..., c6). ``index_rad`` turns the generated
-    flank about the work axis (the work indexed by whole pitches before the pass).
+    the sharp corner (the pitch-line point). ``roll`` = (c1, ..., c6). ``index_rad`` turns the
+    generated flank about the work axis (the work indexed by whole pitches before the pass).
+    ``tip_radius_mm`` = the blade's edge radius rho_t (0: a sharp corner; :func:`edge`).
     """
 
     side: float
@@ -239,7 +241,7 @@ class FaceMillingFamily:
         return out
 
     def within_tool(self, q, flank):
-        return np.real(q[..., 0]) >= -1e-9  # the blade ends at its tip (u = 0)
+        return np.real(q[..., 0]) >= -1e-9  # the blade ends on the tip plane (u = 0)
 
     def pitch_row(self, cone_distance_mm):
         """Start on the pitch line: the point P(s) of the work's pitch generatrix nearest the
