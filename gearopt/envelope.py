@@ -127,7 +127,7 @@ def _residual(family, q, flank, big_l, big_r):
     return np.stack([(big_lq - big_l) / a, (big_rq - big_r) / a, g], axis=-1)
 
 
-def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6)):
+def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6), chords=True):
     """Batched Newton-Shamanskii iteration with per-unknown step clipping.
 
     Each iteration makes a Newton step with a fresh Jacobian, then a chord step with the same
@@ -137,7 +137,8 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6))
 
     ``give_up = (k, r)``: after k iterations a node whose scaled residual is still above r is
     not in Newton's quadratic range (it lies past the envelope's fold or needs a better start)
-    and stops iterating; it is reported as not converged.
+    and stops iterating; it is reported as not converged. ``chords=False``: plain Newton steps
+    (a chord step with a Jacobian from across a jump of the tool's curvature can cycle).
     """
     limit = np.asarray(family.max_step, float)
     active = np.ones(len(q), bool)
@@ -165,7 +166,7 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6))
         q[idx] += step
         # chord step: same Jacobian, residual from a real evaluation
         fr = _residual(family, q[idx], flank[idx], big_l[idx], big_r[idx])
-        far = np.max(np.abs(fr), axis=1) > tol
+        far = (np.max(np.abs(fr), axis=1) > tol) & chords
         chord = clipped(np.linalg.solve(ja[far], -fr[far][..., None])[..., 0])
         q[idx[far]] += chord
         f[idx], jac[idx] = _residual_and_jacobian(
@@ -389,6 +390,10 @@ class EnvelopeSurface:
             max_iter=30,
             give_up=(30, np.inf),
         )
+        if not ok.all():  # continuation from the nearest generated node (a tool whose edge
+            # changes curvature, e.g. a blade's tip fillet, can stall Newton from the start)
+            bad = np.flatnonzero(~ok)
+            q[bad], ok[bad] = self._continued(s.ravel()[bad], h.ravel()[bad])
         if not ok.all():
             raise GearoptError(
                 "EnvelopeSurface.parameters_at",
@@ -396,6 +401,56 @@ class EnvelopeSurface:
                 f"{int((~ok).sum())} of {len(ok)} points (outside the generated flank?)",
             )
         return q.reshape(*s.shape, 3)
+
+    def _continued(self, face_mm: NDArray, profile_mm: NDArray, steps: int = 16, tries: int = 4):
+        """Parameters ``(n, 3)`` and convergence ``(n,)`` at grid coordinates, by plain Newton
+        along the straight path (in grid coordinates) from a generated node, in ``steps`` steps
+        (each from the previous solution): from the nearest node, then from the next nearest
+        (``tries`` in all) where the path crossed a fold. A solution is accepted on the node's
+        sheet only (its Jacobian's sign unchanged: not past a fold of the envelope)."""
+        n = len(face_mm)
+        q_out, ok = np.zeros((n, 3)), np.zeros(n, bool)
+        nodes = np.argwhere(self.mask)
+        if not len(nodes):
+            return q_out, ok
+        ds = float(np.ptp(self.face_mm)) / max(len(self.face_mm) - 1, 1)
+        dh = float(np.ptp(self.profile_mm)) / max(len(self.profile_mm) - 1, 1)
+        gap_s = (self.face_mm[nodes[:, 0]][None, :] - face_mm[:, None]) / ds
+        gap_h = (self.profile_mm[nodes[:, 1]][None, :] - profile_mm[:, None]) / dh
+        order = np.argsort(gap_s**2 + gap_h**2, axis=1, kind="stable")
+        cg, sg = math.cos(self.pitch_angle_rad), math.sin(self.pitch_angle_rad)
+        for attempt in range(min(tries, len(nodes))):
+            todo = np.flatnonzero(~ok)
+            if not len(todo):
+                break
+            near = nodes[order[todo, attempt]]
+            s0, t0 = self.face_mm[near[:, 0]], self.profile_mm[near[:, 1]]
+            q = self.q[near[:, 0], near[:, 1]].astype(float)
+            flank = np.full(len(q), self.index)
+            h0 = t0 if self.taper is None else self.taper.height_mm(s0, t0)
+            _, jac = _residual_and_jacobian(
+                self.family, q, flank, s0 * cg - h0 * sg, s0 * sg + h0 * cg
+            )
+            sheet = np.sign(np.linalg.det(jac))  # the generated node's side of any fold
+            for k in range(1, steps + 1):
+                w = k / steps
+                sk = s0 + w * (face_mm[todo] - s0)
+                tk = t0 + w * (profile_mm[todo] - t0)
+                hk = tk if self.taper is None else self.taper.height_mm(sk, tk)
+                q, _, jac, conv, _ = _newton(
+                    self.family,
+                    q,
+                    flank,
+                    sk * cg - hk * sg,
+                    sk * sg + hk * cg,
+                    tol=self.tol,
+                    max_iter=30,
+                    give_up=(30, np.inf),
+                    chords=False,
+                )
+            conv &= np.sign(np.linalg.det(jac)) == sheet  # not past a fold
+            q_out[todo[conv]], ok[todo[conv]] = q[conv], True
+        return q_out, ok
 
     def points_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` exact flank points at grid coordinates, in the FlankMap's frame."""

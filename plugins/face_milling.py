@@ -101,7 +101,7 @@ Design keys (``[machine.<member>.<flank>]``; keys common to both flanks may sit 
     # roll_c2 ... roll_c6 = 0.0        # modified roll (default 0)
     # work_phase_deg = 0.0             # the work's index for this flank's cut (default 0)
     # blade_profile_radius_mm = "inf"  # or a radius in mm
-    # blade_tip_radius_mm = 0.0        # the blade's edge radius: not supported yet
+    # blade_tip_radius_mm = 0.0        # the blade's edge radius rho_t (0: a sharp corner)
 
     [machine.gear.concave]             # outside blade
     cutter_point_radius_mm = 64.783932841
@@ -121,12 +121,30 @@ Root reach: the blade's tip (the plane z_m = 0) must reach the root line (the ro
 generatrix nearest the cradle at centre roll) at the toe and at the heel, else a
 ``DesignError`` names ``sliding_base_mm``.
 
+Blade tip (edge) radius ``blade_tip_radius_mm`` rho_t (Gleason's edge radius; default 0, a
+sharp corner): the corner between the cutting edge and the tip line is a circular arc of radius
+rho_t tangent to the tip plane z_m = 0 (which stays the blade's lowest plane: the settings, the
+root reach and the depth keep their meaning) and to the edge (the straight blade, or the profile
+arc when there is one); its centre lies rho_t above the tip plane (z_m = -rho_t) on the blade's
+side. The edge's arc length u runs from the fillet's point on the tip plane (u = 0; the tip
+line, u < 0, generates nothing) along the fillet (to u = rho_t (pi/2 - alpha) on a straight
+blade) and on along the edge; the edge above the fillet is the sharp blade's. The fillet
+generates the flank's root fillet, tangent to the root cone where the blade's tip sweeps it: the
+flank there leaves more material than the sharp blade's (tens of micrometres at 1 mm on the
+conjugate gear), and the envelope's fold (the flank tangent to the root cone) lies at the
+bottom of the fillet region, so the generated region (the FlankMap's mask) stops the envelope
+solver's fold margin above it. rho_t must stay below b_m / (1 - sin alpha) (the fillet ends
+below the blade's pitch-line point, the mean dedendum b_m above the tip plane; a
+``DesignError`` names ``blade_tip_radius_mm``). With a profile arc the fillet meets the arc
+itself, and its lowest point lies on the tip plane exactly (the sharp arc blade's corner, at
+arc length ``tangent_mm`` from the pitch-line point, sits about u_p^2 sin(alpha) / (2 R) past
+it toward the work: 11 micrometres at R = 400 mm, u_p = 5.2 mm).
+
 Settings from the blank and local synthesis: a design with a ``[synthesis]`` table
-(:meth:`FaceMilling.synthesize`, :mod:`gearopt_plugins.face_milling_synthesis`); a designed
-TE by inverse TCA: :meth:`FaceMilling.realise_te_target`
-(:mod:`gearopt_plugins.face_milling_inverse`). Not yet: a blade tip (edge) radius
-(``blade_tip_radius_mm`` other than 0 raises ``NotAvailableError``) and a check against a
-published settings summary (none readable was found).
+(:meth:`FaceMilling.synthesize`, :mod:`gearopt_plugins.face_milling_synthesis`; the synthesis
+gives the pinion a sharp blade); a designed TE by inverse TCA:
+:meth:`FaceMilling.realise_te_target` (:mod:`gearopt_plugins.face_milling_inverse`). Not yet: a
+check against a published settings summary (none readable was found).
 """
 
 from __future__ import annotations
@@ -229,6 +247,7 @@ class FaceMillingFlank:
             sliding_base_mm=self.sliding_base_mm,
             roll=self.roll,
             index_rad=index_rad + math.radians(self.work_phase_deg),
+            tip_radius_mm=self.blade_tip_radius_mm,
         )
 
 
@@ -257,11 +276,13 @@ class FaceMillingMachine:
 @dataclass(frozen=True, kw_only=True)
 class FaceMillingSettings:
     """The settings of one member as given (``basic_settings`` derives none in this slice);
-    ``*_blade_profile_curvature_per_mm`` = 1 / profile radius (0: straight blade)."""
+    ``*_blade_profile_curvature_per_mm`` = 1 / profile radius (0: straight blade),
+    ``*_blade_tip_radius_mm`` the blade's edge radius (0: a sharp corner)."""
 
     concave_cutter_point_radius_mm: float
     concave_blade_pressure_angle_deg: float
     concave_blade_profile_curvature_per_mm: float
+    concave_blade_tip_radius_mm: float
     concave_radial_setting_mm: float
     concave_cradle_angle_deg: float
     concave_machine_root_angle_deg: float
@@ -278,6 +299,7 @@ class FaceMillingSettings:
     convex_cutter_point_radius_mm: float
     convex_blade_pressure_angle_deg: float
     convex_blade_profile_curvature_per_mm: float
+    convex_blade_tip_radius_mm: float
     convex_radial_setting_mm: float
     convex_cradle_angle_deg: float
     convex_machine_root_angle_deg: float
@@ -313,12 +335,20 @@ def _parse_flank(
             raise DesignError(
                 f"{where}.{key}", rule="required (in this flank's table or its member's)"
             )
-    tip = read_number(merged, "blade_tip_radius_mm", where, 0.0, ge=0.0)
-    if tip != 0.0:
-        raise NotAvailableError(
-            f"{where}.blade_tip_radius_mm", tip, "a blade tip (edge) radius is not supported yet"
-        )
     alpha = read_number(merged, "blade_pressure_angle_deg", where, gt=0.0, lt=45.0)
+    tip = read_number(merged, "blade_tip_radius_mm", where, 0.0, ge=0.0)
+    # the fillet must end on the blade below its pitch-line point (the mean dedendum above the
+    # tip plane, where a profile arc touches the straight blade): rho_t (1 - sin alpha) < b_m
+    tip_reach = blank.mean_dedendum_mm[index] / (1.0 - math.sin(math.radians(alpha)))
+    if tip >= tip_reach:
+        raise DesignError(
+            f"{where}.blade_tip_radius_mm",
+            tip,
+            f"the tip fillet (tangent to the tip plane and the edge) rises rho_t (1 - sin "
+            f"alpha) above the tip plane and must end below the blade's pitch-line point (the "
+            f"mean dedendum {blank.mean_dedendum_mm[index]:.3f} mm above it): rho_t must be "
+            f"< {tip_reach:.3f} mm",
+        )
     rp = read_number(merged, "cutter_point_radius_mm", where, gt=0.0)
     reach = depth * math.tan(math.radians(alpha))
     if flank == "convex" and rp <= reach:
@@ -591,7 +621,7 @@ class FaceMilling(BaseMachineModel):
             for flank in FLANKS:
                 spec = design.machine.member(member).flank(flank)
                 for key in FLANK_KEYS:
-                    if key in ("blade_profile_radius_mm", "blade_tip_radius_mm"):
+                    if key == "blade_profile_radius_mm":
                         continue
                     values[f"{flank}_{key}"] = getattr(spec, key)
                 values[f"{flank}_blade_profile_curvature_per_mm"] = spec.profile_curvature_per_mm
@@ -659,7 +689,12 @@ class FaceMilling(BaseMachineModel):
                 turn_rad=_tooth_turn_rad(design, member, flank, teeth),
                 notes=(
                     f"{BLADE_OF_FLANK[flank]} blade (face milling): r_p = "
-                    f"{spec.cutter_point_radius_mm:g} mm, c1 = {spec.ratio_of_roll:g}",
+                    f"{spec.cutter_point_radius_mm:g} mm, c1 = {spec.ratio_of_roll:g}"
+                    + (
+                        f", edge radius {spec.blade_tip_radius_mm:g} mm"
+                        if spec.blade_tip_radius_mm
+                        else ""
+                    ),
                 ),
             )
             if tool_pass:

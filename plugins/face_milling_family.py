@@ -2,7 +2,8 @@
 
 Frames and conventions are those of :mod:`gearopt_plugins.face_milling` (read its docstring
 first). Parameters ``q = (u, theta, phi_p)``: ``u`` the arc length along the blade's edge from
-its tip (0) toward the cutter body, ``theta`` the angle of the edge point about the cutter axis
+its tip (0, on the tip plane) toward the cutter body (along the tip fillet first when the blade
+has an edge radius, :func:`edge`), ``theta`` the angle of the edge point about the cutter axis
 in the cradle frame (the head cutter's own rotation does not change the cone its blades sweep),
 ``phi_p`` the work rotation from centre roll (rad); the cradle turns by
 ``phi_c = c1 phi_p + c2 phi_p^2 + ... + c6 phi_p^6``.
@@ -31,8 +32,9 @@ class CutterFlank:
     ``side`` = +1 for the outside blade (concave flank: the tooth material lies radially outside
     the edge), -1 for the inside blade (convex flank). ``curvature_per_mm`` = 1 / profile radius
     (0: straight edge), the arc tangent to the straight edge at arc length ``tangent_mm`` from
-    the tip (the pitch-line point). ``roll`` = (c1, ..., c6). ``index_rad`` turns the generated
-    flank about the work axis (the work indexed by whole pitches before the pass).
+    the sharp corner (the pitch-line point). ``roll`` = (c1, ..., c6). ``index_rad`` turns the
+    generated flank about the work axis (the work indexed by whole pitches before the pass).
+    ``tip_radius_mm`` = the blade's edge radius rho_t (0: a sharp corner; :func:`edge`).
     """
 
     side: float
@@ -48,6 +50,7 @@ class CutterFlank:
     roll: tuple[float, ...]
     index_rad: float = 0.0
     tangent_mm: float = 0.0
+    tip_radius_mm: float = 0.0
 
     @staticmethod
     def stack(flanks: tuple[CutterFlank, ...]) -> CutterFlank:
@@ -58,12 +61,10 @@ class CutterFlank:
         return CutterFlank(**values)
 
 
-def edge(c: CutterFlank, u):
-    """Radius, height (along the cradle axis z_m, toward the work; the tip at 0) and their
-    derivatives in u of the edge point at arc length ``u`` from the tip: a straight line at the
-    blade pressure angle, or the circular arc of curvature kappa tangent to it at arc length
-    ``tangent_mm`` (the pitch-line point), its centre on the material side (complex-safe in
-    ``u``)."""
+def _profile(c: CutterFlank, u):
+    """Radius, height and their u-derivatives of the blade's edge without its tip fillet, at arc
+    length ``u`` from the sharp corner (the straight line at the pressure angle, or the profile
+    arc tangent to it at ``tangent_mm``; complex-safe in ``u``)."""
     sa, ca = np.sin(c.pressure_angle_rad), np.cos(c.pressure_angle_rad)
     side = c.side
     t_r, t_h = side * sa, -ca  # unit tangent, from the tip toward the cutter body
@@ -83,6 +84,61 @@ def edge(c: CutterFlank, u):
     d_radius = cos_k * t_r + sin_k * m_r
     d_height = cos_k * t_h + sin_k * m_h
     return radius, height, d_radius, d_height
+
+
+def _fillet(c: CutterFlank):
+    """The tip fillet of radius rho_t = ``tip_radius_mm``, tangent to the tip plane (z_m = 0)
+    and to the edge (:func:`_profile`): ``(length, u_edge, centre_radius)`` with ``length`` =
+    rho_t (pi/2 - alpha_c) its arc length (alpha_c the edge's pressure angle where the fillet
+    touches it), ``u_edge`` the arc length of that point along the edge from the sharp corner,
+    ``centre_radius`` the radius of its centre (its height is -rho_t). All 0 for rho_t = 0 (the
+    sharp corner: the edge unchanged). Real arithmetic on the settings only (not on ``u``)."""
+    rho = np.asarray(c.tip_radius_mm, float)
+    alpha = np.asarray(c.pressure_angle_rad, float)
+    sa, ca = np.sin(alpha), np.cos(alpha)
+    k = np.asarray(c.curvature_per_mm, float)
+    u0 = np.asarray(c.tangent_mm, float)
+    straight = k == 0.0
+    ks = np.where(straight, 1.0, k)
+    # profile arc: its centre Q at height sa / k - u0 ca, the fillet's centre at distance
+    # 1/k + rho_t from Q and at height -rho_t: sin(alpha_c) = (Q_h + rho_t) / (1/k + rho_t)
+    sin_c = np.where(straight, sa, (sa - u0 * ca * ks + rho * ks) / (1.0 + rho * ks))
+    alpha_c = np.where(straight, alpha, np.arcsin(sin_c))
+    u_edge = np.where(straight, rho * (1.0 - sa) / ca, u0 + (alpha_c - alpha) / ks)
+    rounded = rho > 0.0
+    u_edge = np.where(rounded, u_edge, 0.0)
+    length = np.where(rounded, rho * (0.5 * math.pi - alpha_c), 0.0)
+    r_e, _, _, dh_e = _profile(c, u_edge)
+    centre_radius = r_e + rho * c.side * dh_e  # the edge point less rho_t along its normal
+    return length, u_edge, centre_radius
+
+
+def edge(c: CutterFlank, u):
+    """Radius, height (along the cradle axis z_m, toward the work; the tip plane at 0) and their
+    derivatives in u of the edge point at arc length ``u`` from the tip (complex-safe in ``u``).
+
+    From the tip plane: the tip fillet of radius rho_t (``tip_radius_mm``, Gleason's edge
+    radius), tangent to the tip plane at u = 0 (its centre rho_t above the tip plane, toward
+    the cutter body) and to the edge at u = rho_t (pi/2 - alpha_c); then the edge (the straight
+    line at the blade pressure angle, or the circular arc of curvature kappa tangent to it at
+    arc length ``tangent_mm`` from the sharp corner (the pitch-line point), its centre on the
+    material side). With rho_t = 0 the edge starts at the sharp corner. For u < 0 (past the
+    tip: not part of the blade, :meth:`FaceMillingFamily.within_tool`) the fillet's circle, or
+    the edge when rho_t = 0, continues smoothly for the solver.
+    """
+    length, u_edge, centre_radius = _fillet(c)
+    radius, height, d_radius, d_height = _profile(c, u - length + u_edge)
+    rho = np.asarray(c.tip_radius_mm, float)
+    on_fillet = (rho > 0.0) & (np.real(u) < length)
+    psi = u / np.where(rho > 0.0, rho, 1.0)  # the fillet's turn from the tip plane
+    s_half = np.sin(0.5 * psi)
+    side = c.side
+    return (
+        np.where(on_fillet, centre_radius + rho * side * np.sin(psi), radius),
+        np.where(on_fillet, -2.0 * rho * s_half * s_half, height),
+        np.where(on_fillet, side * np.cos(psi), d_radius),
+        np.where(on_fillet, -np.sin(psi), d_height),
+    )
 
 
 def _roll(c: CutterFlank, phi):
@@ -185,7 +241,7 @@ class FaceMillingFamily:
         return out
 
     def within_tool(self, q, flank):
-        return np.real(q[..., 0]) >= -1e-9  # the blade ends at its tip (u = 0)
+        return np.real(q[..., 0]) >= -1e-9  # the blade ends on the tip plane (u = 0)
 
     def pitch_row(self, cone_distance_mm):
         """Start on the pitch line: the point P(s) of the work's pitch generatrix nearest the

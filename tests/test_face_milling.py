@@ -12,7 +12,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
-from gearopt.errors import DesignError, GearoptError, NotAvailableError
+from gearopt.errors import DesignError, GearoptError
 from gearopt.testing import FlankContract
 from gearopt_plugins.face_milling import FaceMilling, _family
 from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
@@ -41,6 +41,18 @@ def _modified_text() -> str:
     return head + MODIFIED + "\n[machine.gear]" + rest
 
 
+#: the blade tip (edge) radius of the rounded-blade tests, mm (about 0.2 m_mn)
+TIP_RADIUS_MM = 1.0
+
+
+def _with_tip_radius(text: str, radius_mm: float = TIP_RADIUS_MM) -> str:
+    """A design text with ``blade_tip_radius_mm`` on every blade of both members."""
+    for member in MEMBERS:
+        header = f"[machine.{member}]\n"
+        text = text.replace(header, f"{header}blade_tip_radius_mm = {radius_mm!r}\n", 1)
+    return text
+
+
 @pytest.fixture(scope="module")
 def conjugate():
     return gearopt.load_design(CONJUGATE)
@@ -51,9 +63,11 @@ class TestFaceMillingContract(FlankContract):
     def machine_model(self):
         return FaceMilling()
 
-    @pytest.fixture(params=["conjugate", "modified"])
+    @pytest.fixture(params=["conjugate", "modified", "rounded", "rounded-modified"])
     def design_text(self, request):
-        return CONJUGATE.read_text() if request.param == "conjugate" else _modified_text()
+        text = CONJUGATE.read_text() if "modified" not in request.param else _modified_text()
+        # rounded: a blade tip radius on every blade (with the profile arcs and modified roll)
+        return _with_tip_radius(text) if request.param.startswith("rounded") else text
 
 
 # --- the conjugate control -----------------------------------------------------------------------
@@ -247,7 +261,9 @@ def test_concave_is_the_outside_blade_and_convex_the_inside_blade(conjugate):
         ("machine.pinion.sliding_base_mm", 3.0, DesignError, "cannot reach the root"),
         ("machine.gear.machine_center_to_back_mm", 2.0, DesignError, "cannot reach the root"),
         ("machine.gear.convex.cutter_point_radius_mm", 2.0, DesignError, "inside blade"),
-        ("machine.gear.blade_tip_radius_mm", 1.0, NotAvailableError, "not supported"),
+        ("machine.gear.blade_tip_radius_mm", -0.5, DesignError, ">= 0"),
+        ("machine.gear.blade_tip_radius_mm", 7.5, DesignError, "pitch-line point"),
+        ("machine.pinion.concave.blade_tip_radius_mm", 7.5, DesignError, "< 7.38"),
         ("machine.gear.blade_profile_radius_mm", 10.0, DesignError, "whole depths"),
         ("machine.gear.blade_profile_radius_mm", "round", DesignError, "inf"),
         ("machine.gear.blade_pressure_angle_deg", 50.0, DesignError, "blade_pressure_angle"),
@@ -535,3 +551,203 @@ def test_flank_query_on_a_tapered_grid(tapered):
     g = math.radians(tapered.blank.pitch_angle_deg[1])
     assert_allclose(out["height_mm"], -30.0 * math.sin(g) + 86.0 * math.cos(g), atol=1e-12)
     assert out["inside_blank"]
+
+
+# --- the blade tip (edge) radius -----------------------------------------------------------------
+
+
+def test_sharp_blade_output_is_bit_for_bit_mains(conjugate):
+    """``blade_tip_radius_mm = 0`` (the default, or given) leaves the flanks and the TCA
+    metrics bit for bit as main wrote them (tests/data, unchanged since 5122773)."""
+    from gearopt.flank import FlankGrid
+
+    ref = np.load(MAIN_REFERENCE)
+    given = gearopt.with_overrides(
+        conjugate, {f"machine.{m}.blade_tip_radius_mm": 0.0 for m in MEMBERS}
+    )
+    for design in (conjugate, given):
+        for member in MEMBERS:
+            maps = gearopt.generate_flanks(design, member, grid=FlankGrid(n_face=9, n_profile=7))
+            for flank, fm in maps.items():
+                key = f"{member}_{flank}_"
+                for name in ("mask", "polar_angle_rad", "points_mm", "normals"):
+                    assert np.array_equal(getattr(fm, name), ref[key + name]), key + name
+    metrics = gearopt.evaluators()["tca"].evaluate(given, None).metrics
+    for name, value in metrics.items():
+        assert value == ref["metric_" + name], name
+
+
+def _cutter(side: float, curvature_per_mm: float, tip_radius_mm: float) -> CutterFlank:
+    alpha = math.radians(20.0)
+    return CutterFlank(
+        side=side,
+        point_radius_mm=60.0,
+        pressure_angle_rad=alpha,
+        curvature_per_mm=curvature_per_mm,
+        radial_setting_mm=70.0,
+        cradle_angle_rad=0.7,
+        machine_root_angle_rad=0.3,
+        center_to_back_mm=0.0,
+        blank_offset_mm=0.0,
+        sliding_base_mm=5.0,
+        roll=(0.3, 0, 0, 0, 0, 0),
+        tangent_mm=5.0 / math.cos(alpha),
+        tip_radius_mm=tip_radius_mm,
+    )
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+@pytest.mark.parametrize("curvature_per_mm", [0.0, 1.0 / 400.0])
+def test_tip_fillet_is_a_circle_of_the_tip_radius_on_the_tool(side, curvature_per_mm):
+    """In the tool's axial section (radius, height) the edge from u = 0 to the fillet's end:
+    unit speed, curvature 1/rho_t (second derivatives by complex step of edge()'s first ones),
+    the centre of curvature fixed, rho_t above the tip plane and on the blade's side (away from
+    the material); the fillet touches the tip plane at u = 0 (height 0, horizontal tangent)
+    and never crosses it; at its end it joins the edge with the edge's point and tangent, and
+    beyond it the edge is the sharp blade's edge (the same line or profile arc)."""
+    from gearopt_plugins.face_milling_family import _fillet, edge
+
+    rho = 1.3
+    sharp, rounded = _cutter(side, curvature_per_mm, 0.0), _cutter(side, curvature_per_mm, rho)
+    length, u_edge, _ = (float(v) for v in _fillet(rounded))
+    alpha = math.radians(20.0)
+    if curvature_per_mm == 0.0:
+        assert length == pytest.approx(rho * (0.5 * math.pi - alpha), rel=1e-14)
+    u = np.linspace(0.0, length, 41)[1:-1]
+    r, h, dr, dh = edge(rounded, u)
+    _, _, d2r, d2h = (v.imag / 1e-30 for v in edge(rounded, u + 1e-30j))
+    assert_allclose(np.hypot(dr, dh), 1.0, atol=1e-14)
+    curvature = dr * d2h - dh * d2r  # signed, positive turning left in (r, h)
+    assert_allclose(np.abs(curvature), 1.0 / rho, rtol=1e-12)
+    centre_r, centre_h = r - dh / curvature, h + dr / curvature
+    assert_allclose(centre_h, -rho, atol=1e-12)  # rho_t above the tip plane (z_m < 0)
+    assert np.ptp(centre_r) < 1e-12
+    # the centre lies on the blade's side: radially away from the tooth material
+    r_tip = edge(rounded, np.array(0.0))[0]
+    assert (centre_r[0] - r_tip) * side == pytest.approx(0.0, abs=1e-12)
+    assert np.all((centre_r[0] - r) * side < 0.0)
+    h0, dh0 = edge(rounded, np.array(0.0))[1], edge(rounded, np.array(0.0))[3]
+    assert abs(h0) < 1e-15 and abs(dh0) < 1e-15
+    assert np.all(h < 0.0)
+    eps = 1e-7
+    before = np.array(edge(rounded, np.array(length - eps)), float)
+    after = np.array(edge(rounded, np.array(length + eps)), float)
+    assert_allclose(before, after, atol=1e-6)
+    # beyond the fillet: the sharp blade's edge itself, shifted along its arc length
+    v = np.linspace(length, length + 8.0, 9)
+    assert_allclose(
+        np.array(edge(rounded, v)), np.array(edge(sharp, v - length + u_edge)), atol=1e-12
+    )
+
+
+@pytest.fixture(scope="module")
+def rounded_pairs():
+    """(sharp, rounded) flanks of the conjugate and modified designs, blade tip radius 1 mm."""
+    from gearopt.flank import FlankGrid
+
+    grid = FlankGrid(n_face=9, n_profile=25)
+    out = {}
+    for name, text in (("conjugate", CONJUGATE.read_text()), ("modified", _modified_text())):
+        sharp, rounded = gearopt.loads_design(text), gearopt.loads_design(_with_tip_radius(text))
+        for member in MEMBERS:
+            a = FaceMilling().generate_flanks(sharp, member=member, grid=grid)
+            b = FaceMilling().generate_flanks(rounded, member=member, grid=grid)
+            for flank in FLANKS:
+                length = float(_fillet_length(rounded, member, flank))
+                out[name, member, flank] = (a[flank], b[flank], length)
+    return out
+
+
+def _fillet_length(design, member, flank):
+    from gearopt_plugins.face_milling_family import _fillet
+
+    return _fillet(_family(design, member, (flank,)).cutters[0])[0]
+
+
+@pytest.mark.parametrize("design", ["conjugate", "modified"])
+def test_tip_radius_leaves_the_flank_above_the_fillet(rounded_pairs, design):
+    """Nodes generated by the blade's edge above its fillet (u past the fillet's end) are the
+    sharp blade's flank points (the same cone: 5e-14 mm measured)."""
+    for member in MEMBERS:
+        for flank in FLANKS:
+            sharp, rounded, length = rounded_pairs[design, member, flank]
+            above = sharp.mask & rounded.mask & (rounded.parameters[..., 0] > length)
+            assert above.sum() > 100
+            gap = np.abs(rounded.points_mm - sharp.points_mm)[above].max()
+            assert gap <= 1e-9, (member, flank, gap)
+
+
+@pytest.mark.parametrize("design", ["conjugate", "modified"])
+def test_tip_radius_leaves_material_at_the_root(rounded_pairs, design):
+    """Where the fillet generates the flank (u on the fillet) the rounded blade, which lacks
+    the sharp blade's corner, removes less: the flank lies off the sharp blade's flank toward
+    the tooth space (along the normal out of the material), never into the material; by tens
+    of micrometres on the gear near its root (0.086 / 0.091 mm measured, 1 mm radius)."""
+    for member in MEMBERS:
+        for flank in FLANKS:
+            sharp, rounded, length = rounded_pairs[design, member, flank]
+            fillet = sharp.mask & rounded.mask & (rounded.parameters[..., 0] < length)
+            assert fillet.any(), (member, flank)
+            d = rounded.points_mm - sharp.points_mm
+            along = np.einsum("...i,...i", d, rounded.normals)[fillet]
+            assert along.min() > 0.0, (member, flank)
+            if member == "gear":
+                assert along.max() > 0.05, (flank, along.max())
+
+
+def _tip_sweep_above_root(design, member, flank="convex"):
+    """The blade's tip (u = 0: the tip plane, the fillet's lowest point) over cutter phases
+    and roll angles, in the work: its height above the root cone, and the least of it in each
+    of 7 bins of the face width."""
+    index = MEMBERS.index(member)
+    blank = design.blank
+    family = _family(design, member, (flank,))
+    theta = np.linspace(-math.pi, math.pi, 2001)
+    phi = np.linspace(-0.6, 0.6, 121)
+    q = np.stack(np.broadcast_arrays(0.0, theta[:, None], phi[None, :]), axis=-1)
+    p = family.geometry(q, np.zeros(q.shape[:-1], int))["point"].reshape(-1, 3)
+    g = math.radians(blank.pitch_angle_deg[index])
+    big_l, big_r = p[:, 2], np.hypot(p[:, 0], p[:, 1])
+    s = big_l * math.cos(g) + big_r * math.sin(g)
+    h = -big_l * math.sin(g) + big_r * math.cos(g)
+    above = h + blank.dedendum_at_mm(index, s)
+    ai, ao = blank.inner_cone_distance_mm, blank.outer_cone_distance_mm
+    on = (s >= ai) & (s <= ao)
+    bins = np.linspace(ai, ao, 8)
+    least = [above[(s >= a) & (s < b)].min() for a, b in zip(bins[:-1], bins[1:], strict=True)]
+    return above[on].min(), max(least)
+
+
+@pytest.mark.parametrize("path", [CONJUGATE, TAPERED])
+@pytest.mark.parametrize("member", MEMBERS)
+def test_rounded_tip_still_sweeps_the_root(path, member):
+    """With a blade tip radius the blade's lowest points (the fillet touching the tip plane)
+    still sweep the root cone over the whole face, never below it: the depth is unchanged."""
+    design = gearopt.loads_design(_with_tip_radius(path.read_text()))
+    for flank in FLANKS:
+        lowest, least = _tip_sweep_above_root(design, member, flank)
+        assert lowest > -1e-9 and least < 0.01, (flank, lowest, least)
+
+
+@pytest.mark.parametrize("tip_radius_mm", [0.0, TIP_RADIUS_MM])
+def test_family_with_tip_radius_is_complex_step_safe(tip_radius_mm):
+    """edge() on and off the fillet: complex-step derivatives of the meshing equations equal
+    central differences (u spans the fillet, its end and the edge; the differences round
+    off at 1e-8 on L, R of about 100 mm)."""
+    design = gearopt.loads_design(_with_tip_radius(_modified_text(), tip_radius_mm))
+    family = _family(design, "pinion", FLANKS)
+    rng = np.random.default_rng(7)
+    q = np.stack(
+        [rng.uniform(0, 4, 40), rng.uniform(-0.5, 0.5, 40), rng.uniform(-0.5, 0.5, 40)], -1
+    )
+    flank = rng.integers(0, 2, 40)
+    for k in range(3):
+        dq = np.zeros(3)
+        dq[k] = 1.0
+        cs = np.stack(family.axial_radial_meshing(q + 1e-30j * dq, flank), -1).imag / 1e-30
+        h = 1e-6
+        fd = (
+            np.stack(family.axial_radial_meshing(q + h * dq, flank), -1)
+            - np.stack(family.axial_radial_meshing(q - h * dq, flank), -1)
+        ) / (2 * h)
+        assert_allclose(cs, fd, rtol=1e-6, atol=1e-7)  # differences' rounding on L, R ~ 100 mm
