@@ -215,15 +215,18 @@ def test_local_synthesis_closes_through_the_contact_engine(seed002, closed_loop,
     """What the pinion was synthesised for at M, read by the engine's TCA over the whole mesh of
     the generated FlankMaps: M within 0.5 mm, path direction within 2 deg, contact ellipse
     within 10 %, the parabolic TE level (peak to peak at the hand-overs) within 10 %."""
-    asked = tomllib.loads(SEED002.read_text())["synthesis"]
-    path = asked.get(side, {}).get("path_angle_deg", asked["path_angle_deg"])
-    tca = closed_loop[0][side]
+    _assert_closes(seed002, closed_loop[0][side], SEED002, side)
+
+
+def _assert_closes(design, tca, path, side):
+    asked = tomllib.loads(path.read_text())["synthesis"]
+    angle = asked.get(side, {}).get("path_angle_deg", asked["path_angle_deg"])
     assert np.hypot(*tca.center_offset_mm) < 0.5
-    assert abs(tca.path_angle_deg - path) < 2.0
+    assert abs(tca.path_angle_deg - angle) < 2.0
     assert abs(tca.ellipse_major_axis_mm / asked["ellipse_major_axis_mm"] - 1.0) < 0.10
     assert abs(tca.te_peak_to_peak_arcsec / abs(asked["te_level_arcsec"]) - 1.0) < 0.10
     assert not tca.edge_contact
-    report = {r.targets.side: r for r in seed002.machine.synthesis}[side]
+    report = {r.targets.side: r for r in design.machine.synthesis}[side]
     assert report.first_order_residual < 1e-8
 
 
@@ -239,16 +242,7 @@ def test_local_synthesis_closes_on_the_tapered_pair(closed_loop_tapered, side):
     """The same closure on seed 002's pair with tapered depth (standard taper): each member
     tilted by its dedendum angle, the gear from the blank, the pinion by local synthesis."""
     design, sides = closed_loop_tapered
-    asked = tomllib.loads(SEED002_TAPERED.read_text())["synthesis"]
-    path = asked.get(side, {}).get("path_angle_deg", asked["path_angle_deg"])
-    tca = sides[side]
-    assert np.hypot(*tca.center_offset_mm) < 0.5
-    assert abs(tca.path_angle_deg - path) < 2.0
-    assert abs(tca.ellipse_major_axis_mm / asked["ellipse_major_axis_mm"] - 1.0) < 0.10
-    assert abs(tca.te_peak_to_peak_arcsec / abs(asked["te_level_arcsec"]) - 1.0) < 0.10
-    assert not tca.edge_contact
-    report = {r.targets.side: r for r in design.machine.synthesis}[side]
-    assert report.first_order_residual < 1e-8
+    _assert_closes(design, sides[side], SEED002_TAPERED, side)
 
 
 def test_synthesised_pinion_has_the_asked_backlash(seed002, closed_loop):
