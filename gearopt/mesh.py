@@ -115,29 +115,23 @@ def _gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) 
     """The path's direction on the gear flank at M (:func:`path_angle`) from the contact points
     of the two positions either side of M (rows 4 and 5 of the extra positions), carried into
     the gear's frame at their contact angles."""
-    from gearopt.newton_tca import _FlankJet
+    from gearopt.newton_tca import _cross, _FlankJet
 
-    b, c = field.b, field.c
-    points = []
-    for k in (4, 5):
-        phi = float(ex.phi_rad[k])
-        p = field.pinion.point_at(ex.contact_face_mm[k], ex.contact_profile_mm[k])
-        cp, sp = math.cos(phi), math.sin(phi)
-        p = np.array([cp * p[0] - sp * p[1], sp * p[0] + cp * p[1], p[2]])
-        q = b @ p + c
-        turn = (
-            -field.ratio * phi
-            + field.phase_rad
-            - field._shift
-            - field.gear_sense * float(ex.minimum_rad[k])
-        )
-        ct, st = math.cos(turn), math.sin(turn)
-        points.append(np.array([ct * q[0] + st * q[1], -st * q[0] + ct * q[1], q[2]]))
+    phi = ex.phi_rad[4:6]
+    p = field.pinion.point_at(ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6])
+    cp, sp = np.cos(phi), np.sin(phi)
+    p = np.stack([cp * p[:, 0] - sp * p[:, 1], sp * p[:, 0] + cp * p[:, 1], p[:, 2]], -1)
+    q = p @ field.b.T + field.c
+    turn = (
+        -field.ratio * phi + field.phase_rad - field._shift - field.gear_sense * ex.minimum_rad[4:6]
+    )
+    ct, st = np.cos(turn), np.sin(turn)
+    points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
     mid = 0.5 * (points[0] + points[1])
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
     _, p_s, p_h, *_ = _FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
     return path_angle(
-        points[1] - points[0], np.cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+        points[1] - points[0], _cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
     )
 
 
