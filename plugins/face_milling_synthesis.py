@@ -156,7 +156,7 @@ SOLVED_KEYS = (
     "roll_c2",
 )
 #: closing tolerances of the synthesis (met or SettingsError)
-TOLERANCE = {"first_order": 1e-8, "path_deg": 1e-2, "relative": 1e-3}
+TOLERANCE = {"first_order": 1e-7, "path_deg": 1e-2, "relative": 1e-3}
 
 
 @dataclass(frozen=True, kw_only=True)
