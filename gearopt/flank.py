@@ -37,6 +37,8 @@ from scipy.interpolate import RectBivariateSpline
 from gearopt.errors import GearoptError
 
 __all__ = [
+    "axial_plane",
+    "cone_coordinates",
     "DepthTaper",
     "FlankGrid",
     "FlankMap",
@@ -57,6 +59,20 @@ def check_member_and_flank(member: str, flank: str) -> None:
         raise GearoptError("member", member, f"must be one of {MEMBERS}")
     if flank not in FLANKS:
         raise GearoptError("flank", flank, f"must be one of {FLANKS}")
+
+
+def axial_plane(cone_distance_mm, height_mm, pitch_angle_rad: float):
+    """``(L, R)``: the axial position and radius of the point at cone distance ``s`` along the
+    pitch generatrix and height ``h`` above it (the member's axial plane, pitch angle gamma):
+    L = s cos(gamma) - h sin(gamma), R = s sin(gamma) + h cos(gamma)."""
+    cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
+    return cone_distance_mm * cg - height_mm * sg, cone_distance_mm * sg + height_mm * cg
+
+
+def cone_coordinates(axial_mm, radius_mm, pitch_angle_rad: float):
+    """``(s, h)`` of the axial-plane point ``(L, R)``: the inverse of :func:`axial_plane`."""
+    cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
+    return axial_mm * cg + radius_mm * sg, -axial_mm * sg + radius_mm * cg
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -276,9 +292,7 @@ class FlankMap:
         """Face and profile (grid) coordinates ``(s, t)`` of axial-plane points ``(L, R)``
         (t = h, the height above the pitch cone, for uniform depth)."""
         g = math.radians(self.pitch_angle_deg)
-        axial_mm, radius_mm = np.asarray(axial_mm), np.asarray(radius_mm)
-        s = axial_mm * math.cos(g) + radius_mm * math.sin(g)
-        h = -axial_mm * math.sin(g) + radius_mm * math.cos(g)
+        s, h = cone_coordinates(np.asarray(axial_mm), np.asarray(radius_mm), g)
         if self.taper is not None:
             h = self.taper.profile_of(s, h)
         return s, h
@@ -405,9 +419,7 @@ class FlankMap:
         """``(..., 3)`` points of the flank at grid coordinates ``(s, h)`` (spline)."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
         g = math.radians(self.pitch_angle_deg)
-        height = self.height_at(s, h)
-        big_l = s * math.cos(g) - height * math.sin(g)
-        big_r = s * math.sin(g) + height * math.cos(g)
+        big_l, big_r = axial_plane(s, self.height_at(s, h), g)
         theta = self.polar_angle_at(s, h)
         return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
 

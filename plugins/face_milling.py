@@ -165,7 +165,7 @@ from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
-from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
+from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily, flank_family
 from gearopt_plugins.face_milling_synthesis import SIDES
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
@@ -528,16 +528,11 @@ def _family(design: Design, member: str, flanks, *, tool_pass: int = 0) -> FaceM
     index = MEMBERS.index(member)
     teeth = (design.pair.pinion_teeth, design.pair.gear_teeth)[index]
     spec = design.machine.member(member)
-    index_rad = 2.0 * math.pi * tool_pass / teeth
-    return FaceMillingFamily(
-        cutters=tuple(
-            spec.flank(f).cutter(
-                f, index_rad=index_rad, pitch_depth_mm=design.blank.mean_dedendum_mm[index]
-            )
-            for f in flanks
-        ),
-        scale_mm=design.blank.mean_cone_distance_mm,
-        pitch_angle_rad=math.radians(design.blank.pitch_angle_deg[index]),
+    return flank_family(
+        design.blank,
+        index,
+        {f: spec.flank(f) for f in flanks},
+        index_rad=2.0 * math.pi * tool_pass / teeth,
     )
 
 
@@ -572,19 +567,19 @@ class FaceMilling(BaseMachineModel):
         """The pinion's roll on ``side`` fitted by inverse TCA to the design's ``[te_target]``
         (:mod:`gearopt_plugins.face_milling_inverse`): c0 moves the cradle angle, c1 ... c6
         replace ``ratio_of_roll`` and ``roll_c2`` ... ``roll_c6``; the gear is unchanged."""
-        from gearopt_plugins.face_milling_inverse import SIDE_FLANKS, inverse_tca
+        from gearopt_plugins.face_milling_inverse import inverse_tca
 
         if design.te_target is None:
             raise DesignError("te_target", rule="the design has no [te_target] table")
-        if side not in SIDE_FLANKS:
-            raise DesignError("side", side, f"must be one of {sorted(SIDE_FLANKS)}")
+        if side not in SIDES:
+            raise DesignError("side", side, f"must be one of {sorted(SIDES)}")
         mean = None
         for report in design.machine.synthesis:  # M of the local synthesis, when there is one
             if report.targets.side == side:
                 mean = (report.targets.mean_point_face_mm, report.targets.mean_point_profile_mm)
         result = inverse_tca(design, design.te_target, side=side, mean_point_mm=mean)
         table = machine_table(design.machine)
-        flank = SIDE_FLANKS[side][0]
+        flank = SIDES[side][0]
         values = table["pinion"][flank]
         before = {k: values[k] for k in ("cradle_angle_deg", "ratio_of_roll", *ROLL_KEYS)}
         values["cradle_angle_deg"] += result.cradle_shift_deg

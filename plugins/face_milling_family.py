@@ -21,7 +21,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CutterFlank", "FaceMillingFamily", "edge"]
+__all__ = ["CutterFlank", "FaceMillingFamily", "edge", "flank_family"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -284,3 +284,17 @@ class FaceMillingFamily:
                 phi = phi - (value - phi_c) / slope
             rows.append(np.stack([np.broadcast_to(u, s.shape), theta, phi], axis=-1))
         return np.stack(rows)
+
+
+def flank_family(blank, index: int, specs, *, index_rad: float = 0.0) -> FaceMillingFamily:
+    """The family cutting the flanks ``specs`` (``{flank: settings}``, each with a
+    ``cutter(flank, index_rad=, pitch_depth_mm=)``, e.g. a ``FaceMillingFlank``) of member
+    ``index`` (0 pinion, 1 gear) of ``blank``, the work indexed by ``index_rad``."""
+    return FaceMillingFamily(
+        cutters=tuple(
+            spec.cutter(flank, index_rad=index_rad, pitch_depth_mm=blank.mean_dedendum_mm[index])
+            for flank, spec in specs.items()
+        ),
+        scale_mm=blank.mean_cone_distance_mm,
+        pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
+    )

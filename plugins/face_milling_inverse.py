@@ -33,14 +33,15 @@ from numpy.typing import NDArray
 from gearopt.contact import Placement
 from gearopt.design import Design
 from gearopt.errors import SettingsError
+from gearopt.flank import cone_coordinates
+from gearopt.kinematics import rot_z
 from gearopt.mesh import ToothFrame
 from gearopt.solve import complex_step_jacobian, newton
 from gearopt.te_target import ARCSEC, TETarget
-from gearopt_plugins.face_milling_local import _solve_nodes
+from gearopt_plugins.face_milling_local import _solve_nodes, hand_sign, mirrored
+from gearopt_plugins.face_milling_synthesis import SIDES
 
 __all__ = ["InverseTCA", "inverse_tca"]
-
-SIDE_FLANKS = {"drive": ("convex", "concave"), "coast": ("concave", "convex")}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -84,18 +85,6 @@ class InverseTCA:
         return (self.interval_rad[1] - self.interval_rad[0]) * pinion_teeth / (2.0 * math.pi)
 
 
-def _rot(angle):
-    c, s = np.cos(angle), np.sin(angle)
-    z, o = 0.0 * c, 1.0 + 0.0 * c
-    return np.stack(
-        [np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2
-    )
-
-
-def _mirror(v, hand):
-    return v * np.array([1.0, hand, 1.0])
-
-
 def _poly(coef, x):
     """phi_c and its derivative for c0 ... c6."""
     value = np.polyval(coef[::-1], x)
@@ -109,12 +98,11 @@ class _Pair:
     def __init__(self, design: Design, side: str, mean_point_mm=None) -> None:
         from gearopt_plugins.face_milling import _family
 
-        pinion_flank, gear_flank = SIDE_FLANKS[side]
+        pinion_flank, gear_flank = SIDES[side]
         blank = design.blank
         self.pinion = _family(design, "pinion", (pinion_flank,))
         self.gear = _family(design, "gear", (gear_flank,))
-        self.hand1 = 1.0 if blank.hand[0] == "right" else -1.0
-        self.hand2 = 1.0 if blank.hand[1] == "right" else -1.0
+        self.hand1, self.hand2 = (hand_sign(h) for h in blank.hand)
         self.b, self.c = Placement(shaft_angle_deg=design.pair.shaft_angle_deg).pinion_to_gear
         self.ratio = design.pair.pinion_teeth / design.pair.gear_teeth
         self.scale = blank.mean_cone_distance_mm
@@ -128,15 +116,15 @@ class _Pair:
     def pinion_point(self, q, cradle):
         geo = self.pinion.geometry(q, np.zeros(q.shape[:-1], int), cradle=cradle)
         return (
-            _mirror(geo["point"], self.hand1),
-            _mirror(geo["normal"], self.hand1),
+            mirrored(geo["point"], self.hand1),
+            mirrored(geo["normal"], self.hand1),
             geo["meshing"],
         )
 
     def gear_point(self, q):
         geo = self.gear.geometry(q, np.zeros(q.shape[:-1], int))
         f = self.gear.axial_radial_meshing(q, np.zeros(q.shape[:-1], int))[2]
-        return _mirror(geo["point"], self.hand2), _mirror(geo["normal"], self.hand2), f
+        return mirrored(geo["point"], self.hand2), mirrored(geo["normal"], self.hand2), f
 
     def fold(self, x, coef) -> NDArray:
         """``(N, 2)`` determinants of the envelope equations (L, R, f) in the generating
@@ -167,25 +155,21 @@ class _Pair:
         each member's axial plane; with ``coef`` (the pinion's roll) also negative beyond a
         flank's fold (the sign of :meth:`fold` against its sign at the reference)."""
         out = []
+        b = self.blank
         for index, (family, q) in enumerate(((self.pinion, x[:, 0:3]), (self.gear, x[:, 4:7]))):
             big_l, big_r, _ = family.axial_radial_meshing(q, np.zeros(len(q), int))
-            g = math.radians(self.blank.pitch_angle_deg[index])
-            s = big_l * math.cos(g) + big_r * math.sin(g)
-            h = -big_l * math.sin(g) + big_r * math.cos(g)
-            b = self.blank
+            s, h = cone_coordinates(big_l, big_r, math.radians(b.pitch_angle_deg[index]))
             out += [
                 s - b.inner_cone_distance_mm,
                 b.outer_cone_distance_mm - s,
                 h + b.dedendum_at_mm(index, s),
                 b.addendum_at_mm(index, s) - h,
             ]
+            if index == 0 and self.region is not None:  # the pinion flank as generated
+                inside = self.region(s, h)  # (it ends above its fold)
         margin = np.min(np.stack(out), axis=0)
-        if self.region is not None:  # the pinion flank as generated (it ends above its fold)
-            big_l, big_r, _ = self.pinion.axial_radial_meshing(x[:, 0:3], np.zeros(len(x), int))
-            g = math.radians(self.blank.pitch_angle_deg[0])
-            s = big_l * math.cos(g) + big_r * math.sin(g)
-            h = -big_l * math.sin(g) + big_r * math.cos(g)
-            margin = np.where(self.region(s, h), margin, -1.0)
+        if self.region is not None:
+            margin = np.where(inside, margin, -1.0)
         if coef is not None:
             folded = np.any(self.fold(x, coef) * self.fold_sign <= 0.0, axis=-1)
             margin = np.where(folded, -1.0, margin)
@@ -199,7 +183,7 @@ class _Pair:
         slope = roll_slope(x[..., 2])
         p, n1, f1 = self.pinion_point(q1, (x[..., 3], slope))
         r, n2, f2 = self.gear_point(x[..., 4:7])
-        rot1, rot2 = _rot(phi1), _rot(psi)
+        rot1, rot2 = rot_z(phi1)[..., :3, :3], rot_z(psi)[..., :3, :3]
         q = np.einsum("ij,...jk,...k->...i", self.b, rot1, p) + self.c
         g = np.einsum("...ij,...j->...i", rot2, r)
         m1 = np.einsum("ij,...jk,...k->...i", self.b, rot1, n1)
@@ -228,17 +212,16 @@ class _Pair:
         start1 = self.pinion.pitch_row(np.array([s1]))[0, 0]
         sol = _solve_nodes(self.pinion, np.array([s1]), np.array([h1]), start1, g1)
         q1 = sol.x[0]
-        p = _mirror(self.pinion.geometry(q1[None], self.zero)["point"][0], self.hand1)
-        n = _mirror(self.pinion.geometry(q1[None], self.zero)["normal"][0], self.hand1)
+        p = mirrored(self.pinion.geometry(q1[None], self.zero)["point"][0], self.hand1)
+        n = mirrored(self.pinion.geometry(q1[None], self.zero)["normal"][0], self.hand1)
         self.sense = 1 if p[0] * n[1] - p[1] * n[0] > 0.0 else -1
         qg = self.b @ p + self.c
         g2 = math.radians(blank.pitch_angle_deg[1])
         big_l2, big_r2 = qg[2], math.hypot(qg[0], qg[1])
-        s2 = big_l2 * math.cos(g2) + big_r2 * math.sin(g2)
-        h2 = -big_l2 * math.sin(g2) + big_r2 * math.cos(g2)
+        s2, h2 = cone_coordinates(big_l2, big_r2, g2)
         start2 = self.gear.pitch_row(np.array([blank.mean_cone_distance_mm]))[0, 0]
         q2 = _solve_nodes(self.gear, np.array([s2]), np.array([h2]), start2, g2).x[0]
-        r = _mirror(self.gear.geometry(q2[None], self.zero)["point"][0], self.hand2)
+        r = mirrored(self.gear.geometry(q2[None], self.zero)["point"][0], self.hand2)
         psi0 = math.atan2(qg[1], qg[0]) - math.atan2(r[1], r[0])
         # the tangent basis of the normal equations: the pinion's tangent plane at the guess
         m = self.b @ n

@@ -26,11 +26,34 @@ from numpy.typing import NDArray
 
 from gearopt.contact import Placement
 from gearopt.errors import SettingsError
+from gearopt.flank import axial_plane
+from gearopt.kinematics import rot_z
 from gearopt.mesh import path_angle
 from gearopt.newton_tca import _FlankJet, _System
 from gearopt.solve import newton
 
-__all__ = ["EnvelopeJet", "LocalMesh", "TaylorJet", "envelope_jet", "local_mesh"]
+__all__ = [
+    "EnvelopeJet",
+    "LocalMesh",
+    "TaylorJet",
+    "envelope_jet",
+    "hand_sign",
+    "local_mesh",
+    "mirrored",
+]
+
+
+def hand_sign(hand: str) -> float:
+    """+1 for a right-hand member, -1 for a left-hand one (the mirror image in the member's
+    x-z plane of the right-hand flank the families generate)."""
+    return 1.0 if hand == "right" else -1.0
+
+
+def mirrored(vectors, sign: float):
+    """Points or normals ``(..., 3)`` of the family's right-hand flank as the member of hand
+    ``sign`` (:func:`hand_sign`) has them."""
+    return vectors * np.array([1.0, sign, 1.0])
+
 
 #: stencil step (mm) of the finite differences of Theta on the exact envelope
 JET_STEP_MM = 0.1
@@ -60,9 +83,7 @@ class EnvelopeJet:
 
 def _solve_nodes(family, s, h, guess, pitch_angle_rad):
     """Envelope points at the axial-plane coordinates ``(s, h)`` ``(N,)`` (family's hand)."""
-    cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
-    target_l = s * cg - h * sg
-    target_r = s * sg + h * cg
+    target_l, target_r = axial_plane(s, h, pitch_angle_rad)
     scale = family.scale_mm
 
     def residual(x, idx):
@@ -259,7 +280,7 @@ def local_mesh(
 
     # the ellipse: both second fundamental forms in the gear frame at u = 0
     b = system.b
-    rot = _rot_z(gear_turn_rad)
+    rot = rot_z(gear_turn_rad)[:3, :3]
     _, p_s, p_h, p_ss, p_sh, p_hh, p_n = pinion.frame()
     m = rot.T @ b  # pinion frame -> gear member frame (as generated)
     p_s, p_h, p_ss, p_sh, p_hh, p_n = (m @ v for v in (p_s, p_h, p_ss, p_sh, p_hh, p_n))
@@ -289,8 +310,3 @@ def local_mesh(
         ellipse_angle_deg=math.degrees(math.atan2(direction[1], direction[0])),
         residual=residual0,
     )
-
-
-def _rot_z(angle: float) -> NDArray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

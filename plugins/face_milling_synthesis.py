@@ -104,14 +104,17 @@ from gearopt.blank import Blank
 from gearopt.contact import Placement
 from gearopt.design import PairData
 from gearopt.errors import DesignError, SettingsError
+from gearopt.flank import axial_plane, cone_coordinates
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
-from gearopt_plugins.face_milling_family import FaceMillingFamily
+from gearopt_plugins.face_milling_family import flank_family
 from gearopt_plugins.face_milling_local import (
     TaylorJet,
     _solve_nodes,
     envelope_jet,
+    hand_sign,
     local_mesh,
+    mirrored,
 )
 
 __all__ = [
@@ -526,19 +529,6 @@ def gear_flanks_from_blank(pair: PairData, cutter_radius_mm: float | None = None
 # --- local synthesis of a pinion flank -----------------------------------------------------------
 
 
-def _family(spec, flank: str, blank: Blank, index: int) -> FaceMillingFamily:
-    return FaceMillingFamily(
-        cutters=(spec.cutter(flank, pitch_depth_mm=blank.mean_dedendum_mm[index]),),
-        scale_mm=blank.mean_cone_distance_mm,
-        pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
-    )
-
-
-def _rot_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 @dataclass(frozen=True, kw_only=True)
 class _MeanPoint:
     """M on both members at the mean position (pinion angle 0)."""
@@ -563,12 +553,11 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     if taper is not None:  # the pattern's profile coordinate is t (DepthTaper): h at s1
         h1 = float(taper.height_mm(s1, h1))
     g1, g2 = (math.radians(a) for a in blank.pitch_angle_deg)
-    big_l1 = s1 * math.cos(g1) - h1 * math.sin(g1)
-    big_r1 = s1 * math.sin(g1) + h1 * math.cos(g1)
+    big_l1, big_r1 = axial_plane(s1, h1, g1)
     b, c = placement.pinion_to_gear
     ratio = pair.pinion_teeth / pair.gear_teeth
-    hand2 = 1.0 if blank.hand[1] == "right" else -1.0
-    family = _family(gear_spec, gear_flank, blank, 1)
+    hand2 = hand_sign(blank.hand[1])
+    family = flank_family(blank, 1, {gear_flank: gear_spec})
     start = family.pitch_row(np.array([blank.mean_cone_distance_mm]))[0, 0]
     axis1 = b[:, 2]
 
@@ -579,13 +568,10 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
         )
         q = p @ b.T + c
         big_l2, big_r2 = q[:, 2], np.hypot(q[:, 0], q[:, 1])
-        s2 = big_l2 * math.cos(g2) + big_r2 * math.sin(g2)
-        h2 = -big_l2 * math.sin(g2) + big_r2 * math.cos(g2)
+        s2, h2 = cone_coordinates(big_l2, big_r2, g2)
         sol = _solve_nodes(family, s2, h2, start, g2)
         geo = family.geometry(sol.x, np.zeros(len(omega), int))
-        point, normal = geo["point"], geo["normal"]
-        point[:, 1] *= hand2
-        normal[:, 1] *= hand2
+        point, normal = mirrored(geo["point"], hand2), mirrored(geo["normal"], hand2)
         turn = np.arctan2(q[:, 1], q[:, 0]) - np.arctan2(point[:, 1], point[:, 0])
         ct, st = np.cos(turn), np.sin(turn)
         n = np.stack(
@@ -771,7 +757,7 @@ def synthesize_pinion_flank(
             _SOLVED.pop(next(iter(_SOLVED)))
     spec, report, mean, analysis = _SOLVED[key]
     ratio = pair.pinion_teeth / pair.gear_teeth
-    hand1 = 1.0 if blank.hand[0] == "right" else -1.0
+    hand1 = hand_sign(blank.hand[0])
     # the work's index that puts the flank's M at its place in the mesh (its polar angle omega
     # at pinion angle 0), less the backlash on the coast flank (a thinner tooth)
     thinning = 0.0
@@ -803,11 +789,10 @@ def _solve_flank(pair, flank, gear_specs, chosen, targets, flank_type):
     placement = Placement(shaft_angle_deg=pair.shaft_angle_deg)
     mean = _mean_point(pair, gear_specs[gear_flank], gear_flank, targets, placement)
     g1 = math.radians(blank.pitch_angle_deg[0])
-    big_l1 = mean.s1 * math.cos(g1) - mean.h1 * math.sin(g1)
-    big_r1 = mean.s1 * math.sin(g1) + mean.h1 * math.cos(g1)
+    big_l1, big_r1 = axial_plane(mean.s1, mean.h1, g1)
     e_t = np.array([-math.sin(mean.omega), math.cos(mean.omega), 0.0])
     n_target = np.array([mean.normal1 @ e_t, mean.normal1[2]])
-    hand1 = 1.0 if blank.hand[0] == "right" else -1.0
+    hand1 = hand_sign(blank.hand[0])
     ratio = pair.pinion_teeth / pair.gear_teeth
     lag_target = 2.0 * abs(targets.te_level_arcsec) / ARCSEC / (math.pi / pair.pinion_teeth) ** 2
     start = pinion_start(pair, {f: _as_dict(s) for f, s in gear_specs.items()}, flank, chosen)
@@ -827,7 +812,7 @@ def _solve_flank(pair, flank, gear_specs, chosen, targets, flank_type):
     def analyse(x, second=True):
         count["n"] += 1
         spec = spec_of(x)
-        family = _family(spec, flank, blank, 0)
+        family = flank_family(blank, 0, {flank: spec})
         q0 = guess["q"]
         if q0 is None:
             q0 = family.pitch_row(np.array([mean.s1]))[0, 0]
@@ -847,9 +832,7 @@ def _solve_flank(pair, flank, gear_specs, chosen, targets, flank_type):
         q = np.array([sol.x[0, 0], sol.x[0, 1], 0.0])
         f = family.axial_radial_meshing(q[None], np.zeros(1, int))[2][0]
         geo = family.geometry(q[None], np.zeros(1, int))
-        point, normal = geo["point"][0], geo["normal"][0]
-        point[1] *= hand1
-        normal[1] *= hand1
+        point, normal = mirrored(geo["point"][0], hand1), mirrored(geo["normal"][0], hand1)
         theta = math.atan2(point[1], point[0])
         et = np.array([-math.sin(theta), math.cos(theta), 0.0])
         first = np.array([f, normal @ et - n_target[0], normal[2] - n_target[1]])
