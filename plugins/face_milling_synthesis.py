@@ -535,6 +535,8 @@ class _MeanPoint:
 
     s1: float
     h1: float
+    axial_mm: float  # M's axial position and radius on the pinion
+    radius_mm: float
     omega: float  # M's polar angle on the pinion
     normal1: np.ndarray  # the pinion's out-of-material normal at M, pinion frame
     gear_jet: Any
@@ -615,6 +617,8 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     return _MeanPoint(
         s1=s1,
         h1=h1,
+        axial_mm=float(big_l1),
+        radius_mm=float(big_r1),
         omega=float(omega),
         normal1=-(b.T @ n[0]),
         gear_jet=jet,
@@ -789,7 +793,7 @@ def _solve_flank(pair, flank, gear_specs, chosen, targets, flank_type):
     placement = Placement(shaft_angle_deg=pair.shaft_angle_deg)
     mean = _mean_point(pair, gear_specs[gear_flank], gear_flank, targets, placement)
     g1 = math.radians(blank.pitch_angle_deg[0])
-    big_l1, big_r1 = axial_plane(mean.s1, mean.h1, g1)
+    big_l1, big_r1 = mean.axial_mm, mean.radius_mm
     e_t = np.array([-math.sin(mean.omega), math.cos(mean.omega), 0.0])
     n_target = np.array([mean.normal1 @ e_t, mean.normal1[2]])
     hand1 = hand_sign(blank.hand[0])
