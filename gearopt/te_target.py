@@ -60,10 +60,8 @@ class TETarget:
                 "the designed TE must fall away from phi1_0 (quadratic < 0, or quadratic = 0 "
                 "and quartic < 0)",
             )
-        x = self.mesh_in_rad
-        if self.delta_rad(np.linspace(0.0, x, 201)).max() > 0.0 or np.any(
-            np.diff(self.delta_rad(np.linspace(0.0, x, 201))) > 0.0
-        ):
+        delta = self.delta_rad(np.linspace(0.0, self.mesh_in_rad, 201))
+        if delta.max() > 0.0 or np.any(np.diff(delta) > 0.0):
             raise DesignError(
                 "te_target.quartic",
                 self.quartic,
@@ -148,7 +146,7 @@ class TETarget:
         te_in = read_number(table, "mesh_in_te_arcsec", where, lt=0.0) / ARCSEC
         x_t = math.pi / pinion_teeth
         x_in = ratio * x_t
-        if ratio <= 1.0 + 1e-9:
+        if ratio <= 1.0 + 1e-9:  # x_in on x_T: the two conditions are one
             raise DesignError(f"{where}.contact_ratio", ratio, "must exceed 1")
         quadratic, quartic = np.linalg.solve(
             np.array([[x_t**2, x_t**4], [x_in**2, x_in**4]]), np.array([te_t, te_in])
