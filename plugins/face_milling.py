@@ -451,21 +451,10 @@ def machine_table(machine: FaceMillingMachine) -> dict[str, Any]:
 
 # --- settings by synthesis -----------------------------------------------------------------------
 
-_SYNTHESES: dict = {}
 _SYNTHESIS_NOTE = (
     "derived: the gear's settings from the blank (unless [machine.gear] gives them), the "
     "pinion's by local synthesis at M ([synthesis]; gearopt_plugins.face_milling_synthesis)"
 )
-
-
-def _flat(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
-    out = []
-    for k, v in table.items():
-        if isinstance(v, Mapping):
-            out += _flat(v, f"{prefix}{k}.")
-        else:
-            out.append((prefix + k, v))
-    return out
 
 
 def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
@@ -556,12 +545,7 @@ class FaceMilling(BaseMachineModel):
         pinion's by local synthesis, per flank, from the ``[synthesis]`` table
         (:mod:`gearopt_plugins.face_milling_synthesis`). ``[machine.pinion]`` and
         ``[machine.pinion.<flank>]`` may hold the chosen inputs only."""
-        key = repr((pair, sorted(_flat(table)), sorted(_flat(synthesis))))
-        if key not in _SYNTHESES:
-            _SYNTHESES[key] = _synthesize(table, synthesis, pair)
-            while len(_SYNTHESES) > 64:
-                _SYNTHESES.pop(next(iter(_SYNTHESES)))
-        return _SYNTHESES[key]
+        return _synthesize(table, synthesis, pair)
 
     def realise_te_target(self, design: Design, *, side: str = "drive") -> tuple[dict, dict]:
         """The pinion's roll on ``side`` fitted by inverse TCA to the design's ``[te_target]``
