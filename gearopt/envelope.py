@@ -38,6 +38,7 @@ __all__ = [
     "EnvelopeSurface",
     "solve_envelope",
     "flank_map",
+    "require_flank",
 ]
 
 _H = 1e-30  # complex step
@@ -490,6 +491,15 @@ def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
     t = (j[None, :] - low).astype(float)
     quadratic = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
     return np.where(j[None, :] < low, quadratic, values)
+
+
+def require_flank(solution: EnvelopeSolution, index: int, *, member: str, flank: str) -> None:
+    """A :class:`SettingsError` when flank ``index`` of a solution has fewer than 4 generated
+    nodes (the settings generate (almost) nothing of it)."""
+    if solution.mask[index].sum() < 4:
+        raise SettingsError(
+            f"{member} {flank} flank", rule="the settings generate (almost) nothing of this flank"
+        )
 
 
 def flank_map(

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.design import MEMBERS, Design
-from gearopt.envelope import flank_map, solve_envelope
+from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import SettingsError
 from gearopt.flank import FlankGrid, FlankMap
 from gearopt.solve import newton
@@ -256,11 +256,7 @@ def generate_from_blade_systems(
     )
     out = {}
     for k, flank in enumerate(flanks):
-        if solution.mask[k].sum() < 4:
-            raise SettingsError(
-                f"{member} {flank} flank",
-                rule="the settings generate (almost) nothing of this flank",
-            )
+        require_flank(solution, k, member=member, flank=flank)
         out[flank] = replace(
             flank_map(
                 family_,

@@ -158,7 +158,7 @@ import numpy as np
 
 from gearopt import hookimpl
 from gearopt.design import MEMBERS, Design, PairData
-from gearopt.envelope import flank_map, solve_envelope
+from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
@@ -651,11 +651,7 @@ class FaceMilling(BaseMachineModel):
         hand = blank.hand[index]
         out = {}
         for k, flank in enumerate(flanks):
-            if solution.mask[k].sum() < 4:
-                raise SettingsError(
-                    f"{member} {flank} flank",
-                    rule="the settings generate (almost) nothing of this flank",
-                )
+            require_flank(solution, k, member=member, flank=flank)
             spec = design.machine.member(member).flank(flank)
             out[flank] = flank_map(
                 family,

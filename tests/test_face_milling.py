@@ -13,6 +13,7 @@ from numpy.testing import assert_allclose
 
 import gearopt
 from gearopt.errors import DesignError, GearoptError
+from gearopt.flank import cone_coordinates
 from gearopt.testing import FlankContract
 from gearopt_plugins.face_milling import FaceMilling, _family
 from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily
@@ -443,24 +444,9 @@ def test_tapered_tip_sweeps_the_root_cone(tapered, member):
     the root cone, and touching it all along the face (machine root angle = root angle: the
     tip plane holds the root cone's generatrix), measured as the least height above the root
     cone in each of 7 bins of the face width."""
-    index = MEMBERS.index(member)
-    blank = tapered.blank
-    family = _family(tapered, member, ("convex",))
-    theta = np.linspace(-math.pi, math.pi, 2001)
-    phi = np.linspace(-0.6, 0.6, 121)
-    q = np.stack(np.broadcast_arrays(0.0, theta[:, None], phi[None, :]), axis=-1)
-    p = family.geometry(q, np.zeros(q.shape[:-1], int))["point"].reshape(-1, 3)
-    g = math.radians(blank.pitch_angle_deg[index])
-    big_l, big_r = p[:, 2], np.hypot(p[:, 0], p[:, 1])
-    s = big_l * math.cos(g) + big_r * math.sin(g)
-    h = -big_l * math.sin(g) + big_r * math.cos(g)
-    above = h + blank.dedendum_at_mm(index, s)
-    ai, ao = blank.inner_cone_distance_mm, blank.outer_cone_distance_mm
-    on = (s >= ai) & (s <= ao)
-    assert above[on].min() > -1e-9
-    bins = np.linspace(ai, ao, 8)
-    least = [above[(s >= a) & (s < b)].min() for a, b in zip(bins[:-1], bins[1:], strict=True)]
-    assert max(least) < 0.01, least
+    lowest, least = _tip_sweep_above_root(tapered, member)
+    assert lowest > -1e-9
+    assert least < 0.01, least
 
 
 def test_root_reach_is_checked_at_toe_and_heel(conjugate, tapered):
@@ -710,9 +696,7 @@ def _tip_sweep_above_root(design, member, flank="convex"):
     q = np.stack(np.broadcast_arrays(0.0, theta[:, None], phi[None, :]), axis=-1)
     p = family.geometry(q, np.zeros(q.shape[:-1], int))["point"].reshape(-1, 3)
     g = math.radians(blank.pitch_angle_deg[index])
-    big_l, big_r = p[:, 2], np.hypot(p[:, 0], p[:, 1])
-    s = big_l * math.cos(g) + big_r * math.sin(g)
-    h = -big_l * math.sin(g) + big_r * math.cos(g)
+    s, h = cone_coordinates(p[:, 2], np.hypot(p[:, 0], p[:, 1]), g)
     above = h + blank.dedendum_at_mm(index, s)
     ai, ao = blank.inner_cone_distance_mm, blank.outer_cone_distance_mm
     on = (s >= ai) & (s <= ao)
