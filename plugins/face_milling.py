@@ -151,7 +151,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -474,7 +474,7 @@ def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
         )
     sub = read_table(table, "pinion", "machine")
     check_keys(sub, (*fs.CHOSEN_KEYS, *FLANKS), "machine.pinion")
-    gear_dicts = {f: fs._as_dict(gear.flank(f)) for f in FLANKS}
+    gear_dicts = {f: asdict(gear.flank(f)) for f in FLANKS}
     flanks, reports = {}, []
     for side, (flank, _) in fs.SIDES.items():
         where = f"machine.pinion.{flank}"
@@ -500,7 +500,7 @@ def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
             backlash_mm=options["backlash_mm"],
             reference_gear_turn_rad=reports[0].gear_turn_rad if reports else None,
         )
-        values = {k: float(v) for k, v in fs._as_dict(spec).items()}
+        values = {k: float(v) for k, v in asdict(spec).items()}
         if math.isinf(values["blade_profile_radius_mm"]):
             values["blade_profile_radius_mm"] = "inf"
         flanks[flank] = _parse_flank(values, where + " (synthesised)", pair, "pinion", flank)

@@ -94,7 +94,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -799,7 +799,7 @@ def _solve_flank(pair, flank, gear_specs, chosen, targets, flank_type):
     hand1 = hand_sign(blank.hand[0])
     ratio = pair.pinion_teeth / pair.gear_teeth
     lag_target = 2.0 * abs(targets.te_level_arcsec) / ARCSEC / (math.pi / pair.pinion_teeth) ** 2
-    start = pinion_start(pair, {f: _as_dict(s) for f, s in gear_specs.items()}, flank, chosen)
+    start = pinion_start(pair, {f: asdict(s) for f, s in gear_specs.items()}, flank, chosen)
     x_start = np.array([start[k] for k in SOLVED_KEYS])
     x_start[1] = math.radians(x_start[1])
     scales = _SCALES * np.array([1, 1, 1, 1, x_start[4], x_start[4]])
@@ -996,9 +996,3 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
             f"the pinion cannot be made tangent to the gear at M (residual "
             f"{report.first_order_residual:.2e})",
         )
-
-
-def _as_dict(spec) -> dict:
-    if isinstance(spec, Mapping):
-        return dict(spec)
-    return {k: getattr(spec, k) for k in spec.__dataclass_fields__}
