@@ -198,6 +198,18 @@ class _System:
         self.b, self.c = field.b, field.c
         self.gs = float(field.gear_sense)
 
+    @classmethod
+    def of_jets(cls, pinion, gear, *, b: NDArray, c: NDArray, gear_sense: float) -> _System:
+        """The equations of two jets (anything with ``surface(s, h, turn)``, ``sg``, ``cg``
+        like :class:`_FlankJet`) placed by ``q = b p + c``, without a ClearanceField (the
+        angles are then the caller's: :meth:`__call__` only)."""
+        system = cls.__new__(cls)
+        system.field = None
+        system.pinion, system.gear = pinion, gear
+        system.b, system.c = b, c
+        system.gs = float(gear_sense)
+        return system
+
     def angles(self, u: float, gear_angle_rad: float) -> tuple[float, float]:
         """Pinion angle phi and the gear's polar-angle offset (before the lag) at rotation u."""
         f = self.field

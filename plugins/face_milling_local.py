@@ -197,19 +197,12 @@ class LocalMesh:
     ellipse_form
         4 / (major axis)^2 in 1/mm^2, signed: <= 0 when the flanks cross at M (no point
         contact; the major axis is then inf).
-    ellipse_angle_deg
-        Its direction in the pattern coordinates (face toward the heel = 0, toward the top +).
-    residual
-        Largest residual of the tangency equations at M before the mesh steps (mm / cosines):
-        how far the two patches are from touching at M.
     """
 
     lag_curvature: float
     path_angle_deg: float
     ellipse_major_axis_mm: float
     ellipse_form: float
-    ellipse_angle_deg: float
-    residual: float
 
 
 def local_mesh(
@@ -234,13 +227,10 @@ def local_mesh(
     second fundamental forms at M; ``orientation`` = +1 when the pinion patch's normal
     p_s x p_h points out of the pinion's material, else -1.
     """
-    system = _System.__new__(_System)
-    system.pinion, system.gear = pinion, gear
-    system.b, system.c = placement.pinion_to_gear
-    system.gs = float(-sense)
+    b, c = placement.pinion_to_gear
+    system = _System.of_jets(pinion, gear, b=b, c=c, gear_sense=-sense)
     s1, h1, s2, h2 = pinion.jet.s_mm, pinion.jet.h_mm, gear.jet.s_mm, gear.jet.h_mm
     x = np.array([s1, h1, s2, h2, 0.0])
-    residual0 = float(np.max(np.abs(system(0.0, gear_turn_rad, x)[0])))
     steps = np.array([0.0, 1.0, -1.0, 2.0, -2.0]) * MESH_STEP_RAD
     out = np.empty((len(steps), 5))
     for k, u in enumerate(steps):
@@ -279,7 +269,6 @@ def local_mesh(
     angle = path_angle(ds2 * g_s + dh2 * g_h, g_n, g_point, root_angle_rad)
 
     # the ellipse: both second fundamental forms in the gear frame at u = 0
-    b = system.b
     rot = rot_z(gear_turn_rad)[:3, :3]
     _, p_s, p_h, p_ss, p_sh, p_hh, p_n = pinion.frame()
     m = rot.T @ b  # pinion frame -> gear member frame (as generated)
@@ -299,14 +288,11 @@ def local_mesh(
     # {a: a^T form a <= 1}, its major axis 2 / sqrt(smallest eigenvalue of form)
     delta = compound_um * 1e-3
     form = from_pinion.T @ rel @ from_pinion / (2.0 * delta)
-    w, v = np.linalg.eigh(form)
+    w = np.linalg.eigh(form)[0]
     major = 2.0 / math.sqrt(w[0]) if w[0] > 0.0 else math.inf
-    direction = v[:, 0] if v[0, 0] >= 0.0 else -v[:, 0]
     return LocalMesh(
         lag_curvature=float(curvature),
         path_angle_deg=angle,
         ellipse_major_axis_mm=major,
         ellipse_form=float(w[0]),
-        ellipse_angle_deg=math.degrees(math.atan2(direction[1], direction[0])),
-        residual=residual0,
     )
