@@ -95,7 +95,7 @@ def _poly(coef, x):
 class _Pair:
     """The pinion tool, the gear, their placement and the reference contact."""
 
-    def __init__(self, design: Design, side: str, mean_point_mm=None) -> None:
+    def __init__(self, design: Design, side: str, mean_point_mm=None, region=None) -> None:
         from gearopt_plugins.face_milling import _family
 
         pinion_flank, gear_flank = SIDES[side]
@@ -110,7 +110,7 @@ class _Pair:
         self.base_roll = np.array([0.0, *spec.roll])
         self.zero = np.zeros(1, int)
         self.blank = blank
-        self.region = None
+        self.region = region
         self._reference(design, blank, mean_point_mm)
 
     def pinion_point(self, q, cradle):
@@ -269,8 +269,7 @@ def inverse_tca(
     ``(s, h) -> bool``, where the pinion flank is generated (e.g. a FlankMap's ``inside``,
     the region the contact engine uses): the contact interval then also ends where the contact
     leaves it."""
-    pair = _Pair(design, side, mean_point_mm)
-    pair.region = pinion_region
+    pair = _Pair(design, side, mean_point_mm, pinion_region)
     s = pair.sense
     u = np.linspace(-target.mesh_in_rad, target.mesh_in_rad, positions)
     coef = np.zeros(degree + 1)
@@ -324,6 +323,8 @@ def inverse_tca(
         if change < tol:
             break
     fit = np.polynomial.polynomial.polyval(phi_p, coef)
+    mid = positions // 2  # the folds' sides at the reference, with the fitted roll
+    pair.fold_sign = np.sign(pair.fold(x[mid : mid + 1], coef)[0])
     ends = tuple(_interval_end(pair, solve, coef, u, x, way) for way in (-1, 1))
     return InverseTCA(
         roll=tuple(float(c) for c in coef[1:]) + (0.0,) * (6 - degree),
@@ -344,7 +345,6 @@ def _interval_end(pair, solve, coef, u, x, way: int, step: float = 0.01) -> floa
     bisection to 1e-7 rad."""
     mid = len(u) // 2
     rows = range(mid, len(u)) if way > 0 else range(mid, -1, -1)
-    pair.fold_sign = np.sign(pair.fold(x[mid : mid + 1], coef)[0])
     margin = pair.margin_mm(x, coef)
     last = mid
     for k in rows:
