@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from gearopt import contact_kernels as _kernels
 from gearopt.design import Misalignment
 from gearopt.errors import GearoptError
 from gearopt.flank import FlankMap, hermite_cells
@@ -444,6 +445,7 @@ class _Engine:
         self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
         self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
         self._linear_maps(fields)
+        self._jit = self._kernel_tables() if _kernels.ENABLED else None
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -499,6 +501,41 @@ class _Engine:
                 gear_taper.alpha,
                 gear_taper.beta,
             )
+
+    def _kernel_tables(self):
+        """The tables of :mod:`gearopt.contact_kernels` (gear, pinion) and the node counts."""
+        (imax, jmax), n_cols = self._gear_table
+        taper = self._gear_taper or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        gear = (
+            *(float(a) for a in self._rho_coef),
+            float(imax),
+            float(jmax),
+            int(n_cols),
+            self._gear_taper is not None,
+            *(float(a) for a in taper),
+            np.ascontiguousarray(self.gear_coef.T),
+            np.ascontiguousarray(self.gear_ok),
+        )
+        (p0, ph0), (pia, pib) = (a[:, 0] for a in self._pinion_unit)
+        (pimax, pjmax), p_cols = self._pinion_table
+        ptaper = self._pinion_taper
+        pinion = (
+            float(p0),
+            float(ph0),
+            float(pia),
+            float(pib),
+            float(pimax),
+            float(pjmax),
+            int(p_cols),
+            ptaper is not None,
+            *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
+            np.ascontiguousarray(self._pinion_map),
+            np.ascontiguousarray(self._pinion_const[:, 0]),
+            np.ascontiguousarray(self.pinion_coef.T),
+            np.ascontiguousarray(self.refine_cells),
+        )
+        counts = self.node_real.sum(axis=1).astype(np.intp)
+        return gear, pinion, counts
 
     def _untaper(self, xy) -> None:
         """Gear unit grid coordinates of (s, h) made those of (s, t), in place (tapered
@@ -689,6 +726,8 @@ class _Engine:
 
     def _at(self, rows: _Rows, sh):
         """:meth:`at` on known rows."""
+        if self._jit is not None:
+            return self._at_compiled(rows, sh)
         origin, scale = self._pinion_unit
         xy = sh - origin.reshape((2,) + (1,) * (sh.ndim - 1))
         xy *= scale.reshape((2,) + (1,) * (sh.ndim - 1))
@@ -709,6 +748,26 @@ class _Engine:
         valid &= self.refine_cells[cell]
         return delta, valid
 
+    def _at_compiled(self, rows: _Rows, sh):
+        """:meth:`_at` by :func:`gearopt.contact_kernels.clearance_at`: rows ``(n, 1)`` and
+        points ``(2, n, m)`` as the refinement has them, anything else one row per point."""
+        shape = sh.shape[1:]
+        if len(shape) == 2 and rows.turn.shape == (shape[0], 1):
+            n, m = shape
+            kx, ky = rows.kx.reshape(4, n), rows.ky.reshape(4, n)
+            per_row = (rows.turn, rows.sense, rows.gear_offset, rows.pinion_offset)
+            per_row = tuple(np.ascontiguousarray(a).reshape(n) for a in per_row)
+        else:
+            n, m = math.prod(shape), 1
+            kx, ky = (np.broadcast_to(k, (4,) + shape).reshape(4, n) for k in (rows.kx, rows.ky))
+            per_row = (rows.turn, rows.sense, rows.gear_offset, rows.pinion_offset)
+            per_row = tuple(np.broadcast_to(a, shape).reshape(n) for a in per_row)
+        points = np.ascontiguousarray(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
+        delta, valid = np.empty((n, m)), np.empty((n, m), bool)
+        gear, pinion, _ = self._jit
+        _kernels.clearance_at(kx, ky, *per_row, points, pinion, gear, delta, valid)
+        return delta.reshape(shape), valid.reshape(shape)
+
     def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
         on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
@@ -724,7 +783,28 @@ class _Engine:
         # its side's node tables
         sides = np.unique(side)
         joint = len(sides) > 1 and n <= self._JOINT_ROWS
-        if joint:
+        if self._jit is not None:
+            rows = self._rows(side, phi, angle)
+            out = np.empty((3, n, size))
+            _kernels.node_fields(
+                rows.kx,
+                rows.ky,
+                rows.turn,
+                rows.sense,
+                rows.gear_offset,
+                side,
+                self._jit[2],
+                self.node_index,
+                self.node_xy,
+                self.node_z,
+                self.node_nxy,
+                self.node_nz,
+                self._jit[0],
+                out,
+            )
+            field_, fac, rad = out
+            sides = ()
+        elif joint:
             out = self._node_clearance(
                 self._rows(side[:, None], phi[:, None], angle[:, None]),
                 side,
@@ -875,6 +955,8 @@ class _Engine:
         Returns ``(value, s, h, edge)``: edge where the Newton part of the last step would take
         the point off the flanks to a clearance lower by more than the edge tolerance.
         """
+        if self._jit is not None:
+            return self._refine_compiled(side, phi, angle, s, h, f0, iterations, group)
         cell = np.array([[self.ds], [self.dh]])
         quarter = self._STENCIL.T[:, None, :] * (0.25 * cell[:, :, None])  # (2, 1, 9) mm
         fr = self._FRACTIONS
@@ -941,6 +1023,36 @@ class _Engine:
             if need.any():
                 f[need], _ = self._at(every.subset(need), sh[:, need, None] + quarter)
         return best, sh[0], sh[1], edge
+
+    def _refine_compiled(self, side, phi, angle, s, h, f0, iterations, group):
+        """:meth:`refine` by :func:`gearopt.contact_kernels.refine`."""
+        n = len(s)
+        rows = self._rows(side, phi, angle)
+        s, h = np.array(s, float), np.array(h, float)
+        best = np.full(n, np.nan) if f0 is None else np.array(f0, float)
+        caps = np.atleast_1d(np.asarray(iterations, np.intp))
+        group = np.zeros(n, np.intp) if group is None else np.asarray(group, np.intp)
+        edge = np.zeros(n, bool)
+        gear, pinion, _ = self._jit
+        _kernels.refine(
+            rows.kx,
+            rows.ky,
+            rows.turn,
+            rows.sense,
+            rows.gear_offset,
+            rows.pinion_offset,
+            s,
+            h,
+            best,
+            caps,
+            group,
+            self.tol_rad[side],
+            np.array([self.ds, self.dh]),
+            pinion,
+            gear,
+            edge,
+        )
+        return best, s, h, edge
 
 
 def _differences() -> NDArray:

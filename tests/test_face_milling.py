@@ -381,10 +381,13 @@ def test_uniform_depth_output_is_mains(conjugate):
                 assert_allclose(getattr(fm, name), ref[key + name], rtol=0, atol=1e-12)
     # the TCA metrics: the engine's contact-interval ends are bisected differently since the
     # reference was written (candidate points evaluated at once, 1/80 pitch steps): the
-    # contact ratio may move by one step and the bias with it; the rest to 1e-8
+    # contact ratio may move by one step and the bias with it; the rest to 1e-6 (the compiled
+    # kernels, gearopt.contact_kernels, choose the refinement's closed-form Newton step row by
+    # row rather than for a whole batch: the same step to rounding, refined positions within
+    # about 1e-7 mm)
     metrics = gearopt.evaluators()["tca"].evaluate(conjugate, None).metrics
     for name, value in metrics.items():
-        atol = 1e-8
+        atol = 1e-6
         if name.endswith("contact_ratio"):
             atol = 1.0 / 80.0 * 3.0 + 1e-9
         elif name.endswith("pattern_bias_mm"):

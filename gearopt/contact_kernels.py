@@ -1,0 +1,364 @@
+"""Compiled kernels of the contact engine (numba: the optional ``fast`` extra).
+
+The same arithmetic as the numpy paths of :class:`gearopt.contact._Engine`, written point by
+point in compiled loops, so that a small batch costs its points rather than numpy's fixed
+overhead per call (the engine's refinement evaluates a few hundred points at a time, many times
+over):
+
+- :func:`node_fields`: the clearance, the normal factor and R2 at every generated node of the
+  pinion flank for each row (side, pinion angle, gear angle), off-mask nodes +inf / 0 / 0
+  (``_Engine.sample``'s node fields);
+- :func:`clearance_at`: the clearance at pinion grid coordinates by the pinion's local
+  interpolant, and whether the point is on both flanks and in a refinable pinion cell
+  (``_Engine._at``).
+
+The results equal the numpy paths' to rounding (the order of the operations is kept; a BLAS
+product there may fuse a multiply-add). Without numba, or with the environment variable
+``GEAROPT_JIT=0``, :data:`ENABLED` is False and the engine runs its numpy paths.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+try:  # pragma: no cover - depends on the installed extras
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
+__all__ = ["ENABLED", "clearance_at", "node_fields"]
+
+ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
+
+_TO_TURNS = 0.5 / math.pi
+# the refinement's stencil (``_Engine._STENCIL``) in quarter cells
+_STENCIL_S = np.array([0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 1.0, -1.0, -1.0])
+_STENCIL_T = np.array([0.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
+_TURN = 2.0 * math.pi
+
+
+def _compiled(func=None, *, inline=False):
+    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (never
+    called); ``inline``: inlined into its callers (the point evaluations, which take tuples of
+    tables)."""
+    if func is None:
+        return lambda f: _compiled(f, inline=inline)
+    if not ENABLED:
+        return func
+    options = {"inline": "always"} if inline else {}
+    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
+
+
+@_compiled(inline=True)
+def _hermite(coef, k, u, v):
+    """The bicubic of cell ``k`` (``coef`` is ``(cells, 16)``, c_ab at ``4 a + b``) at
+    ``(u, v)``: Horner as :func:`gearopt.flank.hermite_cells`."""
+    w0 = ((coef[k, 3] * v + coef[k, 2]) * v + coef[k, 1]) * v + coef[k, 0]
+    w1 = ((coef[k, 7] * v + coef[k, 6]) * v + coef[k, 5]) * v + coef[k, 4]
+    w2 = ((coef[k, 11] * v + coef[k, 10]) * v + coef[k, 9]) * v + coef[k, 8]
+    w3 = ((coef[k, 15] * v + coef[k, 14]) * v + coef[k, 13]) * v + coef[k, 12]
+    return ((w3 * u + w2) * u + w1) * u + w0
+
+
+@_compiled(inline=True)
+def _corner(x, limit):
+    """The cell's corner along one unit grid coordinate: ``trunc(fmin(fmax(x, 0), limit))``
+    (a NaN coordinate takes 0)."""
+    a = x if x > 0.0 else 0.0
+    if not a < limit:
+        a = limit
+    return float(int(a))
+
+
+@_compiled(inline=True)
+def _gear_gap(o0, o1, o2, o3, turn, sense, offset, gear):
+    """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``_Engine``'s
+    qx, qy and the qz parts of the gear's unit coordinates) on a row: ``(delta, valid, R2)``.
+    ``gear``: rho coefficients, limits, columns, taper (flag and constants), coefficients,
+    valid cells."""
+    rho0, rho1, lim0, lim1, n_cols, tapered, d0, inv_ia, ib, h0, alpha, beta, coef, ok = gear
+    radius = math.sqrt(o0 * o0 + o1 * o1)
+    theta = math.atan2(o1, o0)
+    x = o2 + rho0 * radius
+    y = o3 + rho1 * radius
+    if tapered:
+        d = x * inv_ia + d0
+        y = (y + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
+    a = _corner(x, lim0)
+    b = _corner(y, lim1)
+    cell = int(a * n_cols + b) + offset
+    u = x - a
+    v = y - b
+    valid = ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0
+    gap = _hermite(coef, cell, u, v) - theta
+    gap += turn
+    gap -= np.rint(gap * _TO_TURNS) * _TURN
+    return gap * sense, valid, radius
+
+
+@_compiled
+def node_fields(kx, ky, turn, sense, offset, side, count, index, xy, z, nxy, nz, gear, out):
+    """Node fields of rows r (``kx``, ``ky``: ``(4, n)``; ``turn``, ``sense``, ``offset``
+    (gear cells), ``side``: ``(n,)``) on the generated nodes of each row's side: ``count[k]``
+    nodes, grid indices ``index[k]``, coordinates ``xy`` (``(2, K, m)``), z terms ``z``
+    (``(4, K, m)``), normals' terms ``nxy``, ``nz`` (``(2, K, m)``). Writes the clearance
+    (+inf off the mask or off the gear flank), the normal factor and R2 (0 off the mask) into
+    ``out`` (``(3, n, nodes)``)."""
+    n = turn.shape[0]
+    for r in range(n):
+        k = side[r]
+        out[0, r, :] = math.inf
+        out[1, r, :] = 0.0
+        out[2, r, :] = 0.0
+        for j in range(count[k]):
+            x, y = xy[0, k, j], xy[1, k, j]
+            o0 = kx[0, r] * x + ky[0, r] * y + z[0, k, j]
+            o1 = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
+            o2 = kx[2, r] * x + ky[2, r] * y + z[2, k, j]
+            o3 = kx[3, r] * x + ky[3, r] * y + z[3, k, j]
+            gap, valid, radius = _gear_gap(o0, o1, o2, o3, turn[r], sense[r], offset[r], gear)
+            nx, ny = nxy[0, k, j], nxy[1, k, j]
+            m0 = kx[0, r] * nx + ky[0, r] * ny + nz[0, k, j]
+            m1 = kx[1, r] * nx + ky[1, r] * ny + nz[1, k, j]
+            g = index[k, j]
+            if valid:
+                out[0, r, g] = gap
+            out[1, r, g] = abs(m1 * o0 - m0 * o1)
+            out[2, r, g] = radius
+
+
+@_compiled(inline=True)
+def _point(kx, ky, turn, sense, offset, pinion_offset, r, s, t, pinion, gear):
+    """Clearance of the pinion point at grid coordinates ``(s, t)`` on row ``r`` (as
+    :func:`clearance_at`): ``(delta, valid)``."""
+    (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef, ok) = pinion
+    x = (s - s0) * ia
+    y = (t - h0) * ib
+    a = _corner(x, lim0)
+    b = _corner(y, lim1)
+    cell = int(a * n_cols + b) + pinion_offset[r]
+    u = x - a
+    v = y - b
+    theta = _hermite(coef, cell, u, v)
+    h = t + (s - pivot) * (alpha + beta * t) if tapered else t
+    big_r = lin[0, 0] * s + lin[0, 1] * h + const[0]
+    px = big_r * math.cos(theta)
+    py = big_r * math.sin(theta)
+    o0 = kx[0, r] * px + ky[0, r] * py + (lin[1, 0] * s + lin[1, 1] * h + const[1])
+    o1 = kx[1, r] * px + ky[1, r] * py + (lin[2, 0] * s + lin[2, 1] * h + const[2])
+    o2 = kx[2, r] * px + ky[2, r] * py + (lin[3, 0] * s + lin[3, 1] * h + const[3])
+    o3 = kx[3, r] * px + ky[3, r] * py + (lin[4, 0] * s + lin[4, 1] * h + const[4])
+    gap, on, _ = _gear_gap(o0, o1, o2, o3, turn[r], sense[r], offset[r], gear)
+    return gap, on and ok[cell] and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+
+
+@_compiled
+def clearance_at(kx, ky, turn, sense, offset, pinion_offset, sh, pinion, gear, delta, valid):
+    """Clearance at pinion grid coordinates ``sh`` (``(2, n, m)``: m points on each of n rows,
+    row constants as :func:`node_fields`, ``pinion_offset`` the rows' pinion cell offsets) by
+    the pinion's local interpolant; writes ``delta`` (the smooth extension beyond the flanks)
+    and ``valid`` (on both flanks, in a refinable pinion cell), each ``(n, m)``. ``pinion``:
+    unit-coordinate origin and scale, limits, columns, taper (flag, pivot, alpha, beta), the
+    map to R1 and the z terms (``(5, 2)``) with its constants, coefficients, refinable cells."""
+    n, m = delta.shape
+    for r in range(n):
+        for p in range(m):
+            delta[r, p], valid[r, p] = _point(
+                kx,
+                ky,
+                turn,
+                sense,
+                offset,
+                pinion_offset,
+                r,
+                sh[0, r, p],
+                sh[1, r, p],
+                pinion,
+                gear,
+            )
+
+
+@_compiled(inline=True)
+def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
+    """One row of :func:`gearopt.contact._pseudo_newton`: ``(step_s, step_h, curved_s,
+    curved_h)``."""
+    mean = (hss + hhh) * 0.5
+    half = (hss - hhh) * 0.5
+    root = math.sqrt(half * half + hsh * hsh)
+    scale = max(abs(hss) + abs(hhh), 1e-300)
+    lam0 = mean + root
+    lam1 = mean - root
+    tiny = 1e-6 * scale
+    if lam1 > tiny:
+        det = hss * hhh - hsh * hsh
+        a = (hsh * g1 - hhh * g0) / det
+        b = (hsh * g0 - hss * g1) / det
+        if a * a + b * b <= free * free:
+            return a, b, a, b
+    v0, v1 = hsh, lam0 - hss
+    if abs(hsh) <= 1e-12 * scale:
+        v0, v1 = (1.0, 0.0) if hss >= hhh else (0.0, 1.0)
+    norm = math.hypot(v0, v1)
+    if not norm > 0.0:
+        norm = 1.0
+    v0 /= norm
+    v1 /= norm
+    gnorm = max(math.hypot(g0, g1), 1e-300)
+    step0 = step1 = curved0 = curved1 = 0.0
+    for i in range(2):
+        e0, e1, lam = (v0, v1, lam0) if i == 0 else (-v1, v0, lam1)
+        slope = e0 * g0 + e1 * g1
+        if lam > tiny:
+            along = min(max(-slope / lam, -free), free)
+            curved0 += along * e0
+            curved1 += along * e1
+        elif abs(slope) > 1e-9 * gnorm:
+            along = -free if slope > 0.0 else free
+        else:
+            along = 0.0
+        step0 += along * e0
+        step1 += along * e1
+    return (
+        min(max(step0, -2.0), 2.0),
+        min(max(step1, -2.0), 2.0),
+        min(max(curved0, -2.0), 2.0),
+        min(max(curved1, -2.0), 2.0),
+    )
+
+
+@_compiled(inline=True)
+def _stencil(kx, ky, turn, sense, offset, pinion_offset, r, s, t, cell, pinion, gear, f):
+    """The clearance on the refinement's stencil around ``(s, t)`` (a quarter ``cell``):
+    centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f``; whether the centre is
+    valid."""
+    qs, qt = 0.25 * cell[0], 0.25 * cell[1]
+    valid = False
+    for i in range(9):
+        a = _STENCIL_S[i] * qs
+        b = _STENCIL_T[i] * qt
+        f[i], on = _point(kx, ky, turn, sense, offset, pinion_offset, r, s + a, t + b, pinion, gear)
+        if i == 0:
+            valid = on
+    return valid
+
+
+@_compiled
+def refine(
+    kx,
+    ky,
+    turn,
+    sense,
+    offset,
+    pinion_offset,
+    s,
+    t,
+    best,
+    caps,
+    group,
+    tol,
+    cell,
+    pinion,
+    gear,
+    edge,
+):
+    """:meth:`gearopt.contact._Engine.refine` row by row: constrained Newton steps from
+    ``(s, t)`` (updated in place with ``best``, the start values, NaN: the interpolated value
+    there; and ``edge``), at most ``caps[g]`` steps for the rows of group g, a group stopping
+    when none of its rows moved more than a thousandth of a cell."""
+    n = s.shape[0]
+    fractions = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
+    f = np.empty((n, 9))
+    active = np.ones(n, np.bool_)
+    moving = np.zeros(n, np.bool_)
+    taken = np.zeros(n, np.bool_)
+    for r in range(n):
+        ok = _stencil(
+            kx, ky, turn, sense, offset, pinion_offset, r, s[r], t[r], cell, pinion, gear, f[r]
+        )
+        if np.isnan(best[r]):
+            best[r] = f[r, 0] if ok else math.inf
+    small = 1e-3 * min(cell[0], cell[1])
+    groups = caps.shape[0]
+    for it in range(caps.max()):
+        for r in range(n):
+            moving[r] = taken[r] = False
+            if not active[r]:
+                continue
+            fr = f[r]
+            g0 = 2.0 * (fr[1] - fr[2])
+            g1 = 2.0 * (fr[3] - fr[4])
+            hss = 16.0 * (fr[1] + fr[2]) - 32.0 * fr[0]
+            hsh = 4.0 * (fr[5] + fr[8]) - 4.0 * (fr[6] + fr[7])
+            hhh = 16.0 * (fr[3] + fr[4]) - 32.0 * fr[0]
+            st0, st1, c0, c1 = _pseudo_newton(g0, g1, hss, hsh, hhh, 2.0)
+            # the Newton part's predicted fall (a valley's slope along itself is not edge)
+            fall = -(
+                g0 * c0
+                + g1 * c1
+                + 0.5 * (hss * c0 * c0 + 2.0 * hsh * c0 * c1)
+                + 0.5 * hhh * c1 * c1
+            )
+            _, on = _point(
+                kx,
+                ky,
+                turn,
+                sense,
+                offset,
+                pinion_offset,
+                r,
+                s[r] + c0 * cell[0],
+                t[r] + c1 * cell[1],
+                pinion,
+                gear,
+            )
+            edge[r] = (not on) and fall > tol[r]
+            # the step cut back by halvings to the first valid point not above the best
+            limit = best[r] + 1e-13 * abs(best[r])
+            for fraction in fractions:
+                ns = s[r] + fraction * (st0 * cell[0])
+                nt = t[r] + fraction * (st1 * cell[1])
+                value, on = _point(
+                    kx, ky, turn, sense, offset, pinion_offset, r, ns, nt, pinion, gear
+                )
+                if on and value <= limit:
+                    moving[r] = abs(ns - s[r]) + abs(nt - t[r]) > small
+                    taken[r] = True
+                    s[r], t[r], best[r] = ns, nt, value
+                    break
+        still = False
+        for g in range(groups):
+            stop = it == caps[g] - 1
+            if not stop:
+                stop = True
+                for r in range(n):
+                    if group[r] == g and moving[r]:
+                        stop = False
+                        break
+            if stop:
+                for r in range(n):
+                    if group[r] == g:
+                        active[r] = False
+        for r in range(n):
+            still = still or active[r]
+        if not still:
+            break
+        for r in range(n):
+            if active[r] and taken[r]:
+                _stencil(
+                    kx,
+                    ky,
+                    turn,
+                    sense,
+                    offset,
+                    pinion_offset,
+                    r,
+                    s[r],
+                    t[r],
+                    cell,
+                    pinion,
+                    gear,
+                    f[r],
+                )
