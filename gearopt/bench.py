@@ -115,8 +115,12 @@ def _meshed_section53():
 
 
 def _tca_info(options) -> dict:
+    from gearopt import contact_kernels
+
+    kernels = f"numba {contact_kernels.numba.__version__}" if contact_kernels.ENABLED else "numpy"
     return {
         "tca_grid": list(options.grid.shape),
+        "tca_kernels": kernels,
         "tca_case": (
             f"seed001_section5_3, {options.positions} positions x {options.pairs} pairs, "
             "drive and coast, flanks generated beforehand"
