@@ -786,6 +786,10 @@ class _Engine:
         if self._jit is not None:
             rows = self._rows(side, phi, angle)
             out = np.empty((3, n, size))
+            theta = np.empty((2, n, self.node_index.shape[1]))
+            count = self._jit[2]
+            _kernels.node_xy(rows.kx, rows.ky, side, count, self.node_xy, self.node_z, theta)
+            theta = np.arctan2(theta[1], theta[0], out=theta[0])
             _kernels.node_fields(
                 rows.kx,
                 rows.ky,
@@ -793,12 +797,13 @@ class _Engine:
                 rows.sense,
                 rows.gear_offset,
                 side,
-                self._jit[2],
+                count,
                 self.node_index,
                 self.node_xy,
                 self.node_z,
                 self.node_nxy,
                 self.node_nz,
+                theta,
                 self._jit[0],
                 out,
             )
