@@ -356,6 +356,19 @@ class _Rows:
         self.kx, self.ky, self.turn, self.sense = kx, ky, turn, sense
         self.gear_offset, self.pinion_offset = gear_offset, pinion_offset
 
+    def kernel_rows(self, n: int) -> tuple:
+        """The constants of n rows as :mod:`gearopt.contact_kernels` takes them: ``kx``, ``ky``
+        ``(4, n)``, turn, sense, gear and pinion offsets ``(n,)``, each a writable contiguous
+        array of one dtype (numba compiles one version per array type)."""
+        return (
+            np.array(self.kx, float).reshape(4, n),
+            np.array(self.ky, float).reshape(4, n),
+            np.array(self.turn, float).reshape(n),
+            np.array(self.sense, float).reshape(n),
+            np.array(self.gear_offset, np.intp).reshape(n),
+            np.array(self.pinion_offset, np.intp).reshape(n),
+        )
+
     def subset(self, rows) -> _Rows:
         """The rows ``rows`` (an index or mask of the first axis)."""
         return _Rows(
@@ -754,18 +767,20 @@ class _Engine:
         shape = sh.shape[1:]
         if len(shape) == 2 and rows.turn.shape == (shape[0], 1):
             n, m = shape
-            kx, ky = rows.kx.reshape(4, n), rows.ky.reshape(4, n)
-            per_row = (rows.turn, rows.sense, rows.gear_offset, rows.pinion_offset)
-            per_row = tuple(np.ascontiguousarray(a).reshape(n) for a in per_row)
+            constants = rows.kernel_rows(n)
         else:
             n, m = math.prod(shape), 1
-            kx, ky = (np.broadcast_to(k, (4,) + shape).reshape(4, n) for k in (rows.kx, rows.ky))
-            per_row = (rows.turn, rows.sense, rows.gear_offset, rows.pinion_offset)
-            per_row = tuple(np.broadcast_to(a, shape).reshape(n) for a in per_row)
-        points = np.ascontiguousarray(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
+            constants = _Rows(
+                *(np.broadcast_to(k, (4,) + shape) for k in (rows.kx, rows.ky)),
+                *(
+                    np.broadcast_to(a, shape)
+                    for a in (rows.turn, rows.sense, rows.gear_offset, rows.pinion_offset)
+                ),
+            ).kernel_rows(n)
+        points = np.array(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
         delta, valid = np.empty((n, m)), np.empty((n, m), bool)
         gear, pinion, _ = self._jit
-        _kernels.clearance_at(kx, ky, *per_row, points, pinion, gear, delta, valid)
+        _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 
     def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
@@ -788,15 +803,12 @@ class _Engine:
             out = np.empty((3, n, size))
             theta = np.empty((2, n, self.node_index.shape[1]))
             count = self._jit[2]
-            _kernels.node_xy(rows.kx, rows.ky, side, count, self.node_xy, self.node_z, theta)
+            constants, side_ = rows.kernel_rows(n), np.array(side, np.intp)
+            _kernels.node_xy(constants, side_, count, self.node_xy, self.node_z, theta)
             theta = np.arctan2(theta[1], theta[0], out=theta[0])
             _kernels.node_fields(
-                rows.kx,
-                rows.ky,
-                rows.turn,
-                rows.sense,
-                rows.gear_offset,
-                side,
+                constants,
+                side_,
                 count,
                 self.node_index,
                 self.node_xy,
@@ -1040,12 +1052,7 @@ class _Engine:
         edge = np.zeros(n, bool)
         gear, pinion, _ = self._jit
         _kernels.refine(
-            rows.kx,
-            rows.ky,
-            rows.turn,
-            rows.sense,
-            rows.gear_offset,
-            rows.pinion_offset,
+            rows.kernel_rows(n),
             s,
             h,
             best,

@@ -99,10 +99,11 @@ def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
 
 
 @_compiled
-def node_xy(kx, ky, side, count, xy, z, out):
+def node_xy(rows, side, count, xy, z, out):
     """The first two linear outputs (qx, qy in the gear frame) of the nodes of
     :func:`node_fields` into ``out`` (``(2, n, m)``, by node column), for one vectorised
     arctan2 (numpy's SIMD one costs a sixth of libm's point by point)."""
+    kx, ky = rows[0], rows[1]
     n = side.shape[0]
     for r in range(n):
         k = side[r]
@@ -113,14 +114,15 @@ def node_xy(kx, ky, side, count, xy, z, out):
 
 
 @_compiled
-def node_fields(kx, ky, turn, sense, offset, side, count, index, xy, z, nxy, nz, theta, gear, out):
-    """Node fields of rows r (``kx``, ``ky``: ``(4, n)``; ``turn``, ``sense``, ``offset``
-    (gear cells), ``side``: ``(n,)``) on the generated nodes of each row's side: ``count[k]``
-    nodes, grid indices ``index[k]``, coordinates ``xy`` (``(2, K, m)``), z terms ``z``
+def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
+    """Node fields of rows r (``rows`` as :func:`clearance_at`'s, ``side``: ``(n,)``) on the
+    generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
+    coordinates ``xy`` (``(2, K, m)``), z terms ``z``
     (``(4, K, m)``), normals' terms ``nxy``, ``nz`` (``(2, K, m)``), the nodes' polar angles in
     the gear frame ``theta`` (``(n, m)``, atan2 of :func:`node_xy`'s). Writes the clearance
     (+inf off the mask or off the gear flank), the normal factor and R2 (0 off the mask) into
     ``out`` (``(3, n, nodes)``)."""
+    kx, ky, turn, sense, offset, _ = rows
     n = turn.shape[0]
     for r in range(n):
         k = side[r]
@@ -147,9 +149,10 @@ def node_fields(kx, ky, turn, sense, offset, side, count, index, xy, z, nxy, nz,
 
 
 @_compiled(inline=True)
-def _point(kx, ky, turn, sense, offset, pinion_offset, r, s, t, pinion, gear):
+def _point(rows, r, s, t, pinion, gear):
     """Clearance of the pinion point at grid coordinates ``(s, t)`` on row ``r`` (as
     :func:`clearance_at`): ``(delta, valid)``."""
+    kx, ky, turn, sense, offset, pinion_offset = rows
     (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef, ok) = pinion
     x = (s - s0) * ia
     y = (t - h0) * ib
@@ -173,29 +176,18 @@ def _point(kx, ky, turn, sense, offset, pinion_offset, r, s, t, pinion, gear):
 
 
 @_compiled
-def clearance_at(kx, ky, turn, sense, offset, pinion_offset, sh, pinion, gear, delta, valid):
-    """Clearance at pinion grid coordinates ``sh`` (``(2, n, m)``: m points on each of n rows,
-    row constants as :func:`node_fields`, ``pinion_offset`` the rows' pinion cell offsets) by
-    the pinion's local interpolant; writes ``delta`` (the smooth extension beyond the flanks)
-    and ``valid`` (on both flanks, in a refinable pinion cell), each ``(n, m)``. ``pinion``:
-    unit-coordinate origin and scale, limits, columns, taper (flag, pivot, alpha, beta), the
-    map to R1 and the z terms (``(5, 2)``) with its constants, coefficients, refinable cells."""
+def clearance_at(rows, sh, pinion, gear, delta, valid):
+    """Clearance at pinion grid coordinates ``sh`` (``(2, n, m)``: m points on each of n rows)
+    by the pinion's local interpolant; writes ``delta`` (the smooth extension beyond the
+    flanks) and ``valid`` (on both flanks, in a refinable pinion cell), each ``(n, m)``.
+    ``rows``: ``kx``, ``ky`` (``(4, n)``), ``turn``, ``sense``, the gear's and the pinion's
+    cell offsets (``(n,)``). ``pinion``: unit-coordinate origin and scale, limits, columns,
+    taper (flag, pivot, alpha, beta), the map to R1 and the z terms (``(5, 2)``) with its
+    constants, coefficients, refinable cells."""
     n, m = delta.shape
     for r in range(n):
         for p in range(m):
-            delta[r, p], valid[r, p] = _point(
-                kx,
-                ky,
-                turn,
-                sense,
-                offset,
-                pinion_offset,
-                r,
-                sh[0, r, p],
-                sh[1, r, p],
-                pinion,
-                gear,
-            )
+            delta[r, p], valid[r, p] = _point(rows, r, sh[0, r, p], sh[1, r, p], pinion, gear)
 
 
 @_compiled(inline=True)
@@ -247,7 +239,7 @@ def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
 
 
 @_compiled(inline=True)
-def _stencil(kx, ky, turn, sense, offset, pinion_offset, r, s, t, cell, pinion, gear, f):
+def _stencil(rows, r, s, t, cell, pinion, gear, f):
     """The clearance on the refinement's stencil around ``(s, t)`` (a quarter ``cell``):
     centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f``; whether the centre is
     valid."""
@@ -256,7 +248,7 @@ def _stencil(kx, ky, turn, sense, offset, pinion_offset, r, s, t, cell, pinion, 
     for i in range(9):
         a = _STENCIL_S[i] * qs
         b = _STENCIL_T[i] * qt
-        f[i], on = _point(kx, ky, turn, sense, offset, pinion_offset, r, s + a, t + b, pinion, gear)
+        f[i], on = _point(rows, r, s + a, t + b, pinion, gear)
         if i == 0:
             valid = on
     return valid
@@ -264,12 +256,7 @@ def _stencil(kx, ky, turn, sense, offset, pinion_offset, r, s, t, cell, pinion, 
 
 @_compiled
 def refine(
-    kx,
-    ky,
-    turn,
-    sense,
-    offset,
-    pinion_offset,
+    rows,
     s,
     t,
     best,
@@ -292,9 +279,7 @@ def refine(
     moving = np.zeros(n, np.bool_)
     taken = np.zeros(n, np.bool_)
     for r in range(n):
-        ok = _stencil(
-            kx, ky, turn, sense, offset, pinion_offset, r, s[r], t[r], cell, pinion, gear, f[r]
-        )
+        ok = _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r])
         if np.isnan(best[r]):
             best[r] = f[r, 0] if ok else math.inf
     small = 1e-3 * min(cell[0], cell[1])
@@ -318,28 +303,14 @@ def refine(
                 + 0.5 * (hss * c0 * c0 + 2.0 * hsh * c0 * c1)
                 + 0.5 * hhh * c1 * c1
             )
-            _, on = _point(
-                kx,
-                ky,
-                turn,
-                sense,
-                offset,
-                pinion_offset,
-                r,
-                s[r] + c0 * cell[0],
-                t[r] + c1 * cell[1],
-                pinion,
-                gear,
-            )
+            _, on = _point(rows, r, s[r] + c0 * cell[0], t[r] + c1 * cell[1], pinion, gear)
             edge[r] = (not on) and fall > tol[r]
             # the step cut back by halvings to the first valid point not above the best
             limit = best[r] + 1e-13 * abs(best[r])
             for fraction in fractions:
                 ns = s[r] + fraction * (st0 * cell[0])
                 nt = t[r] + fraction * (st1 * cell[1])
-                value, on = _point(
-                    kx, ky, turn, sense, offset, pinion_offset, r, ns, nt, pinion, gear
-                )
+                value, on = _point(rows, r, ns, nt, pinion, gear)
                 if on and value <= limit:
                     moving[r] = abs(ns - s[r]) + abs(nt - t[r]) > small
                     taken[r] = True
@@ -364,18 +335,4 @@ def refine(
             break
         for r in range(n):
             if active[r] and taken[r]:
-                _stencil(
-                    kx,
-                    ky,
-                    turn,
-                    sense,
-                    offset,
-                    pinion_offset,
-                    r,
-                    s[r],
-                    t[r],
-                    cell,
-                    pinion,
-                    gear,
-                    f[r],
-                )
+                _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r])
