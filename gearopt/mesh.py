@@ -27,8 +27,10 @@ Definitions used by the outputs:
 - mean contact point M: the path point midway between the carrying pair's hand-overs; bias =
   the contact line's extension along the face (seed 003 section 6): the face coordinate of the
   contact point where the pair leaves contact inside the flanks minus where it enters (the ends
-  of its contact interval, found by bisection to an eighth of a position step, the points it
-  can visit evaluated at once; the carrying cycle's ends when the contact never leaves the
+  of its contact interval: bracketed by bisection on the engine's edge flag to an eighth of a
+  position step, the points it can visit evaluated at once, then moved to where the tangency
+  point -- the solution of the tangency equations, :mod:`gearopt.newton_tca` -- leaves the
+  flanks, but for line contact; the carrying cycle's ends when the contact never leaves the
   flanks' interior); width = extent of the zone at M perpendicular to the path;
   ``center_offset_mm`` = M minus the flank centre C (the mean cone distance, mid working
   depth: h = (a1 - a2) / 2 with a the mean addenda);
@@ -60,6 +62,8 @@ __all__ = [
 ]
 
 ARCSEC = 180.0 * 3600.0 / math.pi
+#: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
+FLAT_ARCSEC = 0.1
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -621,7 +625,8 @@ def tooth_contacts(
         central = np.abs(v) <= 0.5 * p1 + 1e-9
         best = int(np.argmin(g))
         # (a flat TE, line contact, keeps the window: its least lag is noise)
-        if not central[best] and g[best] < np.min(g[central], initial=np.inf) - 0.1 / ARCSEC:
+        flat = FLAT_ARCSEC / ARCSEC
+        if not central[best] and g[best] < np.min(g[central], initial=np.inf) - flat:
             centres[st.index] = float(v[best])
     if np.any(centres != 0.0):
         states = main_sample(centres)
@@ -768,6 +773,7 @@ def _start_interval(st) -> None:
     around = [r for r in runs if r[0] <= centre <= r[-1]]
     run = around[0] if around else max(runs, key=len)
     lo_k, hi_k = run[0], run[-1]
+    st.ci_flat = bool(np.ptp(gs[lo_k : hi_k + 1]) < FLAT_ARCSEC / ARCSEC)
     st.ci_a = np.array([v[lo_k], v[hi_k]])  # inside
     st.ci_b = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])  # outside
     st.ci_open = np.array([lo_k > 0, hi_k < len(v) - 1])
@@ -783,8 +789,9 @@ def _start_interval(st) -> None:
 
 
 def _interval_finish(st) -> None:
-    """Bisect each open bracket on the answers of its candidate points: the end is the middle
-    of the last bracket, the contact point the last inside one's."""
+    """Bisect each open bracket on the answers of its candidate points, then move it to the
+    tangency point's exit (:func:`_tangency_end`): the end is the middle of the last bracket,
+    the contact point the last inside one's."""
     if st.interval_done:
         return
     st.interval_done = True
@@ -801,8 +808,31 @@ def _interval_finish(st) -> None:
             else:
                 jb = m
         st.ci_a[e], st.ci_b[e] = a + (b - a) * ja / parts, a + (b - a) * jb / parts
+        _tangency_end(st, e)
     ends = np.where(st.ci_open, 0.5 * (st.ci_a + st.ci_b), st.ci_a)
     st.interval = (float(ends[0]), float(ends[1]))
+
+
+def _tangency_end(st, e: int) -> None:
+    """An interval end bisected on the engine's edge flag, moved to where the tangency point
+    leaves the flanks (:func:`gearopt.newton_tca.contact_interval_end`). The edge flag lags
+    that point where the minimum slides along a boundary before the clearance beyond it falls
+    by the edge tolerance (a path meeting the boundary at a grazing angle to the contact
+    ellipse), and leads it where the tangency point lies in the pinion's lowest generated
+    cells, which the engine's refinement does not enter. Kept as it is where Newton's method
+    fails, and where the pair's lag is flat over its interior contacts (:data:`FLAT_ARCSEC`:
+    a line contact, where the tangency point is not unique, or nearly one)."""
+    from gearopt.newton_tca import contact_interval_end
+
+    if st.ci_flat:
+        return
+    a, b = float(st.ci_a[e]), float(st.ci_b[e])
+    found = contact_interval_end(
+        st.field, a, (float(st.ci_s[e]), float(st.ci_h[e])), b - a, abs(b - a)
+    )
+    if found is not None:
+        st.ci_a[e], st.ci_b[e] = found[0], found[1]
+        st.ci_s[e], st.ci_h[e] = found[2][0], found[2][1]
 
 
 def _start_handover(st, t, p1, step) -> None:

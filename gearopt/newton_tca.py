@@ -40,7 +40,7 @@ from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
 from gearopt.flank import FlankMap
 
-__all__ = ["NewtonTCA", "newton_tca", "tangency_equations"]
+__all__ = ["NewtonTCA", "contact_interval_end", "newton_tca", "tangency_equations"]
 
 ARCSEC = 180.0 * 3600.0 / math.pi
 
@@ -365,3 +365,141 @@ def newton_tca(
         iterations=iterations,
         residual=residual,
     )
+
+
+#: a Jacobian of the tangency equations whose least singular value is below this fraction of its
+#: largest is taken for line contact (the contact point is not unique; the least singular value
+#: is about the relative curvature along the contact ellipse, 1/mm, the largest about the gear
+#: radius, mm). Measured at the ends of contact intervals: point contacts 6e-7 and more (seed
+#: 003, R_b = 10000 mm: 7.7e-7), conjugate flanks 1.7e-8 and less (the most on the coarse
+#: default grid, where the interpolants are least conjugate)
+LINE_CONTACT = 1e-7
+
+
+def _point_contact(system: _System, u: float, x: NDArray) -> bool:
+    """Whether the tangency equations' Jacobian at solution ``x`` is regular (a point contact:
+    its least singular value at least :data:`LINE_CONTACT` times its largest)."""
+    phi, turn = system.angles(u, 0.0)
+    singular = np.linalg.svd(system(phi, turn, x)[1], compute_uv=False)
+    return bool(singular[-1] >= LINE_CONTACT * singular[0])
+
+
+def _tangency(system: _System, u: float, x: NDArray, iterations: int = 8):
+    """Newton's iteration on the tangency equations at rotation ``u`` from ``x`` (a nearby
+    solution): ``(x, inside)`` with ``inside`` whether the point lies on both flanks, or None
+    when it does not converge (a singular or ill-conditioned Jacobian: line contact)."""
+    phi, turn = system.angles(u, 0.0)
+    x = np.array(x, float)
+    for _ in range(iterations):
+        F, J, in1, in2 = system(phi, turn, x)
+        if np.max(np.abs(F)) <= RESIDUAL_LIMIT:
+            return x, in1 and in2
+        try:
+            dx = np.linalg.solve(J, -F)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(dx)) or np.max(np.abs(dx[:4])) > 5.0:  # no jumps of mm
+            return None
+        x += dx
+    return None
+
+
+def _grid_margin(jet: _FlankJet, s: float, h: float) -> float:
+    """How far (mm) the point (s, h) lies inside the jet's grid (negative outside)."""
+    return min(
+        s - jet.s0,
+        jet.s0 + (jet.n_f - 1) * jet.ds - s,
+        h - jet.h0,
+        jet.h0 + (jet.n_p - 1) * jet.dh - h,
+    )
+
+
+def contact_interval_end(
+    field: ClearanceField,
+    u_rad: float,
+    start: tuple[float, float],
+    toward: float,
+    step_rad: float,
+    *,
+    tol_rad: float = 1e-6,
+    tol_mm: float = 1e-4,
+    steps: int = 24,
+) -> tuple[float, float, NDArray] | None:
+    """Where the tangency point (the solution of the tangency equations) leaves the flanks: a
+    pair's entry into or exit from contact (seed 003 section 6).
+
+    From rotation ``u_rad``, where the contact point is near ``start`` = ``(s1, h1)``, the
+    search steps by ``step_rad`` toward ``toward`` (+1 or -1) while the tangency point stays on
+    both flanks (or back while it does not, up to ``steps`` steps each way). The bracket is
+    then narrowed to ``tol_rad``: by the Illinois method on the point's distance inside the
+    grids where it leaves through a grid edge (toe, heel, top, the grid's bottom), stopping
+    once the point lies within ``tol_mm`` of it; by bisection where it leaves through the
+    boundary of a flank's generated cells. Returns ``(u_inside, u_outside, x)`` with ``x`` the
+    unknowns (s1, h1, s2, h2, lambda) at ``u_inside`` (``u_outside`` = ``u_inside`` when the
+    point lies within ``tol_mm`` of a grid edge), or None where Newton's method fails or
+    the contact is a line (:data:`LINE_CONTACT`), or no bracket is found."""
+    system = _System(field)
+    s1, h1 = (float(v) for v in start)
+    phi, _ = system.angles(float(u_rad), 0.0)
+    lag = float(field._gap(system.pinion_point(s1, h1, 0.0)[0], None, np.float64(phi))[0])
+    q = system.pinion_point(s1, h1, phi)[1]
+    s2, h2 = (float(v) for v in field.gear.to_grid(q[2], math.hypot(q[0], q[1])))
+    got = _tangency(system, float(u_rad), np.array([s1, h1, s2, h2, lag]))
+    if got is None:
+        return None
+    x, inside = got
+    if inside and not _point_contact(system, float(u_rad), x):
+        return None
+    sign = math.copysign(1.0, toward)
+    u_in = u_out = x_out = None
+    if inside:
+        u_in, x_in = u_rad, x
+        for k in range(1, steps + 1):
+            u = u_rad + sign * k * step_rad
+            got = _tangency(system, u, x_in)
+            if got is None or not got[1]:
+                u_out, x_out = u, got and got[0]
+                break
+            u_in, x_in = u, got[0]
+    else:
+        u_out, x_out = u_rad, x
+        for k in range(1, steps + 1):
+            u = u_rad - sign * k * step_rad
+            got = _tangency(system, u, x_out)
+            if got is None:
+                return None
+            if got[1]:
+                u_in, x_in = u, got[0]
+                break
+            u_out, x_out = u, got[0]
+    if u_in is None or u_out is None:
+        return None
+
+    def margin(x: NDArray) -> float:
+        return min(_grid_margin(system.pinion, x[0], x[1]), _grid_margin(system.gear, x[2], x[3]))
+
+    m_in = margin(x_in)
+    m_out = margin(x_out) if x_out is not None else math.nan
+    w_in, w_out = m_in, m_out  # the Illinois method's weights: halved on a repeated side
+    side = 0
+    while abs(u_out - u_in) > tol_rad and m_in > tol_mm:
+        if m_out < 0.0:  # through a grid edge: the margin is smooth in u
+            u = u_in + w_in * (u_out - u_in) / (w_in - w_out)
+            lo, hi = sorted((u_in, u_out))
+            u = min(max(u, lo + 1e-3 * (hi - lo)), hi - 1e-3 * (hi - lo))
+        else:  # through the boundary of the generated cells (or Newton failed): bisection
+            u = 0.5 * (u_in + u_out)
+        got = _tangency(system, u, x_in)
+        if got is not None and got[1]:
+            u_in, x_in = u, got[0]
+            m_in = w_in = margin(x_in)
+            w_out *= 0.5 if side == 1 else 1.0
+            side = 1
+        else:
+            u_out = u
+            m_out = w_out = margin(got[0]) if got is not None else math.nan
+            w_in *= 0.5 if side == -1 else 1.0
+            side = -1
+    if m_in <= tol_mm:  # on the grid's edge: the end itself
+        u_out = u_in
+    return (u_in, u_out, x_in) if _point_contact(system, u_in, x_in) else None

@@ -449,10 +449,11 @@ def _bias_cases(seed_cases_path):
     return cases
 
 
-# known gaps (closing note of the session that added this): the path of R_b 250 ends 2.4 mm
-# short of the toe corner, at the pinion's generated boundary near the toe-root corner; R_h
-# 135.6 reads 42.3 against 40.406
-_KNOWN_GAPS = {"table5 R_b 250", "table6 R_h 135.6"}
+# known gaps: none since the contact interval's ends are where the tangency point leaves the
+# flanks (gearopt.mesh._tangency_end); before, the engine's edge flag let the contact slide along
+# the pinion's top (R_h 135.6 read 42.3 against 40.406) and stopped the path of R_b 250 at the
+# pinion's lowest generated cells, 2.2 mm short of the toe corner
+_KNOWN_GAPS: set[str] = set()
 
 
 _BIAS_CASES = [
@@ -477,3 +478,38 @@ def test_tables_5_6_bias_is_the_contact_lines_extension(case_a, overrides, publi
         assert bias["pattern_bias_mm"] >= 52.5
     else:
         assert bias["pattern_bias_mm"] == pytest.approx(published, abs=1.0)
+
+
+def test_contact_interval_ends_where_the_tangency_point_leaves_the_flanks(case_a):
+    # Table 6, R_h 135.6: the pair enters contact where the tangency point (the solution of the
+    # tangency equations, seed 003 eqs 7-8) crosses the gear's top and leaves where it crosses
+    # the pinion's top; found from contact points inside, on two grids, the same to 0.01 mm
+    from gearopt.analysis import AnalysisOptions, meshed_pair
+    from gearopt.newton_tca import contact_interval_end
+
+    key = "machine.pinion.convex."
+    trial = gearopt.with_overrides(
+        case_a, {key + "blade_profile_radius_mm": 500.0, key + "cutter_head_radius_mm": 135.6}
+    )
+    extensions = []
+    for grid in ([41, 61], [81, 161]):
+        options = AnalysisOptions.from_conditions({**SEED003_ANALYSIS, "grid": grid}, design=trial)
+        field = meshed_pair(trial, options).drive
+        u = np.array([-0.4, 0.35])  # inside the contact interval (about -0.455 to 0.385)
+        inside = field.sample(field.sense * u)
+        assert not inside.edge.any()
+        entry, leave = (
+            contact_interval_end(
+                field,
+                u[k],
+                (inside.contact_face_mm[k], inside.contact_profile_mm[k]),
+                toward,
+                0.004,
+            )
+            for k, toward in ((0, -1.0), (1, 1.0))
+        )
+        assert entry[0] < u[0] and leave[0] > u[1]
+        assert entry[2][3] == pytest.approx(field.gear.profile_mm[-1], abs=1e-3)
+        assert leave[2][1] == pytest.approx(field.pinion.profile_mm[-1], abs=1e-3)
+        extensions.append(leave[2][0] - entry[2][0])
+    assert extensions[0] == pytest.approx(extensions[1], abs=0.01)
