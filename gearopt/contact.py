@@ -229,6 +229,22 @@ class ClearanceField:
         side = np.zeros(np.broadcast(s, phi).shape, np.intp)
         return self._engine.at(side, np.stack([s, h]), phi, gear_angle_rad)
 
+    def interval_end(self, u_rad: float, start, toward_rad: float, *, tol_rad: float = 1e-6):
+        """Where the pair leaves contact (seed 003 section 6: the tangency point -- the least
+        clearance, where the flanks touch with a common normal -- leaves the flanks), near the
+        relative rotation ``u_rad`` (in the pinion's direction of motion) where the contact
+        point is near ``start`` = ``(face_mm, profile_mm)``: stepping by ``toward_rad`` (signed,
+        toward the outside; up to 24 steps either way), then bisection to ``tol_rad``. Returns
+        ``(u_inside, u_outside, face_mm, profile_mm)`` with the tangency point at ``u_inside``,
+        or None where Newton's method fails (a line contact) or no bracket is found."""
+        found = self._engine.interval_end(
+            0, self.sense * u_rad, *start, self.sense * toward_rad, tol=tol_rad
+        )
+        if found is None:
+            return None
+        a, b, s, h = found
+        return self.sense * a, self.sense * b, s, h
+
     def sample(
         self,
         phi_rad: NDArray,
@@ -457,6 +473,7 @@ class _Engine:
         self.gear_cells = first.gear._lookup[8].size
         self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
         self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
+        self.pinion_generated = np.concatenate([f.pinion._lookup[8] for f in fields])
         self._linear_maps(fields)
         self._jit = self._kernel_tables() if _kernels.ENABLED else None
 
@@ -887,6 +904,38 @@ class _Engine:
             edge=edge,
         )
         return out if near is None else (out, near_out)
+
+    def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=24, tol=1e-6):
+        """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the
+        contact point near ``(face_mm, profile_mm)``), stepping by ``step_rad`` toward the
+        outside: :func:`gearopt.contact_kernels.interval_end` (point by point in Python
+        without the compiled kernels). ``(phi_inside, phi_outside, s, h)`` or None."""
+        gear, pinion, _ = self._jit or self._kernel_tables()
+        maker = (
+            np.ascontiguousarray(self._rotation),
+            float(self.turn0[side]),
+            float(self.ratio),
+            float(self.gear_sense[side]),
+            int(side * self.gear_cells),
+            int(side * self.pinion_cells),
+        )
+        end = _kernels.interval_end
+        if self._jit is None:
+            end = getattr(end, "py_func", end)
+        found, a, b, s, h = end(
+            maker,
+            float(phi_rad),
+            float(face_mm),
+            float(profile_mm),
+            float(step_rad),
+            int(steps),
+            float(tol),
+            np.array([self.ds, self.dh]),
+            pinion,
+            gear,
+            self.pinion_generated,
+        )
+        return (float(a), float(b), float(s), float(h)) if found else None
 
     def near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
         """Refined minima started from known nearby contact points (no node field)."""

@@ -815,24 +815,19 @@ def _interval_finish(st) -> None:
 
 def _tangency_end(st, e: int) -> None:
     """An interval end bisected on the engine's edge flag, moved to where the tangency point
-    leaves the flanks (:func:`gearopt.newton_tca.contact_interval_end`). The edge flag lags
+    leaves the flanks (:meth:`gearopt.contact.ClearanceField.interval_end`). The edge flag lags
     that point where the minimum slides along a boundary before the clearance beyond it falls
     by the edge tolerance (a path meeting the boundary at a grazing angle to the contact
     ellipse), and leads it where the tangency point lies in the pinion's lowest generated
     cells, which the engine's refinement does not enter. Kept as it is where Newton's method
     fails, and where the pair's lag is flat over its interior contacts (:data:`FLAT_ARCSEC`:
     a line contact, where the tangency point is not unique, or nearly one)."""
-    from gearopt.newton_tca import contact_interval_end
-
     if st.ci_flat:
         return
     a, b = float(st.ci_a[e]), float(st.ci_b[e])
-    found = contact_interval_end(
-        st.field, a, (float(st.ci_s[e]), float(st.ci_h[e])), b - a, abs(b - a)
-    )
+    found = st.field.interval_end(a, (float(st.ci_s[e]), float(st.ci_h[e])), b - a)
     if found is not None:
-        st.ci_a[e], st.ci_b[e] = found[0], found[1]
-        st.ci_s[e], st.ci_h[e] = found[2][0], found[2][1]
+        st.ci_a[e], st.ci_b[e], st.ci_s[e], st.ci_h[e] = found
 
 
 def _start_handover(st, t, p1, step) -> None:
