@@ -953,14 +953,18 @@ class _Engine:
         stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
         refined alongside (as :meth:`near`); their results come last (None without)."""
         n = len(phi)
-        inner = np.where(self.refine_nodes[side], field_.reshape(n, -1), np.inf)
-        pick = np.empty((n, min(candidates, inner.shape[1])), np.intp)
+        flat = field_.reshape(n, -1)
+        pick = np.empty((n, min(candidates, flat.shape[1])), np.intp)
         values = np.empty(pick.shape)
-        rows = np.arange(n)
-        for c in range(pick.shape[1]):  # the lowest, the next lowest, ...
-            pick[:, c] = inner.argmin(axis=1)
-            values[:, c] = inner[rows, pick[:, c]]
-            inner[rows, pick[:, c]] = np.inf
+        if self._jit is not None:
+            _kernels.lowest_nodes(flat, self.refine_nodes, np.array(side, np.intp), pick, values)
+        else:
+            inner = np.where(self.refine_nodes[side], flat, np.inf)
+            rows = np.arange(n)
+            for c in range(pick.shape[1]):  # the lowest, the next lowest, ...
+                pick[:, c] = inner.argmin(axis=1)
+                values[:, c] = inner[rows, pick[:, c]]
+                inner[rows, pick[:, c]] = np.inf
         ci, cj = np.unravel_index(pick, self.shape)
         ok = np.isfinite(values)
         best = np.full(n, np.inf)

@@ -33,6 +33,7 @@ __all__ = [
     "ENABLED",
     "clearance_at",
     "interval_end",
+    "lowest_nodes",
     "node_fields",
     "node_xy",
     "refine",
@@ -463,3 +464,28 @@ def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generat
         else:
             b = m
     return True, a, b, s, t
+
+
+@_compiled
+def lowest_nodes(field, keep, side, pick, values):
+    """The lowest nodes of each row of ``field`` (``(n, nodes)``) among its side's refinable
+    nodes (``keep[side[r]]``), as many as ``pick`` has columns, in ascending order (ties: the
+    first node): their indices into ``pick``, their values into ``values`` (+inf, node 0, where
+    there are no more)."""
+    n, size = field.shape
+    for r in range(n):
+        k = side[r]
+        for c in range(pick.shape[1]):
+            best = math.inf
+            at = 0
+            for g in range(size):
+                v = field[r, g]
+                if v < best and keep[k, g]:
+                    taken = False
+                    for q in range(c):
+                        taken = taken or pick[r, q] == g
+                    if not taken:
+                        best = v
+                        at = g
+            pick[r, c] = at
+            values[r, c] = best
