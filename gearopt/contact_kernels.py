@@ -1,20 +1,27 @@
-"""Compiled kernels of the contact engine (numba: the optional ``fast`` extra).
+"""Compiled kernels of the contact engine (numba).
 
 The same arithmetic as the numpy paths of :class:`gearopt.contact._Engine`, written point by
 point in compiled loops, so that a small batch costs its points rather than numpy's fixed
 overhead per call (the engine's refinement evaluates a few hundred points at a time, many times
 over):
 
-- :func:`node_fields`: the clearance, the normal factor and R2 at every generated node of the
-  pinion flank for each row (side, pinion angle, gear angle), off-mask nodes +inf / 0 / 0
-  (``_Engine.sample``'s node fields);
+- :func:`node_xy`, :func:`node_fields`: the clearance, the normal factor and R2 at every
+  generated node of the pinion flank for each row (side, pinion angle, gear angle), off-mask
+  nodes +inf / 0 / 0 (``_Engine.sample``'s node fields; the polar angles between the two by
+  numpy's vectorised arctan2);
 - :func:`clearance_at`: the clearance at pinion grid coordinates by the pinion's local
   interpolant, and whether the point is on both flanks and in a refinable pinion cell
-  (``_Engine._at``).
+  (``_Engine._at``);
+- :func:`lowest_nodes`, :func:`refine`: the refinement's candidate nodes and its constrained
+  Newton steps (``_Engine._refined``, ``_Engine.refine``);
+- :func:`tangency`, :func:`interval_end`: the tangency point (the least clearance over the
+  smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends);
+  these have no numpy twin: without the kernels they run point by point in Python.
 
 The results equal the numpy paths' to rounding (the order of the operations is kept; a BLAS
-product there may fuse a multiply-add). Without numba, or with the environment variable
-``GEAROPT_JIT=0``, :data:`ENABLED` is False and the engine runs its numpy paths.
+product there may fuse a multiply-add; the refinement's closed-form step is chosen row by row).
+Where numba cannot be imported, or with the environment variable ``GEAROPT_JIT=0``,
+:data:`ENABLED` is False and the engine runs its numpy paths.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The contact engine's compiled kernels (``gearopt.contact_kernels``, the ``fast`` extra)
+"""The contact engine's compiled kernels (``gearopt.contact_kernels``, numba)
 against its numpy paths: every output of the TCA of both sides, the backlash and the ease-off,
 on designs that visit each branch of the kernels (crowned contact inside the flanks, edge
 contact under misalignment, tapered depth on both members, a path that runs into the pinion's
@@ -28,7 +28,7 @@ from gearopt.mesh import mesh_pair
 from .conftest import STUDIES
 
 pytestmark = pytest.mark.skipif(
-    not contact_kernels.ENABLED, reason="numba not installed (the 'fast' extra) or GEAROPT_JIT=0"
+    not contact_kernels.ENABLED, reason="numba not importable or GEAROPT_JIT=0"
 )
 
 SECTION_5_4 = Misalignment(
