@@ -261,7 +261,7 @@ def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
     )
 
 
-@_compiled(inline=True)
+@_compiled
 def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25):
     """The clearance on the refinement's stencil around ``(s, t)`` (``fraction`` of a
     ``cell``): centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f``; whether the
