@@ -50,16 +50,17 @@ __all__ = [
 ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
 
 _TO_TURNS = 0.5 / math.pi
-# the refinement's stencil (``_Engine._STENCIL``) in quarter cells
+_TURN = 2.0 * math.pi
+# the refinement's stencil (``_Engine._STENCIL``) in steps of a fraction of a cell
 _STENCIL_S = np.array([0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 1.0, -1.0, -1.0])
 _STENCIL_T = np.array([0.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
-_TURN = 2.0 * math.pi
 
 
 def _compiled(func=None, *, inline=False):
-    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (never
-    called); ``inline``: inlined into its callers (the point evaluations, which take tuples of
-    tables)."""
+    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (plain
+    Python: only the interval ends' search, which has no numpy twin, runs it); ``inline``:
+    inlined into its callers (the point evaluations, which take tuples of tables: a call
+    boundary would cost more than the evaluation)."""
     if func is None:
         return lambda f: _compiled(f, inline=inline)
     if not ENABLED:
@@ -133,11 +134,10 @@ def node_xy(rows, side, count, xy, z, out):
 def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
     """Node fields of rows r (``rows`` as :func:`clearance_at`'s, ``side``: ``(n,)``) on the
     generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
-    coordinates ``xy`` (``(2, K, m)``), z terms ``z``
-    (``(4, K, m)``), normals' terms ``nxy``, ``nz`` (``(2, K, m)``), the nodes' polar angles in
-    the gear frame ``theta`` (``(n, m)``, atan2 of :func:`node_xy`'s). Writes the clearance
-    (+inf off the mask or off the gear flank), the normal factor and R2 (0 off the mask) into
-    ``out`` (``(3, n, nodes)``)."""
+    coordinates ``xy`` (``(2, K, m)``), z terms ``z`` (``(4, K, m)``), normals' terms ``nxy``,
+    ``nz`` (``(2, K, m)``), the nodes' polar angles in the gear frame ``theta`` (``(n, m)``,
+    atan2 of :func:`node_xy`'s). Writes the clearance (+inf off the mask or off the gear
+    flank), the normal factor and R2 (0 off the mask) into ``out`` (``(3, n, nodes)``)."""
     kx, ky, turn, sense, offset, _ = rows
     n = turn.shape[0]
     for r in range(n):
