@@ -25,14 +25,17 @@ otherwise the workers are kept busy asynchronously.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import datetime as dt
 import math
 import os
 import re
 import shutil
+import signal
 import socket
 import sys
 import tempfile
+import threading
 import time
 import uuid
 import warnings
@@ -417,13 +420,20 @@ def run_study(
         pending[trial.number] = (trial, future, params, attempt)
 
     def ask():
-        trial = study.ask()
-        trial.set_user_attr(_COORD, me)
-        attempt = int(trial.user_attrs.get(_ATTEMPT, 1))  # retries carry theirs
-        params = {d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search}
-        submit(trial, params, attempt)
+        with _held_stops():  # asked and in hand at once
+            trial = study.ask()
+            trial.set_user_attr(_COORD, me)
+            attempt = int(trial.user_attrs.get(_ATTEMPT, 1))  # retries carry theirs
+            params = {
+                d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search
+            }
+            submit(trial, params, attempt)
 
     def tell(number: int, outcome: TrialOutcome) -> None:
+        with _held_stops():  # out of hand and told at once
+            _tell(number, outcome)
+
+    def _tell(number: int, outcome: TrialOutcome) -> None:
         nonlocal failed, evaluated, worker_s
         trial, _, params, attempt = pending.pop(number)
         evaluated += 1
@@ -482,14 +492,16 @@ def run_study(
     def refill(free: int) -> None:
         if suspects:
             if not pending:
-                trial, params, attempt = suspects.pop(0)
-                alone.add(trial.number)
-                submit(trial, params, attempt)
+                with _held_stops():
+                    trial, params, attempt = suspects.pop(0)
+                    alone.add(trial.number)
+                    submit(trial, params, attempt)
             return
         # busy workers: the pending trials not finished (finished ones are told after this)
         busy = sum(not p[1].done() for p in pending.values())
         while held and busy < jobs:
-            submit(*held.pop(0))
+            with _held_stops():
+                submit(*held.pop(0))
             busy += 1
         if batch and pending and not held:
             return
@@ -547,8 +559,9 @@ def run_study(
                 if exc is None:
                     tell(number, future.result())
                 elif isinstance(exc, _Resubmit):
-                    trial, _, params, attempt = pending.pop(number)
-                    held.append((trial, params, attempt))
+                    with _held_stops():
+                        trial, _, params, attempt = pending.pop(number)
+                        held.append((trial, params, attempt))
                 elif _broken(exc):
                     broken = True
                     if batch:
@@ -557,7 +570,8 @@ def run_study(
                     outcome = TrialOutcome(number=number, error=f"{type(exc).__name__}: {exc}")
                     tell(number, outcome)
             if broken:
-                worker_died()
+                with _held_stops():
+                    worker_died()
     except BaseException as exc:
         # stopping (an error, Ctrl-C): the trials in hand go back to the queue as they are,
         # and the workers are stopped; only a killed coordinator leaves RUNNING trials
@@ -595,6 +609,29 @@ def run_study(
         best_design_path=path,
         recovered=recovered,
     )
+
+
+@contextlib.contextmanager
+def _held_stops():
+    """SIGINT and SIGTERM (a polite stop: Ctrl-C, a scheduler) held back while a trial changes
+    hands (asked and put in hand, or taken out of hand and told), then raised again for the
+    handlers they had: a stop then finds every trial of this coordinator either in hand (put
+    back in the queue) or finished, never RUNNING and forgotten. (Handlers, not a signal mask:
+    worker processes started meanwhile must not inherit blocked signals.) Off the main thread,
+    where handlers cannot be set, nothing is held."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    stops = (signal.SIGINT, signal.SIGTERM)
+    previous = {sig: signal.signal(sig, lambda signum, _: caught.append(signum)) for sig in stops}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        if caught:
+            signal.raise_signal(caught[0])
 
 
 def artifact_dir(spec: StudySpec) -> Path:

@@ -652,3 +652,27 @@ def test_a_terminated_coordinator_puts_its_trials_back_in_the_queue(tmp_path, to
     assert all(t.user_attrs["gearopt_attempt"] == 1 for t in waiting)  # not the trials' fault
     _gearopt(["study", "run", study, "--trials", 8, "--jobs", 2, "--no-progress"], toy_site)
     assert _states(_trials(db)) == {"COMPLETE": 8, "FAIL": len(back)}
+
+
+def test_a_stop_during_a_hand_over_waits_for_it():
+    # a SIGTERM (or Ctrl-C) while a trial changes hands -- asked and not yet in hand, or out of
+    # hand and not yet told -- would leave it RUNNING and forgotten: it is held back to the end
+    # of the hand-over and then stops the coordinator as it would have
+    from gearopt.study import _held_stops
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    steps = []
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with _held_stops():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)
+                steps.append("handed over")
+            steps.append("after")
+        assert steps == ["handed over"]
+        assert signal.getsignal(signal.SIGTERM) is stop
+    finally:
+        signal.signal(signal.SIGTERM, previous)
