@@ -262,13 +262,13 @@ def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
 
 
 @_compiled
-def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25):
+def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25, first=0):
     """The clearance on the refinement's stencil around ``(s, t)`` (``fraction`` of a
-    ``cell``): centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f``; whether the
-    centre is valid."""
+    ``cell``): centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f`` from point
+    ``first`` on; whether the centre is valid (False when it is not evaluated)."""
     qs, qt = fraction * cell[0], fraction * cell[1]
     valid = False
-    for i in range(9):
+    for i in range(first, 9):
         a = _STENCIL_S[i] * qs
         b = _STENCIL_T[i] * qt
         f[i], on = _point(rows, r, s + a, t + b, pinion, gear)
@@ -326,14 +326,20 @@ def refine(
                 + 0.5 * (hss * c0 * c0 + 2.0 * hsh * c0 * c1)
                 + 0.5 * hhh * c1 * c1
             )
-            _, on = _point(rows, r, s[r] + c0 * cell[0], t[r] + c1 * cell[1], pinion, gear)
-            edge[r] = (not on) and fall > tol[r]
+            # (the Newton part is the whole step unless a valley or a cap is in it: then the
+            # full step's point tells whether its end is on the flanks)
+            newton = st0 == c0 and st1 == c1
+            if not newton:
+                _, on = _point(rows, r, s[r] + c0 * cell[0], t[r] + c1 * cell[1], pinion, gear)
+                edge[r] = (not on) and fall > tol[r]
             # the step cut back by halvings to the first valid point not above the best
             limit = best[r] + 1e-13 * abs(best[r])
-            for fraction in fractions:
-                ns = s[r] + fraction * (st0 * cell[0])
-                nt = t[r] + fraction * (st1 * cell[1])
+            for i in range(fractions.size):
+                ns = s[r] + fractions[i] * (st0 * cell[0])
+                nt = t[r] + fractions[i] * (st1 * cell[1])
                 value, on = _point(rows, r, ns, nt, pinion, gear)
+                if i == 0 and newton:
+                    edge[r] = (not on) and fall > tol[r]
                 if on and value <= limit:
                     moving[r] = abs(ns - s[r]) + abs(nt - t[r]) > small
                     taken[r] = True
@@ -357,8 +363,9 @@ def refine(
         if not still:
             break
         for r in range(n):
-            if active[r] and taken[r]:
-                _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r])
+            if active[r] and taken[r]:  # (its centre is the point just taken)
+                f[r, 0] = best[r]
+                _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r], 0.25, 1)
 
 
 @_compiled(inline=True)
