@@ -45,6 +45,7 @@ __all__ = [
     "node_xy",
     "refine",
     "tangency",
+    "zone_widths",
 ]
 
 ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
@@ -118,8 +119,8 @@ def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
 @_compiled
 def node_xy(rows, side, count, xy, z, out):
     """The first two linear outputs (qx, qy in the gear frame) of the nodes of
-    :func:`node_fields` into ``out`` (``(2, n, m)``, by node column), for one vectorised
-    arctan2 (numpy's SIMD one costs a sixth of libm's point by point)."""
+    :func:`node_fields` into ``out`` (``(2, n, m)``, by node column; 1 beyond the row's
+    nodes), for one vectorised arctan2 (numpy's SIMD one costs a sixth of libm's point by point)."""
     kx, ky = rows[0], rows[1]
     n = side.shape[0]
     for r in range(n):
@@ -128,6 +129,7 @@ def node_xy(rows, side, count, xy, z, out):
             x, y = xy[0, k, j], xy[1, k, j]
             out[0, r, j] = kx[0, r] * x + ky[0, r] * y + z[0, k, j]
             out[1, r, j] = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
+        out[:, r, count[k] :] = 1.0  # (padding: a harmless angle, never read)
 
 
 @_compiled
@@ -503,3 +505,54 @@ def lowest_nodes(field, keep, side, pick, values):
                         at = g
             pick[r, c] = at
             values[r, c] = best
+
+
+@_compiled(inline=True)
+def _zone_value(f, k, compound, face, profile, points, perp, tk, big):
+    """The separation on line k at ``tk`` minus the compound (``big`` minus it off the grid),
+    bilinear as :func:`gearopt.mesh._widths`'s ``value``."""
+    s = points[k, 0] + tk * perp[k, 0]
+    h = points[k, 1] + tk * perp[k, 1]
+    if not (face[0] <= s <= face[-1] and profile[0] <= h <= profile[-1]):
+        return big - compound
+    i = min(max(np.searchsorted(face, s) - 1, 0), face.size - 2)
+    j = min(max(np.searchsorted(profile, h) - 1, 0), profile.size - 2)
+    s0, h0 = face[i], profile[j]
+    u = min(max((s - s0) / (face[i + 1] - s0), 0.0), 1.0)
+    v = min(max((h - h0) / (profile[j + 1] - h0), 0.0), 1.0)
+    val = (
+        (1 - u) * (1 - v) * f[k, i, j]
+        + u * (1 - v) * f[k, i + 1, j]
+        + (1 - u) * v * f[k, i, j + 1]
+        + u * v * f[k, i + 1, j + 1]
+    )
+    return val - compound
+
+
+@_compiled
+def zone_widths(f, compound, face, profile, points, perp, tau, big, out):
+    """:func:`gearopt.mesh._widths` line by line: the extent of {f < compound} (``f``:
+    ``(K, n_f, n_p)`` separations, capped at ``big``, bilinear between the nodes) along each
+    line ``points[k] + tau perp[k]``, from the middle sample outward on each side to the first
+    sample out of the zone (interpolated; the line's end when there is none), into ``out``; 0
+    where the middle sample is out."""
+    centre = tau.size // 2
+    for k in range(f.shape[0]):
+        out[k] = 0.0
+        if _zone_value(f, k, compound, face, profile, points, perp, tau[centre], big) >= 0.0:
+            continue
+        ends = np.empty(2)
+        for side in range(2):
+            step = 1 if side == 0 else -1
+            ends[side] = tau[-1] if side == 0 else tau[0]
+            before = _zone_value(f, k, compound, face, profile, points, perp, tau[centre], big)
+            i = centre + step
+            while 0 <= i < tau.size:
+                v = _zone_value(f, k, compound, face, profile, points, perp, tau[i], big)
+                if v >= 0.0:
+                    a, b = tau[i - step], tau[i]
+                    ends[side] = a + (b - a) * before / (before - v)
+                    break
+                before = v
+                i += step
+        out[k] = ends[0] - ends[1]
