@@ -234,7 +234,7 @@ class ClearanceField:
         clearance, where the flanks touch with a common normal -- leaves the flanks), near the
         relative rotation ``u_rad`` (in the pinion's direction of motion) where the contact
         point is near ``start`` = ``(face_mm, profile_mm)``: stepping by ``toward_rad`` (signed,
-        toward the outside; up to 24 steps either way), then bisection to ``tol_rad``. Returns
+        toward the outside; up to 128 steps), then bisection to ``tol_rad``. Returns
         ``(u_inside, u_outside, face_mm, profile_mm)`` with the tangency point at ``u_inside``,
         or None where Newton's method fails (a line contact) or no bracket is found."""
         found = self._engine.interval_end(
@@ -905,7 +905,7 @@ class _Engine:
         )
         return out if near is None else (out, near_out)
 
-    def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=24, tol=1e-6):
+    def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the
         contact point near ``(face_mm, profile_mm)``), stepping by ``step_rad`` toward the
         outside: :func:`gearopt.contact_kernels.interval_end` (point by point in Python

@@ -392,34 +392,41 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
     """The tangency point of the flanks on a one-row ``rows``: the unconstrained minimum of
     the clearance over the pinion flank's smooth extension (where the gradient of the
     clearance vanishes, the gear flank turned by it touches the pinion flank with a common
-    normal: Litvin's tangency), by Newton's method on the refinement's stencil from
-    ``(s, t)``, its differences a sixteenth of a cell wide (their error, a sixteenth of the
-    refinement's, puts the point within about 1e-3 mm of the tangency equations' solution on
-    the same interpolants). Returns ``(converged, s, t, inside)``, inside on the gear flank and
-    in the pinion's ``generated`` cells; not converged where the curvatures are not both
-    positive (a line contact, a saddle) or after 16 steps."""
+    normal: Litvin's tangency), from ``(s, t)`` by the refinement's steps (Newton's on the
+    positive curvatures, a descent along the others, at most two cells, cut back until the
+    clearance does not rise) on its stencil, the differences a sixteenth of a cell wide (their
+    error, a sixteenth of the refinement's, puts the point within about 1e-3 mm of the
+    tangency equations' solution on the same interpolants). Returns ``(converged, s, t,
+    inside)``, inside on the gear flank and in the pinion's ``generated`` cells; not converged
+    after 32 steps or where the point found is not a minimum with both curvatures positive (a
+    line contact: the point is not unique)."""
     q = 1.0 / 16.0
-    for _ in range(16):
+    for _ in range(32):
         _stencil(rows, 0, s, t, cell, pinion, gear, f, q)
         g0 = (f[1] - f[2]) / (2.0 * q)
         g1 = (f[3] - f[4]) / (2.0 * q)
         hss = (f[1] + f[2] - 2.0 * f[0]) / (q * q)
         hsh = (f[5] + f[8] - f[6] - f[7]) / (4.0 * q * q)
         hhh = (f[3] + f[4] - 2.0 * f[0]) / (q * q)
-        half = 0.5 * (hss - hhh)
-        least = 0.5 * (hss + hhh) - math.sqrt(half * half + hsh * hsh)
-        if not least > 1e-5 * (abs(hss) + abs(hhh)):
-            return False, s, t, False
-        det = hss * hhh - hsh * hsh
-        d0 = (hsh * g1 - hhh * g0) / det
-        d1 = (hsh * g0 - hss * g1) / det
-        norm = math.sqrt(d0 * d0 + d1 * d1)
-        if norm > 2.0:  # at most two cells a step
-            d0 *= 2.0 / norm
-            d1 *= 2.0 / norm
-        s += d0 * cell[0]
-        t += d1 * cell[1]
-        if norm <= 1e-7:
+        d0, d1, _, _ = _pseudo_newton(g0, g1, hss, hsh, hhh, 2.0)
+        done = math.sqrt(d0 * d0 + d1 * d1) <= 1e-6
+        if not done:
+            done = True  # unless a (cut-back) step does not raise the clearance (beyond the
+            # rounding of the differences, which near the minimum is the clearance's change)
+            limit = f[0] + 1e-10 * abs(f[0])
+            fraction = 1.0
+            for _ in range(6):
+                ns, nt = s + fraction * (d0 * cell[0]), t + fraction * (d1 * cell[1])
+                value, _ = _point(rows, 0, ns, nt, pinion, gear)
+                if value <= limit:
+                    s, t, done = ns, nt, fraction * math.sqrt(d0 * d0 + d1 * d1) <= 1e-6
+                    break
+                fraction *= 0.5
+        if done:
+            half = 0.5 * (hss - hhh)
+            least = 0.5 * (hss + hhh) - math.sqrt(half * half + hsh * hsh)
+            if not least > 1e-5 * (abs(hss) + abs(hhh)):
+                return False, s, t, False
             _, inside = _point_in(rows, 0, s, t, pinion, gear, generated)
             return True, s, t, inside
     return False, s, t, False
@@ -429,11 +436,11 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
 def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generated):
     """Where the tangency point (:func:`tangency`) leaves the flanks, near pinion angle
     ``phi`` where the contact point is near ``(s, t)``: stepping by ``step`` (signed, toward
-    the outside) while the point stays inside (or back while it does not, up to ``steps``
-    steps either way), each step's solve started from the last inside point, then bisection
-    to ``tol`` (rad). Returns ``(found, phi_inside, phi_outside, s, t)`` with the tangency point
-    at ``phi_inside``; not found where Newton's method fails at the start or while stepping
-    back, or no bracket is found."""
+    the outside) while the point stays inside (or back while it does not), up to ``steps``
+    steps, each solve started from the last point found (a step whose solve fails is halved,
+    down to a sixteenth), then bisection to ``tol`` (rad). Returns ``(found, phi_inside,
+    phi_outside, s, t)`` with the tangency point at ``phi_inside``; not found where a solve
+    fails (a line contact) or no bracket is found within the steps."""
     rows = (
         np.empty((4, 1)),
         np.empty((4, 1)),
@@ -447,35 +454,41 @@ def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generat
     ok, s, t, inside = tangency(rows, s, t, cell, pinion, gear, generated, f)
     if not ok:
         return False, phi, phi, s, t
-    a = b = phi
+    # march from the start to the first angle on the other side (inside -> outside, or back)
+    direction = 1.0 if inside else -1.0
+    start_inside = inside
+    last = phi
+    h = step
     found = False
-    if inside:
-        for k in range(1, steps + 1):
-            b = phi + k * step
-            _row_at(maker, b, rows)
-            ok, s1, t1, inside = tangency(rows, s, t, cell, pinion, gear, generated, f)
-            if not (ok and inside):
-                found = True
-                break
-            a, s, t = b, s1, t1
-    else:
-        for k in range(1, steps + 1):
-            a = phi - k * step
-            _row_at(maker, a, rows)
-            ok, s, t, inside = tangency(rows, s, t, cell, pinion, gear, generated, f)
-            if not ok:
-                return False, phi, phi, s, t
-            if inside:
-                found = True
-                break
-            b = a
+    k = 0
+    while k < steps:
+        u = last + direction * h
+        _row_at(maker, u, rows)
+        ok, s1, t1, inside = tangency(rows, s, t, cell, pinion, gear, generated, f)
+        if not ok:
+            if abs(h) > abs(step) / 16.0:
+                h *= 0.5  # a nearer seed
+                continue
+            return False, phi, phi, s, t
+        if inside != start_inside:
+            found = True
+            break
+        last, s, t = u, s1, t1
+        h = step
+        k += 1
     if not found:
         return False, phi, phi, s, t
+    if start_inside:
+        a, b = last, u
+    else:
+        a, b, s, t = u, last, s1, t1
     while abs(b - a) > tol:
         m = 0.5 * (a + b)
         _row_at(maker, m, rows)
         ok, s1, t1, inside = tangency(rows, s, t, cell, pinion, gear, generated, f)
-        if ok and inside:
+        if not ok:
+            return False, phi, phi, s, t
+        if inside:
             a, s, t = m, s1, t1
         else:
             b = m
