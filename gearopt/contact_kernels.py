@@ -45,6 +45,7 @@ __all__ = [
     "node_xy",
     "refine",
     "tangency",
+    "warm",
     "zone_widths",
 ]
 
@@ -173,6 +174,13 @@ def _point(rows, r, s, t, pinion, gear):
     return _point_in(rows, r, s, t, pinion, gear, pinion[14])
 
 
+@_compiled
+def _evaluate(rows, r, s, t, pinion, gear, cells):
+    """:func:`_point_in` compiled once, called: the evaluations outside the stencil (a copy
+    inlined at each call site would multiply the compile time)."""
+    return _point_in(rows, r, s, t, pinion, gear, cells)
+
+
 @_compiled(inline=True)
 def _point_in(rows, r, s, t, pinion, gear, cells):
     """:func:`_point` with valid on the gear flank and in the pinion's ``cells`` (a flag per
@@ -212,7 +220,9 @@ def clearance_at(rows, sh, pinion, gear, delta, valid):
     n, m = delta.shape
     for r in range(n):
         for p in range(m):
-            delta[r, p], valid[r, p] = _point(rows, r, sh[0, r, p], sh[1, r, p], pinion, gear)
+            delta[r, p], valid[r, p] = _evaluate(
+                rows, r, sh[0, r, p], sh[1, r, p], pinion, gear, pinion[14]
+            )
 
 
 @_compiled(inline=True)
@@ -332,14 +342,15 @@ def refine(
             # full step's point tells whether its end is on the flanks)
             newton = st0 == c0 and st1 == c1
             if not newton:
-                _, on = _point(rows, r, s[r] + c0 * cell[0], t[r] + c1 * cell[1], pinion, gear)
+                ns, nt = s[r] + c0 * cell[0], t[r] + c1 * cell[1]
+                _, on = _evaluate(rows, r, ns, nt, pinion, gear, pinion[14])
                 edge[r] = (not on) and fall > tol[r]
             # the step cut back by halvings to the first valid point not above the best
             limit = best[r] + 1e-13 * abs(best[r])
             for i in range(fractions.size):
                 ns = s[r] + fractions[i] * (st0 * cell[0])
                 nt = t[r] + fractions[i] * (st1 * cell[1])
-                value, on = _point(rows, r, ns, nt, pinion, gear)
+                value, on = _evaluate(rows, r, ns, nt, pinion, gear, pinion[14])
                 if i == 0 and newton:
                     edge[r] = (not on) and fall > tol[r]
                 if on and value <= limit:
@@ -417,7 +428,7 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
             fraction = 1.0
             for _ in range(6):
                 ns, nt = s + fraction * (d0 * cell[0]), t + fraction * (d1 * cell[1])
-                value, _ = _point(rows, 0, ns, nt, pinion, gear)
+                value, _ = _evaluate(rows, 0, ns, nt, pinion, gear, pinion[14])
                 if value <= limit:
                     s, t, done = ns, nt, fraction * math.sqrt(d0 * d0 + d1 * d1) <= 1e-6
                     break
@@ -427,7 +438,7 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
             least = 0.5 * (hss + hhh) - math.sqrt(half * half + hsh * hsh)
             if not least > 1e-5 * (abs(hss) + abs(hhh)):
                 return False, s, t, False
-            _, inside = _point_in(rows, 0, s, t, pinion, gear, generated)
+            _, inside = _evaluate(rows, 0, s, t, pinion, gear, generated)
             return True, s, t, inside
     return False, s, t, False
 
@@ -569,3 +580,65 @@ def zone_widths(f, compound, face, profile, points, perp, tau, big, out):
                 before = v
                 i += step
         out[k] = ends[0] - ends[1]
+
+
+def warm() -> None:
+    """Compile every kernel, or load it from the disk cache, in this process, on tables of the
+    engine's types (one cell, zero coefficients): done once before worker processes start, so
+    that they load the cache rather than compile it side by side (numba's cache is not safe
+    for concurrent writers). Nothing without the kernels."""
+    if not ENABLED:
+        return
+    f8, ip = np.float64, np.intp
+    coef, ok = np.zeros((1, 16)), np.ones(1, np.bool_)
+    gear = (0.0, 0.0, 0.0, 0.0, 1, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, coef, ok)
+    lin, const = np.zeros((5, 2)), np.zeros(5)
+    pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, ok)
+    rows = (
+        np.zeros((4, 1)),
+        np.zeros((4, 1)),
+        np.zeros(1),
+        np.ones(1),
+        np.zeros(1, ip),
+        np.zeros(1, ip),
+    )
+    side, count, index = np.zeros(1, ip), np.ones(1, ip), np.zeros((1, 1), ip)
+    xy, z, theta = np.zeros((2, 1, 1)), np.zeros((4, 1, 1)), np.zeros((1, 1))
+    node_xy(rows, side, count, xy, z, np.empty((2, 1, 1)))
+    node_fields(
+        rows, side, count, index, xy, z, xy.copy(), xy.copy(), theta, gear, np.empty((3, 1, 1))
+    )
+    clearance_at(
+        rows, np.zeros((2, 1, 1)), pinion, gear, np.empty((1, 1)), np.empty((1, 1), np.bool_)
+    )
+    cell = np.ones(2)
+    refine(
+        rows,
+        np.zeros(1),
+        np.zeros(1),
+        np.full(1, np.nan),
+        np.ones(1, ip),
+        np.zeros(1, ip),
+        np.zeros(1),
+        cell,
+        pinion,
+        gear,
+        np.zeros(1, np.bool_),
+    )
+    lowest_nodes(
+        np.zeros((1, 1)), np.ones((1, 1), np.bool_), side, np.empty((1, 1), ip), np.empty((1, 1))
+    )
+    maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
+    interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, ok)
+    grid = np.array([0.0, 1.0])
+    zone_widths(
+        np.zeros((1, 2, 2)),
+        1.0,
+        grid,
+        grid,
+        np.zeros((1, 2)),
+        np.ones((1, 2)),
+        np.linspace(-1.0, 1.0, 5),
+        10.0,
+        np.empty(1, f8),
+    )

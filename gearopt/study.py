@@ -48,6 +48,7 @@ import optuna
 import sqlalchemy as sa
 from optuna.trial import TrialState
 
+from gearopt import contact_kernels
 from gearopt.errors import GearoptError, StudyError
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, work
@@ -508,6 +509,9 @@ def run_study(
         for _ in range(min(jobs - busy, max(free, 0))):
             ask()
 
+    # the contact engine's kernels compiled (or loaded) here once, before the workers start:
+    # they load the cache rather than compile it side by side
+    contact_kernels.warm()
     executor = _executor(jobs, backend, scheduler)
     busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
     try:

@@ -18,6 +18,16 @@ TOY = Path(__file__).parent / "toy_plugin"
 SEED_CASES = ROOT.parent / "shared" / "reference" / "seed_cases.json"
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _compiled_kernels():
+    """The contact engine's kernels compiled (or loaded from the disk cache) once in this
+    process before any test starts a subprocess: CLI and study workers then load the cache
+    rather than compile it side by side."""
+    from gearopt import contact_kernels
+
+    contact_kernels.warm()
+
+
 @pytest.fixture(scope="session")
 def seed_cases() -> dict:
     """The seeds' published inputs and outputs (../shared/reference/seed_cases.json).
