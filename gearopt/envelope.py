@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import RegularGridInterpolator
 
 from gearopt.errors import GearoptError, SettingsError
-from gearopt.flank import DepthTaper, FlankGrid, FlankMap
+from gearopt.flank import DepthTaper, FlankGrid, FlankMap, axial_plane
 
 __all__ = [
     "GeneratingFamily",
@@ -366,6 +366,12 @@ class EnvelopeSurface:
         x, y, z = point[..., 0], self.sign * point[..., 1], point[..., 2]
         return np.stack([c * x - s * y, s * x + c * y, z], axis=-1)
 
+    def _axial_plane(self, face_mm, profile_mm):
+        """``(L, R)`` of grid coordinates (the profile coordinate t made the height first on
+        tapered depth)."""
+        h = profile_mm if self.taper is None else self.taper.height_mm(face_mm, profile_mm)
+        return axial_plane(face_mm, h, self.pitch_angle_rad)
+
     def parameters_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` generation parameters at grid coordinates, by Newton from the grid."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
@@ -376,17 +382,12 @@ class EnvelopeSurface:
             bounds_error=False,
             fill_value=None,
         )(np.stack([s.ravel(), h.ravel()], axis=-1))
-        cg, sg = math.cos(self.pitch_angle_rad), math.sin(self.pitch_angle_rad)
-        sf, hf = s.ravel(), h.ravel()
-        if self.taper is not None:  # grid coordinate t -> height
-            hf = self.taper.height_mm(sf, hf)
-        flank = np.full(len(sf), self.index)
+        flank = np.full(s.size, self.index)
         q, _, _, ok, _ = _newton(
             self.family,
             start,
             flank,
-            sf * cg - hf * sg,
-            sf * sg + hf * cg,
+            *self._axial_plane(s.ravel(), h.ravel()),
             tol=self.tol,
             max_iter=30,
             give_up=(30, np.inf),
@@ -419,7 +420,6 @@ class EnvelopeSurface:
         gap_s = (self.face_mm[nodes[:, 0]][None, :] - face_mm[:, None]) / ds
         gap_h = (self.profile_mm[nodes[:, 1]][None, :] - profile_mm[:, None]) / dh
         order = np.argsort(gap_s**2 + gap_h**2, axis=1, kind="stable")
-        cg, sg = math.cos(self.pitch_angle_rad), math.sin(self.pitch_angle_rad)
         for attempt in range(min(tries, len(nodes))):
             todo = np.flatnonzero(~ok)
             if not len(todo):
@@ -428,22 +428,17 @@ class EnvelopeSurface:
             s0, t0 = self.face_mm[near[:, 0]], self.profile_mm[near[:, 1]]
             q = self.q[near[:, 0], near[:, 1]].astype(float)
             flank = np.full(len(q), self.index)
-            h0 = t0 if self.taper is None else self.taper.height_mm(s0, t0)
-            _, jac = _residual_and_jacobian(
-                self.family, q, flank, s0 * cg - h0 * sg, s0 * sg + h0 * cg
-            )
+            _, jac = _residual_and_jacobian(self.family, q, flank, *self._axial_plane(s0, t0))
             sheet = np.sign(np.linalg.det(jac))  # the generated node's side of any fold
             for k in range(1, steps + 1):
                 w = k / steps
                 sk = s0 + w * (face_mm[todo] - s0)
                 tk = t0 + w * (profile_mm[todo] - t0)
-                hk = tk if self.taper is None else self.taper.height_mm(sk, tk)
                 q, _, jac, conv, _ = _newton(
                     self.family,
                     q,
                     flank,
-                    sk * cg - hk * sg,
-                    sk * sg + hk * cg,
+                    *self._axial_plane(sk, tk),
                     tol=self.tol,
                     max_iter=30,
                     give_up=(30, np.inf),
