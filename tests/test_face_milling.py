@@ -304,15 +304,9 @@ def test_settings_without_an_envelope_raise_never_nan(conjugate, overrides):
         assert np.all(np.isfinite(fm.points_mm)) and fm.residual[fm.mask].max() <= 1e-12
 
 
-def test_family_is_complex_step_safe(conjugate):
-    """The meshing function's complex-step derivatives equal central differences."""
-    family = _family(conjugate, "pinion", FLANKS)
-    rng = np.random.default_rng(5)
-    q = np.stack(
-        [rng.uniform(0, 10, 20), rng.uniform(-0.5, 0.5, 20), rng.uniform(-0.5, 0.5, 20)], -1
-    )
-    flank = rng.integers(0, 2, 20)
-    assert isinstance(family.cutters[0], CutterFlank)
+def _assert_complex_step_safe(family, q, flank, *, atol: float) -> None:
+    """The meshing function's complex-step derivatives (each generation parameter in turn)
+    equal its central differences (step 1e-6) to 1e-6 relative and ``atol``."""
     for k in range(3):
         dq = np.zeros(3)
         dq[k] = 1.0
@@ -322,7 +316,19 @@ def test_family_is_complex_step_safe(conjugate):
             np.stack(family.axial_radial_meshing(q + h * dq, flank), -1)
             - np.stack(family.axial_radial_meshing(q - h * dq, flank), -1)
         ) / (2 * h)
-        assert_allclose(cs, fd, rtol=1e-6, atol=1e-8)
+        assert_allclose(cs, fd, rtol=1e-6, atol=atol)
+
+
+def test_family_is_complex_step_safe(conjugate):
+    """The meshing function's complex-step derivatives equal central differences."""
+    family = _family(conjugate, "pinion", FLANKS)
+    rng = np.random.default_rng(5)
+    q = np.stack(
+        [rng.uniform(0, 10, 20), rng.uniform(-0.5, 0.5, 20), rng.uniform(-0.5, 0.5, 20)], -1
+    )
+    flank = rng.integers(0, 2, 20)
+    assert isinstance(family.cutters[0], CutterFlank)
+    _assert_complex_step_safe(family, q, flank, atol=1e-8)
 
 
 def test_profile_arc_is_tangent_at_the_pitch_line_point_and_crowns_both_ways():
@@ -731,13 +737,5 @@ def test_family_with_tip_radius_is_complex_step_safe(tip_radius_mm):
         [rng.uniform(0, 4, 40), rng.uniform(-0.5, 0.5, 40), rng.uniform(-0.5, 0.5, 40)], -1
     )
     flank = rng.integers(0, 2, 40)
-    for k in range(3):
-        dq = np.zeros(3)
-        dq[k] = 1.0
-        cs = np.stack(family.axial_radial_meshing(q + 1e-30j * dq, flank), -1).imag / 1e-30
-        h = 1e-6
-        fd = (
-            np.stack(family.axial_radial_meshing(q + h * dq, flank), -1)
-            - np.stack(family.axial_radial_meshing(q - h * dq, flank), -1)
-        ) / (2 * h)
-        assert_allclose(cs, fd, rtol=1e-6, atol=1e-7)  # differences' rounding on L, R ~ 100 mm
+    # (atol: the differences' rounding on L, R of about 100 mm)
+    _assert_complex_step_safe(family, q, flank, atol=1e-7)
