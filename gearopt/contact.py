@@ -800,13 +800,9 @@ class _Engine:
         _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
-        """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
-        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
-        also :meth:`near` of those rows in the same refinement: ``(sample, near)``."""
-        phi = np.atleast_1d(np.asarray(phi_rad, float))
-        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
-        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+    def _node_fields(self, side, phi, angle):
+        """The clearance, normal factor and R2 at every grid node for rows (side, phi, gear
+        angle), each ``(n, nodes)``: +inf, 0, 0 off the pinion's generated nodes."""
         n, size = len(phi), self.shape[0] * self.shape[1]
         field_, fac, rad = np.empty((n, size)), np.empty((n, size)), np.empty((n, size))
         # each side's rows on its own generated nodes (its node tables broadcast over rows)
@@ -815,30 +811,7 @@ class _Engine:
         # its side's node tables
         sides = np.unique(side)
         joint = len(sides) > 1 and n <= self._JOINT_ROWS
-        if self._jit is not None:
-            rows = self._rows(side, phi, angle)
-            out = np.empty((3, n, size))
-            theta = np.empty((2, n, self.node_index.shape[1]))
-            count = self._jit[2]
-            constants, side_ = rows.kernel_rows(n), np.array(side, np.intp)
-            _kernels.node_xy(constants, side_, count, self.node_xy, self.node_z, theta)
-            theta = np.arctan2(theta[1], theta[0], out=theta[0])
-            _kernels.node_fields(
-                constants,
-                side_,
-                count,
-                self.node_index,
-                self.node_xy,
-                self.node_z,
-                self.node_nxy,
-                self.node_nz,
-                theta,
-                self._jit[0],
-                out,
-            )
-            field_, fac, rad = out
-            sides = ()
-        elif joint:
+        if joint:
             out = self._node_clearance(
                 self._rows(side[:, None], phi[:, None], angle[:, None]),
                 side,
@@ -868,6 +841,44 @@ class _Engine:
                     factor[:, slot],
                     radius[:, slot],
                 )
+        return field_, fac, rad
+
+    def _node_fields_compiled(self, side, phi, angle):
+        """:meth:`_node_fields` by :func:`gearopt.contact_kernels.node_fields` (the nodes'
+        polar angles in between by numpy's vectorised arctan2)."""
+        n = len(phi)
+        rows = self._rows(side, phi, angle)
+        out = np.empty((3, n, self.shape[0] * self.shape[1]))
+        theta = np.empty((2, n, self.node_index.shape[1]))
+        count = self._jit[2]
+        constants, side = rows.kernel_rows(n), np.array(side, np.intp)
+        _kernels.node_xy(constants, side, count, self.node_xy, self.node_z, theta)
+        theta = np.arctan2(theta[1], theta[0], out=theta[0])
+        _kernels.node_fields(
+            constants,
+            side,
+            count,
+            self.node_index,
+            self.node_xy,
+            self.node_z,
+            self.node_nxy,
+            self.node_nz,
+            theta,
+            self._jit[0],
+            out,
+        )
+        return out[0], out[1], out[2]
+
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
+        """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
+        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
+        also :meth:`near` of those rows in the same refinement: ``(sample, near)``."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        n = len(phi)
+        node_fields = self._node_fields if self._jit is None else self._node_fields_compiled
+        field_, fac, rad = node_fields(side, phi, angle)
         shape = (n,) + self.shape
         field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
         i, j = _argmin_nodes(field_)

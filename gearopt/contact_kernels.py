@@ -167,13 +167,6 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
             out[2, r, g] = radius
 
 
-@_compiled(inline=True)
-def _point(rows, r, s, t, pinion, gear):
-    """Clearance of the pinion point at grid coordinates ``(s, t)`` on row ``r`` (as
-    :func:`clearance_at`): ``(delta, valid)``, valid in the pinion's refinable cells."""
-    return _point_in(rows, r, s, t, pinion, gear, pinion[14])
-
-
 @_compiled
 def _evaluate(rows, r, s, t, pinion, gear, cells):
     """:func:`_point_in` compiled once, called: the evaluations outside the stencil (a copy
@@ -183,8 +176,10 @@ def _evaluate(rows, r, s, t, pinion, gear, cells):
 
 @_compiled(inline=True)
 def _point_in(rows, r, s, t, pinion, gear, cells):
-    """:func:`_point` with valid on the gear flank and in the pinion's ``cells`` (a flag per
-    cell of the pinion tables)."""
+    """Clearance of the pinion point at grid coordinates ``(s, t)`` on row ``r`` (as
+    :func:`clearance_at`): ``(delta, valid)``, valid on the gear flank and in the pinion's
+    ``cells`` (a flag per cell of the pinion tables: ``pinion[14]``, the refinable ones, or
+    the generated ones)."""
     kx, ky, turn, sense, offset, pinion_offset = rows
     (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef, _) = pinion
     x = (s - s0) * ia
@@ -283,7 +278,7 @@ def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25, first=0):
     for i in range(first, 9):
         a = _STENCIL_S[i] * qs
         b = _STENCIL_T[i] * qt
-        f[i], on = _point(rows, r, s + a, t + b, pinion, gear)
+        f[i], on = _point_in(rows, r, s + a, t + b, pinion, gear, pinion[14])
         if i == 0:
             valid = on
     return valid
