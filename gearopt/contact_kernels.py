@@ -414,9 +414,14 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
         hss = (f[1] + f[2] - 2.0 * f[0]) / (q * q)
         hsh = (f[5] + f[8] - f[6] - f[7]) / (4.0 * q * q)
         hhh = (f[3] + f[4] - 2.0 * f[0]) / (q * q)
-        d0, d1, _, _ = _pseudo_newton(g0, g1, hss, hsh, hhh, 2.0)
-        done = math.sqrt(d0 * d0 + d1 * d1) <= 1e-6
-        if not done:
+        d0, d1, c0, c1 = _pseudo_newton(g0, g1, hss, hsh, hhh, 2.0)
+        norm = math.sqrt(d0 * d0 + d1 * d1)
+        done = norm <= 1e-6
+        if not done and norm <= 0.1 and d0 == c0 and d1 == c1:
+            # a short Newton step on both positive curvatures is taken whole: so near the
+            # minimum the differences' error, not the step, decides whether the clearance falls
+            s, t = s + d0 * cell[0], t + d1 * cell[1]
+        elif not done:
             done = True  # unless a (cut-back) step does not raise the clearance (beyond the
             # rounding of the differences, which near the minimum is the clearance's change)
             limit = f[0] + 1e-10 * abs(f[0])

@@ -522,3 +522,24 @@ def test_hand_over_guessed_from_interpolated_lags_agrees_with_the_iteration(alig
         assert a.te_peak_to_peak_arcsec == pytest.approx(b.te_peak_to_peak_arcsec, abs=1e-3)
         assert a.te_arcsec == pytest.approx(b.te_arcsec, abs=1e-3)
         assert a.mean_point_mm == pytest.approx(b.mean_point_mm, abs=1e-3)
+
+
+def test_the_engine_finds_where_the_coast_contact_leaves_the_heel(section53):
+    # section 5.3, coast: the tangency point leaves through the heel. The engine's search
+    # (least clearance on a sixteenth-cell stencil) and the textbook solver's tangency
+    # equations find the same exit from three starts inside: within 1e-4 rad of pinion
+    # rotation (measured 6e-5 at this 25 x 21 grid: the stencil's error) and 0.005 mm
+    from gearopt.newton_tca import contact_interval_end
+
+    opts = AnalysisOptions()
+    field = meshed_pair(section53, opts).coast
+    for u in (-0.62, -0.64, -0.66):
+        inside = field.sample(np.array([field.sense * u]))
+        assert not inside.edge[0]
+        start = (inside.contact_face_mm[0], inside.contact_profile_mm[0])
+        engine = field.interval_end(u, start, -0.004)
+        textbook = contact_interval_end(field, u, start, -1.0, 0.004)
+        assert engine is not None and textbook is not None
+        assert engine[0] == pytest.approx(textbook[0], abs=1e-4)
+        assert engine[2] == pytest.approx(textbook[2][0], abs=0.005)
+        assert engine[2] == pytest.approx(field.pinion.face_mm[-1], abs=0.005)  # the heel
