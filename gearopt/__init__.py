@@ -6,16 +6,8 @@ plugin contract (:data:`hookimpl`, the ``Base*`` classes), the plugin registries
 """
 
 from gearopt.blank import Blank, compute_blank
-from gearopt.design import (
-    Design,
-    Meta,
-    Misalignment,
-    PairData,
-    load_design,
-    loads_design,
-    parse_design,
-    with_overrides,
-)
+from gearopt.design import Design, Meta, Misalignment, PairData
+from gearopt.design_files import load_design, loads_design, parse_design, with_overrides
 from gearopt.errors import (
     DesignError,
     GearoptError,

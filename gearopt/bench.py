@@ -55,7 +55,7 @@ def time_call_ms(func: Callable[[], object], *, number: int = 1) -> float:
 
 def bench_basic_settings() -> tuple[float, dict]:
     """Cyclo-palloid basic settings of the seed 001 Table 3 design (both members)."""
-    from gearopt.design import loads_design
+    from gearopt.design_files import loads_design
     from gearopt.plugins import get_machine_model
 
     text = _study_text("seed001_table3.toml")
@@ -70,7 +70,7 @@ def bench_basic_settings() -> tuple[float, dict]:
 def bench_flank_generation() -> tuple[float, dict]:
     """Both flanks of the seed 001 Table 3 pinion (the member whose envelope folds) on the
     default FlankMap grid, settings included; one warm-up run first."""
-    from gearopt.design import loads_design
+    from gearopt.design_files import loads_design
     from gearopt.flank import FlankGrid
     from gearopt.plugins import get_machine_model
 
@@ -91,7 +91,7 @@ def bench_flank_generation() -> tuple[float, dict]:
 def bench_thickness_solve() -> tuple[float, dict]:
     """Additional slope angle of the seed 001 Table 3 pinion solved from its chordal thickness
     (eqs 39-48, "auto"), settings included."""
-    from gearopt.design import loads_design, with_overrides
+    from gearopt.design_files import loads_design, with_overrides
     from gearopt.plugins import get_machine_model
 
     design = loads_design(_study_text("seed001_table3.toml"))
@@ -107,7 +107,7 @@ def _meshed_section53():
     """The seed 001 section 5.3 pair (crowned: the textbook cross-check's case) generated on
     the contact analyses' grid, with the default options."""
     from gearopt.analysis import AnalysisOptions, meshed_pair
-    from gearopt.design import loads_design
+    from gearopt.design_files import loads_design
 
     design = loads_design(_study_text("seed001_section5_3.toml"))
     options = AnalysisOptions()
@@ -115,7 +115,7 @@ def _meshed_section53():
 
 
 def _tca_info(options) -> dict:
-    from gearopt import contact_kernels
+    from gearopt.contact import kernels as contact_kernels
 
     kernels = f"numba {contact_kernels.numba.__version__}" if contact_kernels.ENABLED else "numpy"
     return {

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from gearopt.design import load_design
+from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank_cli import add_flank_parser
 from gearopt.plugins import get_machine_model, list_plugins

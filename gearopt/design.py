@@ -26,26 +26,21 @@ Example (seed 001, Table 2)::
 
 from __future__ import annotations
 
-import copy
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from gearopt.assembly import Misalignment
 from gearopt.blank import Blank, compute_blank, cone_distance_from_module_mm, pitch_angles_rad
-from gearopt.errors import DesignError, GearoptError, NotAvailableError
+from gearopt.errors import DesignError, NotAvailableError
 from gearopt.validate import (
     check_integer,
     check_keys,
     check_number,
-    read_table,
 )
-
-if TYPE_CHECKING:
-    import pluggy
 
 __all__ = [
     "MEMBERS",
@@ -53,10 +48,8 @@ __all__ = [
     "Misalignment",
     "Meta",
     "Design",
-    "load_design",
-    "loads_design",
-    "parse_design",
-    "with_overrides",
+    "SECTIONS",
+    "pair_from_table",
 ]
 
 MEMBERS = ("pinion", "gear")
@@ -336,50 +329,6 @@ class PairData:
         return compute_blank(self)
 
 
-_MISALIGNMENT_KEYS = ("offset_mm", "pinion_axial_mm", "gear_axial_mm", "shaft_angle_deg")
-
-
-@dataclass(frozen=True, kw_only=True)
-class Misalignment:
-    """Displacements of the assembled pair in the housing frame (DESIGN.md for frame and signs).
-
-    ``offset_mm`` (dE) moves the pinion along +y_f, ``pinion_axial_mm`` (dA1) the pinion along its
-    axis out of mesh, ``gear_axial_mm`` (dA2) the gear along its axis out of mesh,
-    ``shaft_angle_deg`` (dGamma) makes the shaft angle Sigma + dGamma. The same keys form the
-    ``[compensation]`` table: errors the machine settings compensate (seed 001 section 4).
-    """
-
-    offset_mm: float = 0.0
-    pinion_axial_mm: float = 0.0
-    gear_axial_mm: float = 0.0
-    shaft_angle_deg: float = 0.0
-
-    def __post_init__(self) -> None:
-        for key in ("offset_mm", "pinion_axial_mm", "gear_axial_mm"):
-            value = check_number(key, getattr(self, key), gt=-10.0, lt=10.0, unit="mm")
-            object.__setattr__(self, key, value)
-        value = check_number(
-            "shaft_angle_deg", self.shaft_angle_deg, gt=-5.0, lt=5.0, unit="degrees"
-        )
-        object.__setattr__(self, "shaft_angle_deg", value)
-
-    @property
-    def is_zero(self) -> bool:
-        """True when every displacement is zero."""
-        return not any(
-            (self.offset_mm, self.pinion_axial_mm, self.gear_axial_mm, self.shaft_angle_deg)
-        )
-
-    @classmethod
-    def from_table(cls, table: Mapping[str, Any], where: str) -> Misalignment:
-        """Build from a TOML table, naming errors ``where.key``."""
-        check_keys(table, _MISALIGNMENT_KEYS, where)
-        try:
-            return cls(**table)
-        except DesignError as exc:
-            raise type(exc)(f"{where}.{exc.parameter}", exc.value, exc.rule) from None
-
-
 @dataclass(frozen=True, kw_only=True)
 class Meta:
     """Free text about a design: its name, where it comes from, notes."""
@@ -429,133 +378,10 @@ class Design:
         return "design"
 
 
-def _pair_from_table(table: Mapping[str, Any]) -> PairData:
+def pair_from_table(table: Mapping[str, Any]) -> PairData:
+    """The ``[pair]`` table of a design file as :class:`PairData` (unknown keys refused)."""
     check_keys(table, _PAIR_KEYS, "pair")
     for key in ("pinion_teeth", "gear_teeth", "mean_spiral_angle_deg", "face_width_mm"):
         if key not in table:
             raise DesignError(f"pair.{key}", rule="required key is missing")
     return PairData(**table)
-
-
-def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
-    """The ``[analysis]`` table: default conditions of the contact evaluators for this design
-    (the keys of :class:`gearopt.analysis.AnalysisOptions`), checked now."""
-    from gearopt.analysis import AnalysisOptions
-
-    try:
-        AnalysisOptions.from_conditions(table, where="analysis")
-    except DesignError:
-        raise
-    except GearoptError as exc:
-        name = (
-            exc.parameter if exc.parameter.startswith("analysis") else f"analysis.{exc.parameter}"
-        )
-        raise DesignError(name, exc.value, exc.rule) from None
-    return dict(table)
-
-
-def _te_target(table: Mapping[str, Any], pair: PairData):
-    """The ``[te_target]`` table: a designed transmission error (:mod:`gearopt.te_target`)."""
-    from gearopt.te_target import TETarget
-
-    return TETarget.from_table(table, pair.pinion_teeth)
-
-
-def parse_design(
-    data: Mapping[str, Any],
-    *,
-    plugin_manager: pluggy.PluginManager | None = None,
-    path: str | None = None,
-) -> Design:
-    """Build a :class:`Design` from a parsed TOML document.
-
-    The ``[machine]`` table is handed to the machine model named by its ``model`` key, found
-    among the registered plugins (``plugin_manager``, default: the built-ins and every installed
-    plugin).
-    """
-    from gearopt.plugins import get_machine_model
-
-    if not isinstance(data, Mapping):
-        raise DesignError("design", data, "must be a TOML document (a table of tables)")
-    tables = {name: read_table(data, name, "") for name in SECTIONS}
-    check_keys(data, SECTIONS, "")
-    if "pair" not in data:
-        raise DesignError("pair", rule="the [pair] table is required")
-    if "machine" not in data:
-        raise DesignError("machine", rule='the [machine] table is required (model = "...")')
-    pair = _pair_from_table(tables["pair"])
-    machine_table = dict(tables["machine"])
-    if "model" not in machine_table:
-        raise DesignError("machine.model", rule="required key is missing")
-    model_name = machine_table.pop("model")
-    if not isinstance(model_name, str):
-        raise DesignError("machine.model", model_name, "must be a string naming a machine model")
-    model = get_machine_model(model_name, plugin_manager=plugin_manager)
-    if "synthesis" in data:
-        machine = model.synthesize(machine_table, tables["synthesis"], pair)
-    else:
-        machine = model.parse_machine(machine_table, pair)
-    meta_table = tables["meta"]
-    check_keys(meta_table, ("name", "description", "source"), "meta")
-    return Design(
-        pair=pair,
-        model=model.name,
-        machine=machine,
-        misalignment=Misalignment.from_table(tables["misalignment"], "misalignment"),
-        compensation=Misalignment.from_table(tables["compensation"], "compensation"),
-        meta=Meta(**meta_table),
-        analysis=_analysis_table(tables["analysis"]),
-        te_target=_te_target(tables["te_target"], pair) if "te_target" in data else None,
-        source=copy.deepcopy(dict(data)),
-        path=path,
-    )
-
-
-def loads_design(text: str, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
-    """Parse a design from TOML text."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError("design", rule=f"malformed TOML: {exc}") from None
-    return parse_design(data, plugin_manager=plugin_manager)
-
-
-def load_design(path: str | Path, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
-    """Load and validate a design TOML file."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DesignError("design file", str(path), "does not exist") from None
-    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
-        raise DesignError(
-            "design file", str(path), f"cannot be read as UTF-8 text ({exc})"
-        ) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError("design file", str(path), f"malformed TOML: {exc}") from None
-    return parse_design(data, plugin_manager=plugin_manager, path=str(path))
-
-
-def with_overrides(
-    design: Design,
-    overrides: Mapping[str, Any],
-    *,
-    plugin_manager: pluggy.PluginManager | None = None,
-) -> Design:
-    """Return a new design with dotted keys replaced, e.g.
-    ``{"machine.pinion.inner_cutter_radius_mm": 76.0}``; the result is validated anew."""
-    data = copy.deepcopy(dict(design.source))
-    for dotted, value in overrides.items():
-        parts = dotted.split(".")
-        node = data
-        for part in parts[:-1]:
-            child = node.setdefault(part, {})
-            if not isinstance(child, dict):
-                raise DesignError(
-                    dotted, value, f"'{part}' is not a table, cannot hold '{parts[-1]}'"
-                )
-            node = child
-        node[parts[-1]] = value
-    return parse_design(data, plugin_manager=plugin_manager, path=design.path)

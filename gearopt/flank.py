@@ -42,6 +42,8 @@ __all__ = [
     "DepthTaper",
     "FlankGrid",
     "FlankMap",
+    "HermiteCells",
+    "hermite_cells",
     "MEMBERS",
     "FLANKS",
     "HANDS",
@@ -160,6 +162,62 @@ class DepthTaper:
     def dheight_dface(self, profile_mm):
         """dh/ds at fixed t: alpha + beta t."""
         return self.alpha + self.beta * np.asarray(profile_mm)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class HermiteCells:
+    """A FlankMap's local bicubic Hermite interpolant of Theta(s, t), one polynomial per cell.
+
+    The grid is uniform: the cell of grid coordinates ``(s, t)`` is found by arithmetic, its
+    unit coordinates are ``x = (s - face0_mm) * face_scale - i`` and
+    ``y = (t - profile0_mm) * profile_scale - j``. Beyond the grid the edge cell's polynomial
+    goes on (unit coordinates outside [0, 1]).
+
+    Attributes
+    ----------
+    face0_mm, face_scale
+        The grid's first face coordinate and its cells per mm along the face.
+    last_row
+        ``n_f - 2``, the last cell row (as a float, for clamping).
+    profile0_mm, profile_scale
+        The same along the profile.
+    last_column
+        ``n_p - 2``, the last cell column.
+    columns
+        ``n_p - 1`` cells per row: cell ``(i, j)`` is number ``i * columns + j``.
+    coefficients
+        ``(n_cells, 16)``: column ``4 a + b`` holds c_ab of Theta = sum c_ab x^a y^b.
+    generated
+        ``(n_cells,)`` True where the cell's four corners are generated nodes.
+    """
+
+    face0_mm: float
+    face_scale: float
+    last_row: float
+    profile0_mm: float
+    profile_scale: float
+    last_column: float
+    columns: int
+    coefficients: NDArray
+    generated: NDArray
+
+    def locate(self, face_mm: NDArray, profile_mm: NDArray):
+        """``(cell, x, y, within)`` of grid points: the cell number (clamped to the grid), the
+        unit coordinates in it and whether the point lies on the grid."""
+        x = (face_mm - self.face0_mm) * self.face_scale
+        y = (profile_mm - self.profile0_mm) * self.profile_scale
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):  # never index with NaN
+            x = np.where(np.isfinite(x), x, -1.0)
+            y = np.where(np.isfinite(y), y, -1.0)
+        fi = np.minimum(np.maximum(x, 0.0), self.last_row).astype(np.intp)
+        fj = np.minimum(np.maximum(y, 0.0), self.last_column).astype(np.intp)
+        within = (x >= 0.0) & (x <= self.last_row + 1.0)
+        within &= (y >= 0.0) & (y <= self.last_column + 1.0)
+        return fi * self.columns + fj, x - fi, y - fj, within
+
+    def polynomial(self, cell: int) -> NDArray:
+        """``(4, 4)`` coefficients c_ab of one cell."""
+        return self.coefficients[cell].reshape(4, 4)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -320,10 +378,11 @@ class FlankMap:
         )
 
     @cached_property
-    def _hermite_data(self) -> tuple[NDArray, NDArray, NDArray]:
-        """Node derivatives of Theta for the local interpolant: Theta_s and Theta_h from the
-        normals (n . r_s = n . r_h = 0, exact where the node is generated), Theta_sh by
-        central differences of those."""
+    def node_derivatives(self) -> tuple[NDArray, NDArray, NDArray]:
+        """Node derivatives of Theta for the local interpolant, ``(Theta_s, Theta_h,
+        Theta_sh)`` in grid coordinates: Theta_s and Theta_h from the normals (n . r_s =
+        n . r_h = 0, exact where the node is generated), Theta_sh by central differences of
+        those."""
         g = math.radians(self.pitch_angle_deg)
         sg, cg = math.sin(g), math.cos(g)
         th = self.polar_angle_rad
@@ -344,10 +403,11 @@ class FlankMap:
         return d_s, d_h, d_sh
 
     @cached_property
-    def _cells(self) -> tuple[NDArray, NDArray]:
-        """Bicubic Hermite coefficients of every cell, ``(n_f - 1, n_p - 1, 4, 4)`` in the
-        cell's unit coordinates, and the cells whose four corners are generated."""
-        d_s, d_h, d_sh = self._hermite_data
+    def cells(self) -> HermiteCells:
+        """The local bicubic Hermite interpolant of Theta, cell by cell (:class:`HermiteCells`):
+        in each cell the polynomial through the values and first derivatives at its four
+        corners (:attr:`node_derivatives`), in the cell's unit coordinates."""
+        d_s, d_h, d_sh = self.node_derivatives
         a = np.diff(self.face_mm)[:, None]
         b = np.diff(self.profile_mm)[None, :]
         th = self.polar_angle_rad
@@ -363,37 +423,18 @@ class FlankMap:
         coef = np.einsum("ai,...ij,bj->...ab", m, f, m)
         k = self.mask
         ok = k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:]
-        return coef, ok
-
-    @cached_property
-    def _lookup(self):
-        """Scalars and tables of the local interpolant's fast path."""
-        coef, ok = self._cells
         fs, fp = self.face_mm, self.profile_mm
-        return (
-            float(fs[0]),
-            (len(fs) - 1) / float(fs[-1] - fs[0]),
-            float(len(fs) - 2),
-            float(fp[0]),
-            (len(fp) - 1) / float(fp[-1] - fp[0]),
-            float(len(fp) - 2),
-            len(fp) - 1,
-            np.ascontiguousarray(coef.reshape(-1, 16).T),
-            ok.ravel(),
+        return HermiteCells(
+            face0_mm=float(fs[0]),
+            face_scale=(len(fs) - 1) / float(fs[-1] - fs[0]),
+            last_row=float(len(fs) - 2),
+            profile0_mm=float(fp[0]),
+            profile_scale=(len(fp) - 1) / float(fp[-1] - fp[0]),
+            last_column=float(len(fp) - 2),
+            columns=len(fp) - 1,
+            coefficients=np.ascontiguousarray(coef.reshape(-1, 16)),
+            generated=ok.ravel(),
         )
-
-    def _cell_of(self, s: NDArray, h: NDArray):
-        """Cell indices and unit coordinates of grid points (uniform grids by arithmetic)."""
-        s0, ia, imax, h0, ib, jmax, _, _, _ = self._lookup
-        x = (s - s0) * ia
-        y = (h - h0) * ib
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):  # never index with NaN
-            x = np.where(np.isfinite(x), x, -1.0)
-            y = np.where(np.isfinite(y), y, -1.0)
-        fi = np.minimum(np.maximum(x, 0.0), imax).astype(np.intp)
-        fj = np.minimum(np.maximum(y, 0.0), jmax).astype(np.intp)
-        within = (x >= 0.0) & (x <= imax + 1.0) & (y >= 0.0) & (y <= jmax + 1.0)
-        return fi, fj, x - fi, y - fj, within
 
     def polar_angle_local(self, face_mm, profile_mm, *, with_inside=False):
         """Theta at grid coordinates ``(s, h)`` by the bicubic Hermite interpolant of the cell
@@ -406,13 +447,11 @@ class FlankMap:
         h = np.asarray(profile_mm, float)
         if s.shape != h.shape:
             s, h = np.broadcast_arrays(s, h)
-        i, j, u, v, within = self._cell_of(s, h)
-        n_cols, coef, ok = self._lookup[6:]
-        k = i * n_cols + j
-        out = hermite_cells(coef, k, u, v)
+        k, u, v, within = self.cells.locate(s, h)
+        out = hermite_cells(self.cells.coefficients, k, u, v)
         if with_inside is False:
             return out
-        cells = ok if with_inside is True else with_inside
+        cells = self.cells.generated if with_inside is True else with_inside
         return out, cells[k] & within
 
     def point_at(self, face_mm, profile_mm) -> NDArray:
@@ -525,11 +564,13 @@ class FlankMap:
         }
 
 
-def hermite_cells(coef: NDArray, k: NDArray, u: NDArray, v: NDArray) -> NDArray:
+def hermite_cells(coef: NDArray, k: NDArray | None, u: NDArray, v: NDArray) -> NDArray:
     """Bicubic polynomials sum_ab c_ab u^a v^b of cells ``k`` at unit coordinates ``(u, v)``:
-    ``coef`` is ``(16, n)``, row ``4 a + b`` holding c_ab of every cell (one gather, then Horner
-    on whole arrays: the fastest numpy form measured)."""
-    c = coef if k is None else np.take(coef, k, axis=1)
+    ``coef`` is ``(n_cells, 16)``, column ``4 a + b`` holding c_ab (:class:`HermiteCells`);
+    with ``k`` None, ``coef`` holds the cells' rows already, ``(..., 16)``. One gather, then
+    Horner on whole arrays."""
+    c = np.take(coef, k, axis=0) if k is not None else np.array(coef)
+    c = np.moveaxis(c, -1, 0)
     w = c[3::4]
     w *= v
     w += c[2::4]

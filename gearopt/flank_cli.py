@@ -20,7 +20,7 @@ import json
 import math
 from typing import Any
 
-from gearopt.design import load_design
+from gearopt.design_files import load_design
 from gearopt.errors import DesignError, NotAvailableError
 from gearopt.flank import MEMBERS, FlankGrid, check_member_and_flank
 from gearopt.plugins import get_machine_model

@@ -48,9 +48,11 @@ from dataclasses import fields as dataclass_fields
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt import contact_kernels
-from gearopt.contact import SEPARATIONS, ClearanceField, ContactError, FieldSample, JointField
-from gearopt.errors import GearoptError
+from gearopt.analysis_options import check_options
+from gearopt.assembly import Placement
+from gearopt.contact import ClearanceField, ContactError, FieldSample, JointField
+from gearopt.contact import kernels as contact_kernels
+from gearopt.flank_jet import FlankJet, cross
 
 __all__ = [
     "ToothFrame",
@@ -120,23 +122,19 @@ def _gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) 
     """The path's direction on the gear flank at M (:func:`path_angle`) from the contact points
     of the two positions either side of M (rows 4 and 5 of the extra positions), carried into
     the gear's frame at their contact angles."""
-    from gearopt.newton_tca import _cross, _FlankJet
-
     phi = ex.phi_rad[4:6]
     p = field.pinion.point_at(ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6])
     cp, sp = np.cos(phi), np.sin(phi)
     p = np.stack([cp * p[:, 0] - sp * p[:, 1], sp * p[:, 0] + cp * p[:, 1], p[:, 2]], -1)
     q = p @ field.b.T + field.c
-    turn = (
-        -field.ratio * phi + field.phase_rad - field._shift - field.gear_sense * ex.minimum_rad[4:6]
-    )
+    turn = -field.ratio * phi + field.gear_offset_rad - field.gear_sense * ex.minimum_rad[4:6]
     ct, st = np.cos(turn), np.sin(turn)
     points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
     mid = 0.5 * (points[0] + points[1])
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
-    _, p_s, p_h, *_ = _FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
+    _, p_s, p_h, *_ = FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
     return path_angle(
-        points[1] - points[0], _cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+        points[1] - points[0], cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
     )
 
 
@@ -247,30 +245,6 @@ class ToothContact:
 
 def _list(values) -> list[float]:
     return [float(v) for v in np.asarray(values).ravel()]
-
-
-def _number(value) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def _check_options(positions: int, pairs: int, cycles: float, compound_um: float, separation):
-    if isinstance(positions, bool) or not isinstance(positions, int) or not 3 <= positions <= 401:
-        raise GearoptError("positions", positions, "must be an integer from 3 to 401")
-    if isinstance(pairs, bool) or not isinstance(pairs, int) or not 2 <= pairs <= 7:
-        raise GearoptError("pairs", pairs, "must be an integer from 2 to 7")
-    if not (_number(cycles) and 1.0 <= cycles <= 5.0):
-        raise GearoptError("cycles", cycles, "must be a number from 1 to 5 mesh cycles")
-    if positions < 2 * cycles + 1:
-        raise GearoptError(
-            "positions",
-            positions,
-            f"must be at least 2 cycles + 1 = {2 * cycles + 1:g} (a step "
-            "below half a pitch, so that hand-overs are bracketed)",
-        )
-    if not (_number(compound_um) and 0.0 < compound_um <= 100.0):
-        raise GearoptError("compound_um", compound_um, "must be in (0, 100] um")
-    if separation not in SEPARATIONS:
-        raise GearoptError("separation", separation, f"must be one of {SEPARATIONS}")
 
 
 class _PairCurve:
@@ -493,7 +467,7 @@ def tooth_contacts(
     """Unloaded TCA of several sides of one pair (``fields``, named by ``sides``), evaluated
     together (:class:`gearopt.contact.JointField`): the same results as one
     :func:`tooth_contact` per side, at about half the cost for two sides."""
-    _check_options(positions, pairs, cycles, compound_um, separation)
+    check_options(positions, pairs, cycles, compound_um, separation)
     fields = list(fields)
     joint = JointField(fields)
     n_sides = len(fields)
@@ -1170,7 +1144,7 @@ def backlash(
     """Backlash at the drive side's positions: the gear at its drive contact angle, turned
     forward until its other flanks touch the pinion's (``coast`` is the coast-side field with
     the drive side's phase)."""
-    _check_options(positions, pairs, cycles, 6.5, "normal")
+    check_options(positions, pairs, cycles, 6.5, "normal")
     pairs += 2  # a pair more on each side: misalignment may move the mesh by a pitch
     curve = _PairCurve(drive)
     p1 = curve.pitch
@@ -1279,20 +1253,11 @@ class MeshedPair:
     backlash_radius_mm: float
 
 
-def mesh_pair(
-    design, *, grid=None, misalignment=None, plugin_manager=None, flanks=None
-) -> MeshedPair:
-    """Generate a design's flanks (or take ``flanks``, the ``(pinion, gear)`` answers of
-    :func:`gearopt.generate_flanks`) and place them in the housing with ``misalignment``
-    (default: the design's ``[misalignment]``)."""
-    import gearopt
-    from gearopt.contact import Placement
-
-    if flanks is None:
-        flanks = tuple(
-            gearopt.generate_flanks(design, member, grid=grid, plugin_manager=plugin_manager)
-            for member in ("pinion", "gear")
-        )
+def mesh_pair(design, flanks, *, misalignment=None) -> MeshedPair:
+    """Place a design's generated flanks in the housing: ``flanks`` is ``(pinion, gear)``, each
+    ``{"convex": FlankMap, "concave": FlankMap}`` as a machine model generates them
+    (:meth:`gearopt.machine.BaseMachineModel.generate_flanks`); ``misalignment`` defaults to the
+    design's ``[misalignment]``."""
     pinion, gear = flanks
     placement = Placement(
         shaft_angle_deg=design.pair.shaft_angle_deg,

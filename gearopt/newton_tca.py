@@ -37,8 +37,9 @@ from numpy.typing import NDArray
 from scipy.optimize import root
 
 from gearopt.contact import ClearanceField
+from gearopt.contact.tangency import TangencySystem
 from gearopt.errors import GearoptError
-from gearopt.flank import FlankMap
+from gearopt.flank_jet import FlankJet
 
 __all__ = ["NewtonTCA", "contact_interval_end", "newton_tca", "tangency_equations"]
 
@@ -108,150 +109,6 @@ class NewtonTCA:
         )
 
 
-class _FlankJet:
-    """Theta of a FlankMap's local Hermite interpolant with its first and second derivatives,
-    at single points. The cell is found by the arithmetic of ``FlankMap._cell_of`` on Python
-    floats (the same cell and unit coordinates, without numpy's per-call overhead); beyond the
-    grid the edge cell's polynomial is extended, as in ``polar_angle_local``."""
-
-    def __init__(self, fm: FlankMap) -> None:
-        self.coef, self.ok = fm._cells
-        fs, fp = fm.face_mm, fm.profile_mm
-        self.s0, self.h0 = float(fs[0]), float(fp[0])
-        self.n_f, self.n_p = len(fs), len(fp)
-        self.ds = float((fs[-1] - fs[0]) / (self.n_f - 1))
-        self.dh = float((fp[-1] - fp[0]) / (self.n_p - 1))
-        g = math.radians(fm.pitch_angle_deg)
-        self.sg, self.cg = math.sin(g), math.cos(g)
-
-    def polar(self, s: float, h: float):
-        """``(theta, t_s, t_h, t_ss, t_sh, t_hh, inside)`` at ``(s, h)``."""
-        x = (s - self.s0) / self.ds
-        y = (h - self.h0) / self.dh
-        i = min(max(math.floor(x), 0), self.n_f - 2)
-        j = min(max(math.floor(y), 0), self.n_p - 2)
-        within = 0.0 <= x <= self.n_f - 1 and 0.0 <= y <= self.n_p - 1
-        u, v = x - i, y - j
-        c = self.coef[i, j]
-        ds, dh = self.ds, self.dh
-        uu = np.array([1.0, u, u * u, u * u * u])
-        du = np.array([0.0, 1.0, 2.0 * u, 3.0 * u * u]) / ds
-        d2u = np.array([0.0, 0.0, 2.0, 6.0 * u]) / (ds * ds)
-        vv = np.array([1.0, v, v * v, v * v * v])
-        dv = np.array([0.0, 1.0, 2.0 * v, 3.0 * v * v]) / dh
-        d2v = np.array([0.0, 0.0, 2.0, 6.0 * v]) / (dh * dh)
-        cv, cdv = c @ vv, c @ dv
-        return (
-            float(uu @ cv),
-            float(du @ cv),
-            float(uu @ cdv),
-            float(d2u @ cv),
-            float(du @ cdv),
-            float(uu @ (c @ d2v)),
-            bool(within and self.ok[i, j]),
-        )
-
-    def surface(self, s: float, h: float, turn: float):
-        """Flank point at ``(s, h)`` with polar angle Theta + ``turn``, member frame:
-        ``(p, p_s, p_h, p_ss, p_sh, p_hh, radius, e_r, e_t, (t_s, t_h), inside)``."""
-        th, t_s, t_h, t_ss, t_sh, t_hh, inside = self.polar(s, h)
-        sg, cg = self.sg, self.cg
-        big_r = s * sg + h * cg
-        big_l = s * cg - h * sg
-        angle = th + turn
-        ca, sa = math.cos(angle), math.sin(angle)
-        e_r = np.array([ca, sa, 0.0])
-        e_t = np.array([-sa, ca, 0.0])
-        e_z = np.array([0.0, 0.0, 1.0])
-        # P = R e_r + L e_z with R, L linear in (s, h): P_x = R_x e_r + R T_x e_t + L_x e_z,
-        # P_xy = (R_x T_y + R_y T_x + R T_xy) e_t - R T_x T_y e_r
-        p = big_r * e_r + big_l * e_z
-        p_s = sg * e_r + big_r * t_s * e_t + cg * e_z
-        p_h = cg * e_r + big_r * t_h * e_t - sg * e_z
-        p_ss = (2.0 * sg * t_s + big_r * t_ss) * e_t - big_r * t_s * t_s * e_r
-        p_sh = (sg * t_h + cg * t_s + big_r * t_sh) * e_t - big_r * t_s * t_h * e_r
-        p_hh = (2.0 * cg * t_h + big_r * t_hh) * e_t - big_r * t_h * t_h * e_r
-        return p, p_s, p_h, p_ss, p_sh, p_hh, big_r, e_r, e_t, (t_s, t_h), inside
-
-
-def _cross(a: NDArray, b: NDArray) -> NDArray:
-    """a x b of two 3-vectors (np.cross costs more than the rest of an evaluation)."""
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
-
-
-def _cosine(a: NDArray, b: NDArray):
-    """a.b / (|a| |b|) and its gradients with respect to a and b."""
-    na, nb = math.sqrt(a @ a), math.sqrt(b @ b)
-    ah, bh = a / na, b / nb
-    f = float(ah @ bh)
-    return f, (bh - f * ah) / na, (ah - f * bh) / nb
-
-
-class _System:
-    """The tangency equations of one ClearanceField (module docstring)."""
-
-    def __init__(self, field: ClearanceField) -> None:
-        self.field = field
-        self.pinion, self.gear = _FlankJet(field.pinion), _FlankJet(field.gear)
-        self.b, self.c = field.b, field.c
-        self.gs = float(field.gear_sense)
-
-    @classmethod
-    def of_jets(cls, pinion, gear, *, b: NDArray, c: NDArray, gear_sense: float) -> _System:
-        """The equations of two jets (anything with ``surface(s, h, turn)``, ``sg``, ``cg``
-        like :class:`_FlankJet`) placed by ``q = b p + c``, without a ClearanceField (the
-        angles are then the caller's: :meth:`__call__` only)."""
-        system = cls.__new__(cls)
-        system.field = None
-        system.pinion, system.gear = pinion, gear
-        system.b, system.c = b, c
-        system.gs = float(gear_sense)
-        return system
-
-    def angles(self, u: float, gear_angle_rad: float) -> tuple[float, float]:
-        """Pinion angle phi and the gear's polar-angle offset (before the lag) at rotation u."""
-        f = self.field
-        phi = f.sense * u
-        return phi, -f.ratio * phi + gear_angle_rad + f.phase_rad - f._shift
-
-    def pinion_point(self, s1: float, h1: float, phi: float) -> tuple[NDArray, NDArray]:
-        """The pinion point (s1, h1) at angle phi: ``(p, q)`` in the pinion and gear frames."""
-        p = self.pinion.surface(s1, h1, phi)[0]
-        return p, self.b @ p + self.c
-
-    def __call__(self, phi: float, gear_turn: float, x: NDArray):
-        """``(F, J, inside_pinion, inside_gear)`` at the unknowns x."""
-        s1, h1, s2, h2, lag = (float(v) for v in x)
-        b = self.b
-        p, p_s, p_h, p_ss, p_sh, p_hh, _, _, _, _, in1 = self.pinion.surface(s1, h1, phi)
-        q = b @ p + self.c
-        a1, b1 = b @ p_s, b @ p_h
-        n1 = _cross(a1, b1)
-        n1_s = _cross(b @ p_ss, b1) + _cross(a1, b @ p_sh)
-        n1_h = _cross(b @ p_sh, b1) + _cross(a1, b @ p_hh)
-        gs, sg2, cg2 = self.gs, self.gear.sg, self.gear.cg
-        r, r_s, r_h, r_ss, r_sh, r_hh, big_r2, e_r, e_t, (t_s, t_h), in2 = self.gear.surface(
-            s2, h2, gear_turn - gs * lag
-        )
-        # the lag turns the polar angle by -gs lambda: e_r' = -gs e_t, e_t' = gs e_r
-        r_l = -gs * big_r2 * e_t
-        r_sl = gs * (big_r2 * t_s * e_r - sg2 * e_t)
-        r_hl = gs * (big_r2 * t_h * e_r - cg2 * e_t)
-        f_s, ga_s, gb_s = _cosine(n1, r_s)
-        f_h, ga_h, gb_h = _cosine(n1, r_h)
-        F = np.empty(5)
-        F[:3] = q - r
-        F[3], F[4] = f_s, f_h
-        J = np.empty((5, 5))
-        J[:3, 0], J[:3, 1] = a1, b1
-        J[:3, 2], J[:3, 3], J[:3, 4] = -r_s, -r_h, -r_l
-        J[3] = [ga_s @ n1_s, ga_s @ n1_h, gb_s @ r_ss, gb_s @ r_sh, gb_s @ r_sl]
-        J[4] = [ga_h @ n1_s, ga_h @ n1_h, gb_h @ r_sh, gb_h @ r_hh, gb_h @ r_hl]
-        return F, J, in1, in2
-
-
 def tangency_equations(
     field: ClearanceField, u_rad: float, x, *, gear_angle_rad: float = 0.0
 ) -> tuple[NDArray, NDArray]:
@@ -274,7 +131,7 @@ def tangency_equations(
         ``(5,)`` residuals (three point differences in mm, two cosines) and ``(5, 5)``
         dF/dx.
     """
-    system = _System(field)
+    system = TangencySystem(field)
     phi, turn = system.angles(float(u_rad), float(gear_angle_rad))
     F, J, _, _ = system(phi, turn, np.asarray(x, float))
     return F, J
@@ -316,7 +173,7 @@ def newton_tca(
     if u.ndim != 1 or u.size == 0:
         raise GearoptError("u_rad", u.shape, "must be a non-empty 1-d array of angles")
     gear_angle_rad = float(gear_angle_rad)
-    system = _System(field)
+    system = TangencySystem(field)
     phi0, _ = system.angles(float(u[0]), gear_angle_rad)
     if start is None:
         from gearopt.mesh import _PairCurve
@@ -326,8 +183,8 @@ def newton_tca(
         lag = float(first.minimum_rad[0])
     else:
         s1, h1 = (float(v) for v in start)
-        p = system.pinion_point(s1, h1, 0.0)[0]  # _gap turns it by phi
-        lag = float(field._gap(p, None, np.float64(phi0), gear_angle_rad)[0])
+        p = system.pinion_point(s1, h1, 0.0)[0]  # turned by phi there
+        lag = float(field.clearance_of_points(p, None, phi0, gear_angle_rad).clearance_rad)
     # the gear guess: the pinion start point mapped into the gear frame
     q = system.pinion_point(s1, h1, phi0)[1]
     s2, h2 = (float(v) for v in field.gear.to_grid(q[2], math.hypot(q[0], q[1])))
@@ -376,7 +233,7 @@ def newton_tca(
 LINE_CONTACT = 1e-7
 
 
-def _point_contact(system: _System, u: float, x: NDArray) -> bool:
+def _point_contact(system: TangencySystem, u: float, x: NDArray) -> bool:
     """Whether the tangency equations' Jacobian at solution ``x`` is regular (a point contact:
     its least singular value at least :data:`LINE_CONTACT` times its largest)."""
     phi, turn = system.angles(u, 0.0)
@@ -384,7 +241,7 @@ def _point_contact(system: _System, u: float, x: NDArray) -> bool:
     return bool(singular[-1] >= LINE_CONTACT * singular[0])
 
 
-def _tangency(system: _System, u: float, x: NDArray, iterations: int = 8):
+def _tangency(system: TangencySystem, u: float, x: NDArray, iterations: int = 8):
     """Newton's iteration on the tangency equations at rotation ``u`` from ``x`` (a nearby
     solution): ``(x, inside)`` with ``inside`` whether the point lies on both flanks, or None
     when it does not converge (a singular or ill-conditioned Jacobian: line contact)."""
@@ -404,7 +261,7 @@ def _tangency(system: _System, u: float, x: NDArray, iterations: int = 8):
     return None
 
 
-def _grid_margin(jet: _FlankJet, s: float, h: float) -> float:
+def _grid_margin(jet: FlankJet, s: float, h: float) -> float:
     """How far (mm) the point (s, h) lies inside the jet's grid (negative outside)."""
     return min(
         s - jet.s0,
@@ -438,10 +295,11 @@ def contact_interval_end(
     unknowns (s1, h1, s2, h2, lambda) at ``u_inside`` (``u_outside`` = ``u_inside`` when the
     point lies within ``tol_mm`` of a grid edge), or None where Newton's method fails or
     the contact is a line (:data:`LINE_CONTACT`), or no bracket is found."""
-    system = _System(field)
+    system = TangencySystem(field)
     s1, h1 = (float(v) for v in start)
     phi, _ = system.angles(float(u_rad), 0.0)
-    lag = float(field._gap(system.pinion_point(s1, h1, 0.0)[0], None, np.float64(phi))[0])
+    p = system.pinion_point(s1, h1, 0.0)[0]
+    lag = float(field.clearance_of_points(p, None, phi).clearance_rad)
     q = system.pinion_point(s1, h1, phi)[1]
     s2, h2 = (float(v) for v in field.gear.to_grid(q[2], math.hypot(q[0], q[1])))
     got = _tangency(system, float(u_rad), np.array([s1, h1, s2, h2, lag]))

@@ -48,7 +48,7 @@ import optuna
 import sqlalchemy as sa
 from optuna.trial import TrialState
 
-from gearopt import contact_kernels
+from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, work

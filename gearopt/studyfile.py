@@ -51,7 +51,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from gearopt.design import Design, load_design, with_overrides
+from gearopt.design import Design
+from gearopt.design_files import load_design, with_overrides
 from gearopt.errors import GearoptError, PluginError, StudyError
 from gearopt.machine import SearchDimension
 from gearopt.plugins import evaluators, get_machine_model, objectives

@@ -25,11 +25,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import Placement
+from gearopt.contact.tangency import TangencySystem
 from gearopt.errors import SettingsError
 from gearopt.flank import axial_plane
+from gearopt.flank_jet import FlankJet
 from gearopt.kinematics import rot_z
 from gearopt.mesh import path_angle
-from gearopt.newton_tca import _FlankJet, _System
 from gearopt.solve import newton
 
 __all__ = [
@@ -138,9 +139,9 @@ def envelope_jet(
     )
 
 
-class TaylorJet(_FlankJet):
+class TaylorJet(FlankJet):
     """An :class:`EnvelopeJet` as the quadratic polar angle of a flank, in the interface the
-    textbook tangency equations use (:class:`gearopt.newton_tca._FlankJet`)."""
+    textbook tangency equations use (:class:`gearopt.flank_jet.FlankJet`)."""
 
     def __init__(self, jet: EnvelopeJet, *, turn_rad: float = 0.0) -> None:
         self.jet = jet
@@ -228,7 +229,7 @@ def local_mesh(
     p_s x p_h points out of the pinion's material, else -1.
     """
     b, c = placement.pinion_to_gear
-    system = _System.of_jets(pinion, gear, b=b, c=c, gear_sense=-sense)
+    system = TangencySystem.of_jets(pinion, gear, b=b, c=c, gear_sense=-sense)
     s1, h1, s2, h2 = pinion.jet.s_mm, pinion.jet.h_mm, gear.jet.s_mm, gear.jet.h_mm
     x = np.array([s1, h1, s2, h2, 0.0])
     steps = np.array([0.0, 1.0, -1.0, 2.0, -2.0]) * MESH_STEP_RAD

@@ -1,4 +1,4 @@
-"""The contact engine's compiled kernels (``gearopt.contact_kernels``, numba)
+"""The contact engine's compiled kernels (``gearopt.contact.kernels``, numba)
 against its numpy paths: every output of the TCA of both sides, the backlash and the ease-off,
 on designs that visit each branch of the kernels (crowned contact inside the flanks, edge
 contact under misalignment, tapered depth on both members, a path that runs into the pinion's
@@ -19,8 +19,14 @@ import numpy as np
 import pytest
 
 import gearopt
-from gearopt import contact_kernels
-from gearopt.analysis import AnalysisOptions, contact_sides, pair_backlash, pair_ease_off
+from gearopt.analysis import (
+    AnalysisOptions,
+    contact_sides,
+    generated_flanks,
+    pair_backlash,
+    pair_ease_off,
+)
+from gearopt.contact import kernels as contact_kernels
 from gearopt.design import Misalignment
 from gearopt.flank import FlankGrid
 from gearopt.mesh import mesh_pair
@@ -63,8 +69,8 @@ CASES = {
 def _analyses(design, options):
     """TCA of both sides, backlash and ease-off on a freshly placed pair (its engines built
     now, so they take the kernels or not as :data:`contact_kernels.ENABLED` says)."""
-    flanks = tuple(gearopt.generate_flanks(design, m, grid=options.grid) for m in MEMBERS)
-    pair = mesh_pair(design, grid=options.grid, misalignment=options.misalignment, flanks=flanks)
+    flanks = generated_flanks(design, options.grid)
+    pair = mesh_pair(design, flanks, misalignment=options.misalignment)
     return {
         **contact_sides(pair, options),
         "backlash": pair_backlash(pair, options),

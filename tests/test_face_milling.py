@@ -388,7 +388,7 @@ def test_uniform_depth_output_is_mains(conjugate):
     # the TCA metrics: the engine's contact-interval ends are bisected differently since the
     # reference was written (candidate points evaluated at once, 1/80 pitch steps): the
     # contact ratio may move by one step and the bias with it; the rest to 1e-6 (the compiled
-    # kernels, gearopt.contact_kernels, choose the refinement's closed-form Newton step row by
+    # kernels, gearopt.contact.kernels, choose the refinement's closed-form Newton step row by
     # row rather than for a whole batch: the same step to rounding, refined positions within
     # about 1e-7 mm)
     metrics = gearopt.evaluators()["tca"].evaluate(conjugate, None).metrics

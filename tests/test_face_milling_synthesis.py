@@ -12,10 +12,19 @@ import pytest
 from scipy.optimize import brentq, fsolve, minimize_scalar
 
 import gearopt
-from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_backlash
-from gearopt.design import Design, _pair_from_table, parse_design
+from gearopt.analysis import (
+    AnalysisOptions,
+    contact_sides,
+    generated_flanks,
+    meshed_pair,
+    pair_backlash,
+)
+from gearopt.assembly import Misalignment
+from gearopt.design import Design, pair_from_table
+from gearopt.design_files import parse_design
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
 from gearopt.flank import FlankGrid
+from gearopt.mesh import mesh_pair
 from gearopt_plugins import face_milling_synthesis as fs
 from gearopt_plugins.face_milling import (
     FaceMilling,
@@ -38,7 +47,7 @@ def seed002():
 
 def _gear_from_blank(path):
     """A design whose gear has the settings from its blank (the pinion: a copy, unused)."""
-    pair = _pair_from_table(tomllib.loads(path.read_text())["pair"])
+    pair = pair_from_table(tomllib.loads(path.read_text())["pair"])
     given = fs.gear_flanks_from_blank(pair)
     gear = FaceMillingMember(
         **{f: _parse_flank(given[f], f"gear.{f}", pair, "gear", f) for f in given}
@@ -315,12 +324,10 @@ def test_the_bias_is_continuous_in_a_small_misalignment(seed002):
     # assembly: 1 um steps of the gear's axial position move it by about 1 um (an end that
     # fell back to the engine's bracket when its search ran out of steps, or took a failed
     # Newton solve for the contact leaving the flanks, jumped by 0.26-0.52 mm here)
-    from gearopt.design import Misalignment
-    from gearopt.mesh import mesh_pair
-
+    flanks = generated_flanks(seed002, FlankGrid())  # grid 25 x 13
     bias = []
     for x in (0.002, 0.003, 0.009, 0.010):
-        pair = mesh_pair(seed002, misalignment=Misalignment(gear_axial_mm=x))  # grid 25 x 13
+        pair = mesh_pair(seed002, flanks, misalignment=Misalignment(gear_axial_mm=x))
         sides = contact_sides(pair, AnalysisOptions())
         bias.append([sides[k].bias_mm for k in ("drive", "coast")])
     bias = np.array(bias)

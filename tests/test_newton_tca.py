@@ -15,9 +15,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
+from gearopt.analysis import generated_flanks
 from gearopt.flank import FlankGrid
+from gearopt.flank_jet import FlankJet
 from gearopt.mesh import _PairCurve, mesh_pair
-from gearopt.newton_tca import _FlankJet, newton_tca, tangency_equations
+from gearopt.newton_tca import newton_tca, tangency_equations
 
 STUDIES = Path(__file__).resolve().parents[1] / "studies"
 ARCSEC_RAD = math.pi / 648000.0
@@ -28,7 +30,7 @@ SIDES = ("drive", "coast")
 @pytest.fixture(scope="module")
 def pair():
     design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
-    return mesh_pair(design, grid=FlankGrid(n_face=25, n_profile=21))
+    return mesh_pair(design, generated_flanks(design, FlankGrid(n_face=25, n_profile=21)))
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +58,7 @@ def test_local_interpolant_jet_is_the_flank_interpolant(pair):
         h = rng.uniform(fm.profile_mm[0] - 0.3, fm.profile_mm[-1] + 0.3, 40)
         s[:3], h[:3] = fm.face_mm[[0, 5, -1]], fm.profile_mm[[0, 7, -1]]  # nodes and corners
         theta, inside = fm.polar_angle_local(s, h, with_inside=True)
-        jet = _FlankJet(fm)
+        jet = FlankJet(fm)
         got = [jet.polar(a, b) for a, b in zip(s, h, strict=True)]
         assert_allclose([g[0] for g in got], theta, rtol=0.0, atol=1e-14)
         assert [g[-1] for g in got] == list(inside)
@@ -133,11 +135,17 @@ def test_solutions_are_tangent_on_both_flanks(pair, solved, side):
     # clearance equals the lag, and it is stationary there (tangency)
     phi = field.sense * U_RAD[ok]
     zero = np.zeros_like(phi)
-    delta, _ = field._at(s1, h1, phi, zero)
+    delta, _ = field.clearance_at_grid(s1, h1, phi, zero)
     assert_allclose(delta, newton.lag_rad[ok], rtol=0.0, atol=1e-6 * ARCSEC_RAD)
     e = 1e-3  # mm
-    d_s = (field._at(s1 + e, h1, phi, zero)[0] - field._at(s1 - e, h1, phi, zero)[0]) / (2 * e)
-    d_h = (field._at(s1, h1 + e, phi, zero)[0] - field._at(s1, h1 - e, phi, zero)[0]) / (2 * e)
+    d_s = (
+        field.clearance_at_grid(s1 + e, h1, phi, zero)[0]
+        - field.clearance_at_grid(s1 - e, h1, phi, zero)[0]
+    ) / (2 * e)
+    d_h = (
+        field.clearance_at_grid(s1, h1 + e, phi, zero)[0]
+        - field.clearance_at_grid(s1, h1 - e, phi, zero)[0]
+    ) / (2 * e)
     assert np.abs(d_s).max() <= 1e-4 * ARCSEC_RAD  # per mm; ~10 arcsec/mm a millimetre away
     assert np.abs(d_h).max() <= 1e-4 * ARCSEC_RAD
 

@@ -13,7 +13,7 @@ import pytest
 
 import gearopt
 from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair
-from gearopt.design import parse_design
+from gearopt.design_files import parse_design
 from gearopt.errors import DesignError
 from gearopt.newton_tca import newton_tca
 from gearopt.te_target import ARCSEC, TETarget, compare

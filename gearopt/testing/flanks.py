@@ -14,7 +14,8 @@ import tomllib
 import numpy as np
 import pytest
 
-from gearopt.design import Design, loads_design, parse_design
+from gearopt.design import Design
+from gearopt.design_files import loads_design, parse_design
 from gearopt.errors import GearoptError
 from gearopt.flank import FLANKS, MEMBERS, FlankGrid, FlankMap
 from gearopt.testing.machine_models import MachineModelContract

@@ -10,7 +10,8 @@ import tomllib
 
 import pytest
 
-from gearopt.design import Design, loads_design, parse_design, with_overrides
+from gearopt.design import Design
+from gearopt.design_files import loads_design, parse_design, with_overrides
 from gearopt.errors import GearoptError, UnknownKeyError
 from gearopt.hookspecs import hookimpl
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension

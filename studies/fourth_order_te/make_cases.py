@@ -32,7 +32,7 @@ from scipy.optimize import least_squares
 
 import gearopt
 from gearopt.analysis import AnalysisOptions
-from gearopt.design import parse_design
+from gearopt.design_files import parse_design
 from gearopt.plugins import get_machine_model
 from gearopt_plugins.face_milling import FaceMilling
 

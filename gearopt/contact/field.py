@@ -38,13 +38,13 @@ from __future__ import annotations
 import ctypes
 import math
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt import contact_kernels as _kernels
-from gearopt.design import Misalignment
+from gearopt.assembly import Placement
+from gearopt.contact import kernels as _kernels
 from gearopt.errors import GearoptError
 from gearopt.flank import FlankMap, hermite_cells
 
@@ -54,49 +54,12 @@ __all__ = [
     "ClearanceField",
     "JointField",
     "FieldSample",
-    "SEPARATIONS",
+    "PointClearance",
 ]
-
-SEPARATIONS = ("normal", "circumferential")
-
-_PINION_TO_HOUSING = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
 
 
 class ContactError(GearoptError):
     """The flanks cannot be brought into contact as asked (no contact inside the flanks)."""
-
-
-@dataclass(frozen=True, kw_only=True)
-class Placement:
-    """Where the pinion and the gear sit in the housing frame (module docstring).
-
-    Attributes
-    ----------
-    shaft_angle_deg
-        Nominal shaft angle Sigma.
-    misalignment
-        dE, dA1, dA2 and dGamma of the assembled pair.
-    """
-
-    shaft_angle_deg: float = 90.0
-    misalignment: Misalignment = field(default_factory=Misalignment)
-
-    @property
-    def gear_axes(self) -> NDArray:
-        """3 x 3 matrix whose columns are x_g, y_g, z_g in S_f."""
-        sigma = math.radians(self.shaft_angle_deg + self.misalignment.shaft_angle_deg)
-        c, s = math.cos(sigma), math.sin(sigma)
-        return np.array([[s, 0.0, c], [0.0, 1.0, 0.0], [-c, 0.0, s]])
-
-    @property
-    def pinion_to_gear(self) -> tuple[NDArray, NDArray]:
-        """``(B, c)`` with q = B p + c: a point p of the (unturned) pinion frame in the gear
-        frame."""
-        m = self.misalignment
-        axes = self.gear_axes
-        pinion_origin = np.array([m.pinion_axial_mm, m.offset_mm, 0.0])
-        gear_origin = m.gear_axial_mm * axes[:, 2]
-        return axes.T @ _PINION_TO_HOUSING, axes.T @ (pinion_origin - gear_origin)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -128,6 +91,35 @@ class FieldSample:
     contact_face_mm: NDArray
     contact_profile_mm: NDArray
     edge: NDArray
+
+
+@dataclass(frozen=True, kw_only=True)
+class PointClearance:
+    """The clearance field at given pinion points (:meth:`ClearanceField.clearance_of_points`).
+
+    Attributes
+    ----------
+    clearance_rad
+        The angular clearance delta: how far the gear must turn back (rad) before its flank
+        reaches the point.
+    normal_factor_mm, radius_mm
+        |n . (z_g x q)| (zero without normals) and R2: mm of normal and of circumferential
+        separation per rad of gear rotation.
+    valid
+        Whether the point faces the gear flank (its image lies on the gear's generated cells).
+    """
+
+    clearance_rad: NDArray
+    normal_factor_mm: NDArray | None
+    radius_mm: NDArray
+    valid: NDArray
+
+    def separation_mm(self, minimum_rad, kind: str = "normal") -> NDArray:
+        """The separation above a contact whose clearance is ``minimum_rad``: ``"normal"``
+        (along the pinion's normal) or ``"circumferential"`` (at equal radius, seed 003
+        section 5)."""
+        factor = self.normal_factor_mm if kind == "normal" else self.radius_mm
+        return (self.clearance_rad - minimum_rad) * factor
 
 
 class ClearanceField:
@@ -210,24 +202,45 @@ class ClearanceField:
         return sample.clearance_rad[0], valid
 
     @property
+    def gear_offset_rad(self) -> float:
+        """The gear's polar-angle offset: the gear flank's polar angle at the contact is
+        Theta2 - ratio * phi + gear angle + this (the phase less the whole pitches that pick
+        the mating gear tooth)."""
+        return self.phase_rad - self._shift
+
+    @property
     def gear_sense(self) -> int:
         """Sense of the gear's polar angle while the pinion turns with ``sense``."""
         return -self.sense
 
-    def _gap(self, p, n, phi, gear_angle_rad=0.0):
-        """Angular clearance of pinion points ``p`` (``(..., 3)``; normals ``n``) at pinion
-        angles ``phi`` (broadcast): ``(delta, normal factor, R2, valid)``."""
-        p = np.asarray(p, float)
+    def clearance_of_points(
+        self, points_mm, normals=None, phi_rad=0.0, gear_angle_rad=0.0
+    ) -> PointClearance:
+        """The angular clearance of pinion points (member frame of the unturned pinion,
+        ``(..., 3)``; their unit ``normals`` for the normal separation) at pinion angles
+        ``phi_rad`` with the gear turned by ``gear_angle_rad`` from its ideal angle (all
+        broadcast). See :class:`PointClearance`."""
+        p = np.asarray(points_mm, float)
         comps = (p[..., 0], p[..., 1], p[..., 2])
-        normals = None if n is None else (n[..., 0], n[..., 1], n[..., 2])
-        side = np.zeros(np.broadcast(p[..., 0], phi).shape, np.intp)
-        return self._engine.gap(side, comps, normals, phi, gear_angle_rad)
+        n = None if normals is None else np.asarray(normals, float)
+        comps_n = None if n is None else (n[..., 0], n[..., 1], n[..., 2])
+        side = np.zeros(np.broadcast(p[..., 0], phi_rad).shape, np.intp)
+        delta, factor, radius, valid = self._engine.gap(
+            side, comps, comps_n, phi_rad, gear_angle_rad
+        )
+        return PointClearance(
+            clearance_rad=delta, normal_factor_mm=factor, radius_mm=radius, valid=valid
+        )
 
-    def _at(self, s, h, phi, gear_angle_rad):
-        """``(delta, valid)`` at pinion grid coordinates off the nodes (see ``_Engine.at``)."""
-        s, h = np.broadcast_arrays(np.asarray(s, float), np.asarray(h, float))
-        side = np.zeros(np.broadcast(s, phi).shape, np.intp)
-        return self._engine.at(side, np.stack([s, h]), phi, gear_angle_rad)
+    def clearance_at_grid(self, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0):
+        """``(clearance_rad, valid)`` at pinion grid coordinates ``(s, h)`` off the nodes, by
+        the flanks' local Hermite interpolants (broadcast with ``phi_rad``). The clearance is
+        the interpolants' smooth extension beyond the flanks (finite everywhere); ``valid`` is
+        False outside either flank and in the pinion's lowest generated cells, where the
+        envelope's fold spoils any interpolant."""
+        s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
+        side = np.zeros(np.broadcast(s, phi_rad).shape, np.intp)
+        return self._engine.at(side, np.stack([s, h]), phi_rad, gear_angle_rad)
 
     def interval_end(self, u_rad: float, start, toward_rad: float, *, tol_rad: float = 1e-6):
         """Where the pair leaves contact (seed 003 section 6: the tangency point -- the least
@@ -373,7 +386,7 @@ class _Rows:
         self.gear_offset, self.pinion_offset = gear_offset, pinion_offset
 
     def kernel_rows(self, n: int) -> tuple:
-        """The constants of n rows as :mod:`gearopt.contact_kernels` takes them: ``kx``, ``ky``
+        """The constants of n rows as :mod:`gearopt.contact.kernels` takes them: ``kx``, ``ky``
         ``(4, n)``, turn, sense, gear and pinion offsets ``(n,)``, each a writable contiguous
         array of one dtype (numba compiles one version per array type)."""
         return (
@@ -469,11 +482,11 @@ class _Engine:
         self.refine_nodes = np.stack([t["keep"] for t in tables])
         self.refine_cells = np.concatenate([t["cells"] for t in tables])
         self.pinion_cells = tables[0]["cells"].size
-        self.pinion_coef = np.concatenate([f.pinion._lookup[7] for f in fields], axis=1)
-        self.gear_cells = first.gear._lookup[8].size
-        self.gear_coef = np.concatenate([f.gear._lookup[7] for f in fields], axis=1)
-        self.gear_ok = np.concatenate([f.gear._lookup[8] for f in fields])
-        self.pinion_generated = np.concatenate([f.pinion._lookup[8] for f in fields])
+        self.pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
+        self.gear_cells = first.gear.cells.generated.size
+        self.gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
+        self.gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+        self.pinion_generated = np.concatenate([f.pinion.cells.generated for f in fields])
         self._linear_maps(fields)
         self._jit = self._kernel_tables() if _kernels.ENABLED else None
 
@@ -489,7 +502,15 @@ class _Engine:
         """
         first = fields[0]
         b, c = first.b, first.c
-        s0, ia, imax, h0, ib, jmax, n_cols = first.gear._lookup[:7]
+        gc = first.gear.cells
+        s0, ia, imax, h0, ib = (
+            gc.face0_mm,
+            gc.face_scale,
+            gc.last_row,
+            gc.profile0_mm,
+            gc.profile_scale,
+        )
+        jmax, n_cols = gc.last_column, gc.columns
         g = math.radians(first.gear.pitch_angle_deg)
         cg, sg = math.cos(g), math.sin(g)
         lin = np.array([b[0], b[1], ia * cg * b[2], -ib * sg * b[2]])
@@ -508,7 +529,15 @@ class _Engine:
         self.node_nz = lin[:2, 2, None, None] * self.normals[2]
         # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
         # z terms (z = L1 = s cos g1 - h sin g1)
-        p0, pia, pimax, ph0, pib, pjmax, p_cols = first.pinion._lookup[:7]
+        pc = first.pinion.cells
+        p0, pia, pimax, ph0, pib = (
+            pc.face0_mm,
+            pc.face_scale,
+            pc.last_row,
+            pc.profile0_mm,
+            pc.profile_scale,
+        )
+        pjmax, p_cols = pc.last_column, pc.columns
         cg1, sg1 = self.cos_sin_pitch
         self._pinion_unit = (np.array([[p0], [ph0]]), np.array([[pia], [pib]]))
         self._pinion_table = (np.array([pimax, pjmax]), p_cols)
@@ -533,7 +562,7 @@ class _Engine:
             )
 
     def _kernel_tables(self):
-        """The tables of :mod:`gearopt.contact_kernels` (gear, pinion) and the node counts."""
+        """The tables of :mod:`gearopt.contact.kernels` (gear, pinion) and the node counts."""
         (imax, jmax), n_cols = self._gear_table
         taper = self._gear_taper or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         gear = (
@@ -543,7 +572,7 @@ class _Engine:
             int(n_cols),
             self._gear_taper is not None,
             *(float(a) for a in taper),
-            np.ascontiguousarray(self.gear_coef.T),
+            self.gear_coef,
             np.ascontiguousarray(self.gear_ok),
         )
         (p0, ph0), (pia, pib) = (a[:, 0] for a in self._pinion_unit)
@@ -561,7 +590,7 @@ class _Engine:
             *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
             np.ascontiguousarray(self._pinion_map),
             np.ascontiguousarray(self._pinion_const[:, 0]),
-            np.ascontiguousarray(self.pinion_coef.T),
+            self.pinion_coef,
             np.ascontiguousarray(self.refine_cells),
         )
         counts = self.node_real.sum(axis=1).astype(np.intp)
@@ -700,7 +729,7 @@ class _Engine:
         inside = np.greater_equal(uv, 0.0, out=_work("inside", (2,) + shape, bool))
         inside &= np.less_equal(uv, 1.0, out=_work("inside2", (2,) + shape, bool))
         # (mode="clip": the cells are valid; the default "raise" buffers ``out``)
-        c = np.take(self.gear_coef, cell, axis=1, out=_work("coef", (16,) + shape), mode="clip")
+        c = np.take(self.gear_coef, cell, axis=0, out=_work("coef", shape + (16,)), mode="clip")
         gap = hermite_cells(c, None, uv[0], uv[1])
         valid = np.take(self.gear_ok, cell, out=_work("valid", shape, bool), mode="clip")
         valid &= inside[0]
@@ -779,7 +808,7 @@ class _Engine:
         return delta, valid
 
     def _at_compiled(self, rows: _Rows, sh):
-        """:meth:`_at` by :func:`gearopt.contact_kernels.clearance_at`: rows ``(n, 1)`` and
+        """:meth:`_at` by :func:`gearopt.contact.kernels.clearance_at`: rows ``(n, 1)`` and
         points ``(2, n, m)`` as the refinement has them, anything else one row per point."""
         shape = sh.shape[1:]
         if len(shape) == 2 and rows.turn.shape == (shape[0], 1):
@@ -844,7 +873,7 @@ class _Engine:
         return field_, fac, rad
 
     def _node_fields_compiled(self, side, phi, angle):
-        """:meth:`_node_fields` by :func:`gearopt.contact_kernels.node_fields` (the nodes'
+        """:meth:`_node_fields` by :func:`gearopt.contact.kernels.node_fields` (the nodes'
         polar angles in between by numpy's vectorised arctan2)."""
         n = len(phi)
         rows = self._rows(side, phi, angle)
@@ -919,7 +948,7 @@ class _Engine:
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the
         contact point near ``(face_mm, profile_mm)``), stepping by ``step_rad`` toward the
-        outside: :func:`gearopt.contact_kernels.interval_end` (point by point in Python
+        outside: :func:`gearopt.contact.kernels.interval_end` (point by point in Python
         without the compiled kernels). ``(phi_inside, phi_outside, s, h)`` or None."""
         gear, pinion, _ = self._jit or self._kernel_tables()
         maker = (
@@ -1106,7 +1135,7 @@ class _Engine:
         return best, sh[0], sh[1], edge
 
     def _refine_compiled(self, side, phi, angle, s, h, f0, iterations, group):
-        """:meth:`refine` by :func:`gearopt.contact_kernels.refine`."""
+        """:meth:`refine` by :func:`gearopt.contact.kernels.refine`."""
         n = len(s)
         rows = self._rows(side, phi, angle)
         s, h = np.array(s, float), np.array(h, float)
