@@ -1,0 +1,650 @@
+"""The contact engine's computations on stacked tables of one or more clearance fields.
+
+:class:`ContactEngine` holds, per field (side), the pinion's generated nodes, the local
+interpolants' cell tables of both flanks (:attr:`gearopt.flank.FlankMap.cells`) and the affine
+maps of the placement folded into a few tables, and evaluates the angular clearance
+(:mod:`gearopt.contact.field`) on them: at every node for a batch of rows (side, pinion angle,
+gear angle), at points off the nodes by the interpolants, the refined minimum (constrained Newton
+steps), and the contact interval's ends. The hot loops are the compiled kernels of
+:mod:`gearopt.contact.kernels`; this module prepares their tables and batches.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import kernels as _kernels
+from gearopt.contact.samples import FieldSample
+from gearopt.errors import GearoptError
+from gearopt.flank import hermite_cells
+
+__all__ = ["ContactEngine", "EngineRows", "node_tables"]
+
+_HEAP = {"kept": False}
+
+
+def _keep_heap() -> None:
+    """Ask glibc (once per process) to keep freed memory for reuse: the analyses allocate and
+    free arrays of a few hundred kB at every call, which with glibc's default thresholds
+    (128 kB until its own adjustment, which only a freed larger block triggers) are mapped and
+    returned to the system each time and faulted in again (some 500 page faults a TCA).
+    Elsewhere (no ``mallopt``) nothing is done."""
+    if _HEAP["kept"]:
+        return
+    _HEAP["kept"] = True
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return
+    mallopt(-3, 16 << 20)  # M_MMAP_THRESHOLD: blocks below 16 MiB come from the heap
+    mallopt(-1, 64 << 20)  # M_TRIM_THRESHOLD: the heap's free top kept up to 64 MiB
+
+
+def node_tables(pinion) -> dict:
+    """The node tables of a field's pinion flank (a field keeps them: it is not changed once
+    made): its generated nodes (flat indices), their points and normals (components apart),
+    the refinable nodes (two cells above the lowest generated ones) and cells, the grid's cell
+    size."""
+    nodes = np.flatnonzero(pinion.mask.ravel())
+    pts = pinion.points_mm.reshape(-1, 3)[nodes]
+    nrm = pinion.normals.reshape(-1, 3)[nodes]
+    keep = pinion.mask.copy()
+    for _ in range(2):
+        below = np.zeros_like(keep)
+        below[:, 1:] = keep[:, :-1]
+        keep &= below
+    slot = np.full(pinion.mask.size, -1, np.intp)
+    slot[nodes] = np.arange(nodes.size)
+    return {
+        "nodes": nodes,
+        "slot": slot,
+        "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
+        "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
+        "keep": keep.ravel(),
+        "cells": (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel(),
+        "cell_mm": (
+            float(np.mean(np.diff(pinion.face_mm))),
+            float(np.mean(np.diff(pinion.profile_mm))),
+        ),
+    }
+
+
+class EngineRows:
+    """Per-row constants of the clearance (:meth:`ContactEngine._rows`): the coefficients of x and y
+    in the four linear outputs (``kx``, ``ky``, each ``(4, ...)``), the gear's ideal turn, the
+    gear's sense and the sides' offsets into the gear and pinion cell tables."""
+
+    __slots__ = ("kx", "ky", "turn", "sense", "gear_offset", "pinion_offset")
+
+    def __init__(self, kx, ky, turn, sense, gear_offset, pinion_offset) -> None:
+        self.kx, self.ky, self.turn, self.sense = kx, ky, turn, sense
+        self.gear_offset, self.pinion_offset = gear_offset, pinion_offset
+
+    def kernel_rows(self, n: int) -> tuple:
+        """The constants of n rows as :mod:`gearopt.contact.kernels` takes them: ``kx``, ``ky``
+        ``(4, n)``, turn, sense, gear and pinion offsets ``(n,)``, each a writable contiguous
+        array of one dtype (numba compiles one version per array type)."""
+        return (
+            np.array(self.kx, float).reshape(4, n),
+            np.array(self.ky, float).reshape(4, n),
+            np.array(self.turn, float).reshape(n),
+            np.array(self.sense, float).reshape(n),
+            np.array(self.gear_offset, np.intp).reshape(n),
+            np.array(self.pinion_offset, np.intp).reshape(n),
+        )
+
+    def subset(self, rows) -> EngineRows:
+        """The rows ``rows`` (an index or mask of the first axis)."""
+        return EngineRows(
+            self.kx[:, rows],
+            self.ky[:, rows],
+            self.turn[rows],
+            self.sense[rows],
+            self.gear_offset[rows],
+            self.pinion_offset[rows],
+        )
+
+
+class ContactEngine:
+    """The clearance computations on stacked tables of K fields (sides).
+
+    Per side: the sense, the gear's polar-angle offset (phase minus whole pitches), the pinion
+    nodes, the local interpolants' cell tables (pinion and gear, concatenated with an offset of
+    one table per side) and the refinable cells. Shared: the placement, the ratio and the grids
+    (the fields must share them).
+    """
+
+    def __init__(self, fields) -> None:
+        _keep_heap()
+        first = fields[0]
+        for f in fields[1:]:
+            same = (
+                np.array_equal(f.pinion.face_mm, first.pinion.face_mm)
+                and np.array_equal(f.pinion.profile_mm, first.pinion.profile_mm)
+                and np.array_equal(f.gear.face_mm, first.gear.face_mm)
+                and np.array_equal(f.gear.profile_mm, first.gear.profile_mm)
+                and np.all(np.abs(f.b - first.b) <= 1e-8 + 1e-5 * np.abs(first.b))
+                and np.all(np.abs(f.c - first.c) <= 1e-8 + 1e-5 * np.abs(first.c))
+                and f.ratio == first.ratio
+            )
+            if not same:
+                raise GearoptError("fields", rule="joined fields must share grids and placement")
+        self.b, self.c, self.ratio = first.b, first.c, first.ratio
+        self.pinion_grid, self.gear_grid = first.pinion, first.gear
+        self.shape = first.pinion.shape
+        self.sense = np.array([f.sense for f in fields], float)
+        self.gear_sense = -self.sense
+        self.turn0 = np.array([f.gear_offset_rad for f in fields])
+        g = math.radians(first.pinion.pitch_angle_deg)
+        self.cos_sin_pitch = (math.cos(g), math.sin(g))
+        tables = [f.node_tables for f in fields]
+        self.ds, self.dh = tables[0]["cell_mm"]
+        # mm of normal separation per rad of gear rotation, typical of each side (a fixed
+        # tolerance in rad for the refinement's edge test)
+        scale = np.array([f.node_factor_mm or 50.0 for f in fields])
+        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
+        self.tol_um = np.array([f.edge_tolerance_um for f in fields])
+        # node tables (all grid nodes; off-mask nodes are +inf in the fields)
+        # the generated pinion nodes of each side, padded to one count with at least one more
+        # (padding: the first generated node again, its result dropped); components stored
+        # apart, contiguous
+        sizes = [t["nodes"].size for t in tables]
+        count = max(sizes) + 1
+        pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
+        self.node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
+        self.node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
+        # each grid node's column in its side's node tables (off-mask: the padding after them)
+        self.node_slot = np.stack(
+            [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
+        )
+        self.points = tuple(
+            np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)])
+            for a in range(3)
+        )
+        self.normals = tuple(
+            np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
+            for a in range(3)
+        )
+        # the interpolant is poor in the lowest generated cells (the envelope's fold):
+        # refinements stay two cells above them
+        self.refine_nodes = np.stack([t["keep"] for t in tables])
+        self.refine_cells = np.concatenate([t["cells"] for t in tables])
+        self.pinion_cells = tables[0]["cells"].size
+        self.pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
+        self.gear_cells = first.gear.cells.generated.size
+        self.gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
+        self.gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+        self.pinion_generated = np.concatenate([f.pinion.cells.generated for f in fields])
+        self._linear_maps(fields)
+        self.kernel_tables = self._kernel_tables()
+
+    def _linear_maps(self, fields) -> None:
+        """The affine maps of the evaluations, folded into a few tables.
+
+        With the pinion turned by phi, ``q = B Rz(phi) p + c``; the gear's unit grid coordinates
+        are ``x2 = (s2 - s0) / ds2``, ``y2 = (h2 - h0) / dh2`` with ``s2 = qz cos g + R2 sin g``,
+        ``h2 = -qz sin g + R2 cos g``. Four outputs are linear in p: qx, qy and the qz parts of
+        x2, y2 (``lin @ p + const``); x2, y2 add ``rho_coef * R2``. Turned by phi, output o is
+        ``kx_o x + ky_o y + (lin_o2 z + const_o)`` with ``kx_o = lin_o0 cos + lin_o1 sin`` and
+        ``ky_o = lin_o1 cos - lin_o0 sin``: ``rotation @ (cos, sin)`` gives (kx, ky).
+        """
+        first = fields[0]
+        b, c = first.b, first.c
+        gc = first.gear.cells
+        s0, ia, imax, h0, ib = (
+            gc.face0_mm,
+            gc.face_scale,
+            gc.last_row,
+            gc.profile0_mm,
+            gc.profile_scale,
+        )
+        jmax, n_cols = gc.last_column, gc.columns
+        g = math.radians(first.gear.pitch_angle_deg)
+        cg, sg = math.cos(g), math.sin(g)
+        lin = np.array([b[0], b[1], ia * cg * b[2], -ib * sg * b[2]])
+        const = np.array([c[0], c[1], ia * (cg * c[2] - s0), -ib * (sg * c[2] + h0)])
+        self.rotation = np.concatenate(
+            [np.stack([lin[:, 0], lin[:, 1]], 1), np.stack([lin[:, 1], -lin[:, 0]], 1)]
+        )
+        self.rho_coef = np.array([ia * sg, ib * cg])
+        self.gear_table = (np.array([imax, jmax]), n_cols)
+        self.lin_z, self.const = lin[:, 2], const
+        # the node tables: x, y and the z terms (with the constants) of every side's nodes;
+        # the normals' x, y and z terms of qx, qy (no constants)
+        self.node_xy = np.stack([self.points[0], self.points[1]])
+        self.node_z = lin[:, 2, None, None] * self.points[2] + const[:, None, None]
+        self.node_nxy = np.stack([self.normals[0], self.normals[1]])
+        self.node_nz = lin[:2, 2, None, None] * self.normals[2]
+        # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
+        # z terms (z = L1 = s cos g1 - h sin g1)
+        pc = first.pinion.cells
+        p0, pia, pimax, ph0, pib = (
+            pc.face0_mm,
+            pc.face_scale,
+            pc.last_row,
+            pc.profile0_mm,
+            pc.profile_scale,
+        )
+        pjmax, p_cols = pc.last_column, pc.columns
+        cg1, sg1 = self.cos_sin_pitch
+        self.pinion_unit = (np.array([[p0], [ph0]]), np.array([[pia], [pib]]))
+        self.pinion_table = (np.array([pimax, pjmax]), p_cols)
+        self.pinion_map = np.concatenate(
+            [np.array([[sg1, cg1]]), np.stack([lin[:, 2] * cg1, -lin[:, 2] * sg1], 1)]
+        )
+        self.pinion_const = np.concatenate([[0.0], const])[:, None]
+        # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
+        self.pinion_taper = first.pinion.taper
+        gear_taper = first.gear.taper
+        self.gear_taper = None
+        if gear_taper is not None:
+            # unit coordinates (x, y) of (s, h) -> y of (s, t): with d = s - pivot,
+            # y' = (y + ib (h0 - d alpha)) / (1 + d beta) - ib h0
+            self.gear_taper = (
+                s0 - gear_taper.pivot_mm,
+                1.0 / ia,
+                ib,
+                h0,
+                gear_taper.alpha,
+                gear_taper.beta,
+            )
+
+    def _kernel_tables(self):
+        """The tables of :mod:`gearopt.contact.kernels` (gear, pinion) and the node counts."""
+        (imax, jmax), n_cols = self.gear_table
+        taper = self.gear_taper or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        gear = (
+            *(float(a) for a in self.rho_coef),
+            float(imax),
+            float(jmax),
+            int(n_cols),
+            self.gear_taper is not None,
+            *(float(a) for a in taper),
+            self.gear_coef,
+            np.ascontiguousarray(self.gear_ok),
+        )
+        (p0, ph0), (pia, pib) = (a[:, 0] for a in self.pinion_unit)
+        (pimax, pjmax), p_cols = self.pinion_table
+        ptaper = self.pinion_taper
+        pinion = (
+            float(p0),
+            float(ph0),
+            float(pia),
+            float(pib),
+            float(pimax),
+            float(pjmax),
+            int(p_cols),
+            ptaper is not None,
+            *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
+            np.ascontiguousarray(self.pinion_map),
+            np.ascontiguousarray(self.pinion_const[:, 0]),
+            self.pinion_coef,
+            np.ascontiguousarray(self.refine_cells),
+        )
+        counts = self.node_real.sum(axis=1).astype(np.intp)
+        return gear, pinion, counts
+
+    def untaper(self, xy) -> None:
+        """Gear unit grid coordinates of (s, h) made those of (s, t), in place (tapered
+        depth; nothing for uniform depth)."""
+        if self.gear_taper is None:
+            return
+        d0, inv_ia, ib, h0, alpha, beta = self.gear_taper
+        d = xy[0] * inv_ia + d0
+        xy[1] = (xy[1] + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
+
+    # --- evaluation ---------------------------------------------------------------------
+
+    @staticmethod
+    def cells_at(coef, xy, table, offset):
+        """The local interpolant at unit grid coordinates ``xy`` (``(2, ...)``; cell tables
+        ``coef``, ``offset`` cells in): ``(Theta, cell index, within the grid)``. Beyond the
+        grid the edge cell's polynomial goes on (unit coordinates outside [0, 1])."""
+        limit, n_cols = table
+        uv = np.fmax(xy, 0.0)  # (fmax: a NaN coordinate takes cell 0, never a bad index)
+        np.fmin(uv, limit.reshape((2,) + (1,) * (xy.ndim - 1)), out=uv)
+        np.trunc(uv, out=uv)  # the cell's corner, in floats (no integer casts but one)
+        corner = uv[0] * n_cols
+        corner += uv[1]
+        cell = corner.astype(np.intp)
+        cell += offset
+        np.subtract(xy, uv, out=uv)
+        inside = uv >= 0.0
+        inside &= uv <= 1.0
+        return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
+
+    def rows_of(self, side, phi, angle) -> EngineRows:
+        """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one
+        shape; the rows' points broadcast against it."""
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), angle)
+        flat = phi.reshape(-1)
+        cs = np.empty((2, flat.size))
+        np.cos(flat, out=cs[0])
+        np.sin(flat, out=cs[1])
+        k = (self.rotation @ cs).reshape((2, 4) + phi.shape)
+        turn = (angle + self.turn0[side]) - self.ratio * phi
+        return EngineRows(
+            k[0],
+            k[1],
+            turn,
+            self.gear_sense[side],
+            side * self.gear_cells,
+            side * self.pinion_cells,
+        )
+
+    def clearance(self, rows: EngineRows, x, y, z, normals=None):
+        """Angular clearance of pinion points with coordinates ``x``, ``y`` and z terms ``z``
+        (``(4, ...)``, :meth:`_linear_maps`) on ``rows``:
+        ``(delta, valid, R2, normal factor or None)``."""
+        out = rows.kx * x
+        out += rows.ky * y
+        out += z
+        radius = out[0] * out[0]
+        radius += np.square(out[1])
+        np.sqrt(radius, out=radius)
+        theta = np.arctan2(out[1], out[0])
+        xy = out[2:]
+        xy += self.rho_coef.reshape((2,) + (1,) * radius.ndim) * radius
+        self.untaper(xy)
+        flank, cell, within = self.cells_at(self.gear_coef, xy, self.gear_table, rows.gear_offset)
+        valid = self.gear_ok[cell]
+        valid &= within
+        gap = flank - theta
+        gap += rows.turn
+        turns = np.rint(gap * (0.5 / math.pi))
+        turns *= 2.0 * math.pi
+        gap -= turns
+        gap *= rows.sense
+        if normals is None:
+            return gap, valid, radius, None
+        nxy, nz = normals
+        m = rows.kx[:2] * nxy[0]
+        m += rows.ky[:2] * nxy[1]
+        m += nz
+        factor = m[1] * out[0]
+        factor -= m[0] * out[1]
+        return gap, valid, radius, np.abs(factor, out=factor)
+
+    def gap(self, side, p, n, phi, gear_angle_rad=0.0):
+        """Angular clearance of pinion points ``p = (x, y, z)`` (normals ``n``) at pinion angles
+        ``phi`` on fields ``side`` (all broadcast): ``(delta, normal factor, R2, valid)``."""
+        x, y, z = (np.asarray(a, float) for a in p)
+        shape = np.broadcast_shapes(x.shape, y.shape, z.shape, np.shape(phi), np.shape(side))
+        if not shape:  # a single point: as a one-element array
+            one = self.gap(
+                np.reshape(side, 1),
+                [np.reshape(a, 1) for a in p],
+                n and [np.reshape(a, 1) for a in n],
+                np.reshape(phi, 1),
+                np.reshape(gear_angle_rad, 1),
+            )
+            return tuple(None if a is None else a[0] for a in one)
+        x, y, z = (np.broadcast_to(a, shape) for a in (x, y, z))
+        rows = self.rows_of(*(np.broadcast_to(a, shape) for a in (side, phi, gear_angle_rad)))
+        zt = self.lin_z.reshape((4,) + (1,) * len(shape)) * z
+        zt += self.const.reshape((4,) + (1,) * len(shape))
+        normals = None
+        if n is not None:
+            nx, ny, nz = (np.broadcast_to(np.asarray(a, float), shape) for a in n)
+            normals = (np.stack([nx, ny]), self.lin_z[:2].reshape((2,) + (1,) * len(shape)) * nz)
+        delta, valid, radius, factor = self.clearance(rows, x, y, zt, normals)
+        return delta, factor, radius, valid
+
+    def at(self, side, sh, phi, gear_angle_rad):
+        """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
+        the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
+        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
+        the pinion's lowest generated cells, where the envelope's fold spoils any
+        interpolant."""
+        shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
+        if not shape:  # a single point: as a one-element array
+            one = self.at(side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad)
+            return one[0][0], one[1][0]
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), gear_angle_rad)
+        lead = (1,) * (len(shape) - phi.ndim)
+        rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
+        return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape))
+
+    def clearance_on_rows(self, rows: EngineRows, sh):
+        """:meth:`at` on known rows by :func:`gearopt.contact.kernels.clearance_at`: rows
+        ``(n, 1)`` and points ``(2, n, m)`` as the refinement has them, anything else one row
+        per point."""
+        shape = sh.shape[1:]
+        if len(shape) == 2 and rows.turn.shape == (shape[0], 1):
+            n, m = shape
+            constants = rows.kernel_rows(n)
+        else:
+            n, m = math.prod(shape), 1
+            constants = EngineRows(
+                *(np.broadcast_to(k, (4,) + shape) for k in (rows.kx, rows.ky)),
+                *(
+                    np.broadcast_to(a, shape)
+                    for a in (rows.turn, rows.sense, rows.gear_offset, rows.pinion_offset)
+                ),
+            ).kernel_rows(n)
+        points = np.array(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
+        delta, valid = np.empty((n, m)), np.empty((n, m), bool)
+        gear, pinion, _ = self.kernel_tables
+        _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
+        return delta.reshape(shape), valid.reshape(shape)
+
+    def node_fields(self, side, phi, angle):
+        """The clearance, normal factor and R2 at every grid node for rows (side, phi, gear
+        angle), each ``(n, nodes)``: +inf, 0, 0 off the pinion's generated nodes
+        (:func:`gearopt.contact.kernels.node_fields`; the nodes' polar angles in between by
+        numpy's vectorised arctan2)."""
+        n = len(phi)
+        rows = self.rows_of(side, phi, angle)
+        out = np.empty((3, n, self.shape[0] * self.shape[1]))
+        theta = np.empty((2, n, self.node_index.shape[1]))
+        count = self.kernel_tables[2]
+        constants, side = rows.kernel_rows(n), np.array(side, np.intp)
+        _kernels.node_xy(constants, side, count, self.node_xy, self.node_z, theta)
+        theta = np.arctan2(theta[1], theta[0], out=theta[0])
+        _kernels.node_fields(
+            constants,
+            side,
+            count,
+            self.node_index,
+            self.node_xy,
+            self.node_z,
+            self.node_nxy,
+            self.node_nz,
+            theta,
+            self.kernel_tables[0],
+            out,
+        )
+        return out[0], out[1], out[2]
+
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
+        """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
+        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
+        also :meth:`near` of those rows in the same refinement: ``(sample, near)``."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        n = len(phi)
+        field_, fac, rad = self.node_fields(side, phi, angle)
+        shape = (n,) + self.shape
+        field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
+        i, j = _argmin_nodes(field_)
+        rows = np.arange(len(phi))
+        f0 = field_[rows, i, j]
+        s = self.pinion_grid.face_mm[i]
+        h = self.pinion_grid.profile_mm[j]
+        edge = np.zeros(len(phi), bool)
+        rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
+        near_out = None
+        if near is not None and not rows.size:
+            near_out = self.near(*near)
+        elif rows.size or near is not None:
+            f0, s, h = f0.copy(), s.copy(), h.copy()
+            f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
+                side[rows],
+                field_[rows],
+                fac[rows],
+                phi[rows],
+                angle[rows],
+                f0[rows],
+                s[rows],
+                h[rows],
+                near=near,
+            )
+        out = FieldSample(
+            phi_rad=phi,
+            clearance_rad=field_,
+            normal_factor_mm=fac,
+            radius_mm=rad,
+            minimum_rad=f0,
+            contact_face_mm=s,
+            contact_profile_mm=h,
+            edge=edge,
+        )
+        return out if near is None else (out, near_out)
+
+    def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
+        """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the
+        contact point near ``(face_mm, profile_mm)``), stepping by ``step_rad`` toward the
+        outside: :func:`gearopt.contact.kernels.interval_end` (point by point in Python
+        without the compiled kernels). ``(phi_inside, phi_outside, s, h)`` or None."""
+        gear, pinion, _ = self.kernel_tables
+        maker = (
+            np.ascontiguousarray(self.rotation),
+            float(self.turn0[side]),
+            float(self.ratio),
+            float(self.gear_sense[side]),
+            int(side * self.gear_cells),
+            int(side * self.pinion_cells),
+        )
+        found, a, b, s, h = _kernels.interval_end(
+            maker,
+            float(phi_rad),
+            float(face_mm),
+            float(profile_mm),
+            float(step_rad),
+            int(steps),
+            float(tol),
+            np.array([self.ds, self.dh]),
+            pinion,
+            gear,
+            self.pinion_generated,
+        )
+        return (float(a), float(b), float(s), float(h)) if found else None
+
+    def near(self, side, phi_rad, face_mm, profile_mm, gear_angle_rad=0.0):
+        """Refined minima started from known nearby contact points (no node field)."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
+        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+        s = np.broadcast_to(np.asarray(face_mm, float), phi.shape).copy()
+        h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
+        return self.refine(side, phi, angle, s, h, None, iterations=3)
+
+    def lowest_nodes(self, flat, side, pick, values) -> None:
+        """The ``pick.shape[1]`` lowest refinable nodes of each row of ``flat`` (rows on
+        fields ``side``): their flat indices into ``pick`` and values into ``values``."""
+        _kernels.lowest_nodes(flat, self.refine_nodes, side, pick, values)
+
+    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None):
+        """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
+        Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
+        region (the pinion's lowest cells) lower than that by more than the edge tolerance
+        stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
+        refined alongside (as :meth:`near`); their results come last (None without)."""
+        n = len(phi)
+        flat = field_.reshape(n, -1)
+        pick = np.empty((n, min(candidates, flat.shape[1])), np.intp)
+        values = np.empty(pick.shape)
+        self.lowest_nodes(flat, np.array(side, np.intp), pick, values)
+        ci, cj = np.unravel_index(pick, self.shape)
+        ok = np.isfinite(values)
+        best = np.full(n, np.inf)
+        s_best, h_best = s.copy(), h.copy()
+        e_best = np.zeros(n, bool)
+        near_out = None
+        if ok.any() or near is not None:
+            rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
+            starts = (
+                side[rows],
+                phi[rows],
+                angle[rows],
+                self.pinion_grid.face_mm[ci[ok]],
+                self.pinion_grid.profile_mm[cj[ok]],
+                values[ok],
+            )
+            if near is None:
+                v, s_r, h_r, e_r = self.refine(*starts)
+            else:  # the near rows: a second group, started from their points
+                m = len(near[0])
+                extra = (near[0], near[1], np.zeros(m), near[2], near[3], np.full(m, np.nan))
+                group = np.repeat([0, 1], [rows.size, m])
+                joined = [np.concatenate(pair) for pair in zip(starts, extra, strict=True)]
+                out = self.refine(*joined, iterations=(4, 3), group=group)
+                near_out = tuple(a[rows.size :] for a in out)
+                v, s_r, h_r, e_r = (a[: rows.size] for a in out)
+            order = np.lexsort((v, rows))
+            rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
+            first = np.r_[True, rows[1:] != rows[:-1]]
+            best[rows[first]] = v[first]
+            s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
+            e_best[rows[first]] = e_r[first]
+        rows = np.arange(n)
+        i, j = _argmin_nodes(field_)
+        tol = self.tol_um[side] * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
+        with np.errstate(invalid="ignore"):
+            low = np.isfinite(f0) & ~(best - f0 <= tol)
+        value = np.where(low, f0, best)
+        s_best, h_best = np.where(low, s, s_best), np.where(low, h, h_best)
+        return value, s_best, h_best, low | e_best, near_out
+
+    def refine(self, side, phi, angle, s, h, f0, iterations=4, group=None):
+        """Constrained Newton steps on the clearance between the node grid's lines.
+
+        Gradient and Hessian by central differences (a quarter cell) of the interpolated
+        clearance, extended smoothly beyond the flanks; the step is Newton's on the positive
+        curvatures and a descent of up to two cells along the others (the valley of line
+        contact), at most two cells in all. A step leaving the flanks is cut back (halvings,
+        evaluated at once with the next stencil) to the last valid point: repeated, this slides
+        the point along the boundary to the least clearance on it, second order for straight
+        edges.
+
+        ``f0``: the start values (None or NaN: the interpolated value there). ``iterations``:
+        the most steps, or one count per group of rows (``group``: each row's group); each
+        group stops on its own, its rows then left as they are, so a group's results are those
+        of a refinement of its rows alone.
+
+        Returns ``(value, s, h, edge)``: edge where the Newton part of the last step would take
+        the point off the flanks to a clearance lower by more than the edge tolerance.
+        """
+        n = len(s)
+        rows = self.rows_of(side, phi, angle)
+        s, h = np.array(s, float), np.array(h, float)
+        best = np.full(n, np.nan) if f0 is None else np.array(f0, float)
+        caps = np.atleast_1d(np.asarray(iterations, np.intp))
+        group = np.zeros(n, np.intp) if group is None else np.asarray(group, np.intp)
+        edge = np.zeros(n, bool)
+        gear, pinion, _ = self.kernel_tables
+        _kernels.refine(
+            rows.kernel_rows(n),
+            s,
+            h,
+            best,
+            caps,
+            group,
+            self.tol_rad[side],
+            np.array([self.ds, self.dh]),
+            pinion,
+            gear,
+            edge,
+        )
+        return best, s, h, edge
+
+
+def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
+    n = field_.shape[0]
+    flat = field_.reshape(n, -1).argmin(axis=1)
+    return np.unravel_index(flat, field_.shape[1:])
