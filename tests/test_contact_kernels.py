@@ -1,5 +1,6 @@
 """The contact engine's compiled kernels (``gearopt.contact.kernels``, numba)
-against its numpy paths: every output of the TCA of both sides, the backlash and the ease-off,
+against their numpy reference (``tests/numpy_engine.py``, the engine's numpy paths before the
+kernels): every output of the TCA of both sides, the backlash and the ease-off,
 on designs that visit each branch of the kernels (crowned contact inside the flanks, edge
 contact under misalignment, tapered depth on both members, a path that runs into the pinion's
 fold-trimmed boundary).
@@ -31,6 +32,7 @@ from gearopt.design import Misalignment
 from gearopt.flank import FlankGrid
 from gearopt.mesh import mesh_pair
 
+from . import numpy_engine
 from .conftest import STUDIES
 
 pytestmark = pytest.mark.skipif(
@@ -68,7 +70,7 @@ CASES = {
 
 def _analyses(design, options):
     """TCA of both sides, backlash and ease-off on a freshly placed pair (its engines built
-    now, so they take the kernels or not as :data:`contact_kernels.ENABLED` says)."""
+    now)."""
     flanks = generated_flanks(design, options.grid)
     pair = mesh_pair(design, flanks, misalignment=options.misalignment)
     return {
@@ -99,7 +101,7 @@ def test_kernels_give_the_numpy_paths_results(case, monkeypatch):
     design = gearopt.with_overrides(gearopt.load_design(STUDIES / name), overrides)
     options = AnalysisOptions(**conditions)
     compiled = _analyses(design, options)
-    monkeypatch.setattr(contact_kernels, "ENABLED", False)
+    numpy_engine.install(monkeypatch)
     plain = _analyses(design, options)
     checked = 0
     for key, result in compiled.items():
