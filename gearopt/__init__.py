@@ -29,6 +29,7 @@ from gearopt.plugins import (
     machine_models,
     objectives,
 )
+from gearopt.studyfile import load_study_spec
 
 __version__ = "0.1.0"
 
@@ -90,13 +91,10 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    # the study API imports Optuna: only when it is asked for
+    # the study layer imports Optuna and SQLAlchemy (about 2 s): loaded when it is asked for,
+    # so that the CLI and every worker process start without it
     if name == "run_study":
         from gearopt.study import run_study
 
         return run_study
-    if name == "load_study_spec":
-        from gearopt.studyfile import load_study_spec
-
-        return load_study_spec
     raise AttributeError(f"module 'gearopt' has no attribute {name!r}")

@@ -17,6 +17,19 @@ import sys
 import time
 from collections.abc import Callable, Iterable
 from importlib import import_module
+from pathlib import Path
+
+import numpy as np
+
+from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_backlash
+from gearopt.contact import kernels as contact_kernels
+from gearopt.design_files import loads_design, with_overrides
+from gearopt.errors import GearoptError, NotAvailableError
+from gearopt.flank import FlankGrid
+from gearopt.newton_tca import newton_tca
+from gearopt.plugins import get_machine_model
+from gearopt.studyfile import load_study_spec
+from gearopt.trial import evaluate_trial
 
 __all__ = ["BENCHMARKS", "run_benchmarks", "time_call_ms"]
 
@@ -55,8 +68,6 @@ def time_call_ms(func: Callable[[], object], *, number: int = 1) -> float:
 
 def bench_basic_settings() -> tuple[float, dict]:
     """Cyclo-palloid basic settings of the seed 001 Table 3 design (both members)."""
-    from gearopt.design_files import loads_design
-    from gearopt.plugins import get_machine_model
 
     text = _study_text("seed001_table3.toml")
     design = loads_design(text)
@@ -70,9 +81,6 @@ def bench_basic_settings() -> tuple[float, dict]:
 def bench_flank_generation() -> tuple[float, dict]:
     """Both flanks of the seed 001 Table 3 pinion (the member whose envelope folds) on the
     default FlankMap grid, settings included; one warm-up run first."""
-    from gearopt.design_files import loads_design
-    from gearopt.flank import FlankGrid
-    from gearopt.plugins import get_machine_model
 
     design = loads_design(_study_text("seed001_table3.toml"))
     model = get_machine_model(design.model)
@@ -91,8 +99,6 @@ def bench_flank_generation() -> tuple[float, dict]:
 def bench_thickness_solve() -> tuple[float, dict]:
     """Additional slope angle of the seed 001 Table 3 pinion solved from its chordal thickness
     (eqs 39-48, "auto"), settings included."""
-    from gearopt.design_files import loads_design, with_overrides
-    from gearopt.plugins import get_machine_model
 
     design = loads_design(_study_text("seed001_table3.toml"))
     design = with_overrides(design, {"machine.pinion.additional_slope_angle_deg": "auto"})
@@ -106,8 +112,6 @@ def bench_thickness_solve() -> tuple[float, dict]:
 def _meshed_section53():
     """The seed 001 section 5.3 pair (crowned: the textbook cross-check's case) generated on
     the contact analyses' grid, with the default options."""
-    from gearopt.analysis import AnalysisOptions, meshed_pair
-    from gearopt.design_files import loads_design
 
     design = loads_design(_study_text("seed001_section5_3.toml"))
     options = AnalysisOptions()
@@ -115,7 +119,6 @@ def _meshed_section53():
 
 
 def _tca_info(options) -> dict:
-    from gearopt.contact import kernels as contact_kernels
 
     kernels = f"numba {contact_kernels.numba.__version__}" if contact_kernels.ENABLED else "numpy"
     return {
@@ -131,7 +134,6 @@ def _tca_info(options) -> dict:
 def bench_tca() -> tuple[float, dict]:
     """Unloaded TCA of both sides (TE with solved hand-overs, contact path, pattern, contact
     ratio) of the section 5.3 pair, flanks generated beforehand; one warm-up run first."""
-    from gearopt.analysis import contact_sides
 
     pair, options = _meshed_section53()
     contact_sides(pair, options)
@@ -141,7 +143,6 @@ def bench_tca() -> tuple[float, dict]:
 def bench_backlash() -> tuple[float, dict]:
     """Backlash at the 21 drive positions of the section 5.3 pair (drive contact, then the
     other flanks), flanks generated beforehand."""
-    from gearopt.analysis import pair_backlash
 
     pair, options = _meshed_section53()
     pair_backlash(pair, options)
@@ -153,9 +154,6 @@ def bench_tca_newton() -> tuple[float, dict]:
     analytic Jacobian, continuation) on the same case as ``tca_ms``: every relative angle the
     21 positions x 3 pairs visit (41 distinct ones) on both sides, nothing else (no hand-over,
     no pattern)."""
-    import numpy as np
-
-    from gearopt.newton_tca import newton_tca
 
     pair, options = _meshed_section53()
     p1 = pair.drive.pinion.pitch_rad
@@ -183,8 +181,6 @@ def bench_study_trial() -> tuple[float, dict]:
     keys, both members generated, TCA aligned and misaligned, backlash, objectives, table rows),
     a different pinion each time (the unchanged gear's solved slope angle is remembered, as in
     a study's worker); one warm-up trial first."""
-    from gearopt.studyfile import load_study_spec
-    from gearopt.trial import evaluate_trial
 
     spec = load_study_spec(_study_path("cyclo_palloid_contact.toml"))
     params = dict(spec.enqueue[0])
@@ -204,12 +200,9 @@ def bench_study_trial() -> tuple[float, dict]:
 
 def _study_path(name: str):
     """``studies/<name>`` of the source checkout, or a NotAvailableError."""
-    from pathlib import Path
 
     path = Path(__file__).resolve().parents[1] / "studies" / name
     if not path.exists():
-        from gearopt.errors import NotAvailableError
-
         raise NotAvailableError("benchmark design", str(path), "needs a source checkout (studies/)")
     return path
 
@@ -234,8 +227,6 @@ def run_benchmarks(names: Iterable[str] | None = None, *, repeats: int = 5) -> d
     results = {}
     for name in names:
         if name not in BENCHMARKS:
-            from gearopt.errors import GearoptError
-
             raise GearoptError("benchmark", name, f"unknown; known: {sorted(BENCHMARKS)}")
         runs, info = [], {}
         for _ in range(repeats):

@@ -15,6 +15,7 @@ Errors in the input are printed as one line naming the parameter, its value and 
 from __future__ import annotations
 
 import argparse
+import copy
 import dataclasses
 import json
 import sys
@@ -22,11 +23,20 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+import tomli_w
+
+from gearopt.analysis import AnalysisOptions
+from gearopt.bench import run_benchmarks
+from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
 from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError
-from gearopt.flank_cli import add_flank_parser
-from gearopt.plugins import get_machine_model, list_plugins
+from gearopt.flank import FLANKS, MEMBERS
+from gearopt.flank_cli import add_flank_parser, parse_grid
+from gearopt.plots import plot_analysis
+from gearopt.plugins import evaluators, get_machine_model, list_plugins
 from gearopt.study_cli import add_study_parser
+from gearopt.thickness import design_chordal_thickness
 
 __all__ = ["main"]
 
@@ -93,9 +103,6 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 
 
 def _cmd_realise_te(args: argparse.Namespace) -> int:
-    import copy
-
-    import tomli_w
 
     design = load_design(args.design)
     table, report = get_machine_model(design.model).realise_te_target(design, side=args.side)
@@ -143,12 +150,10 @@ def _cmd_settings(args: argparse.Namespace) -> int:
 
 
 def _cmd_flanks(args: argparse.Namespace) -> int:
-    from gearopt.flank import FLANKS, MEMBERS
-    from gearopt.thickness import design_chordal_thickness
 
     design = load_design(args.design)
     model = get_machine_model(design.model)
-    grid = _parse_grid(args.grid)
+    grid = parse_grid(args.grid)
     out: dict[str, Any] = {"design": design.name, "model": design.model, "grid": list(grid.shape)}
     for member in MEMBERS:
         maps = model.generate_flanks(design, member=member, grid=grid)
@@ -219,7 +224,6 @@ def _parse_teeth(text: str, option: str, *, count: int | None = None) -> list[in
 
 
 def _chain_text(name: str, out: dict[str, Any]) -> str:
-    import pandas as pd
 
     summary = [
         (key, f"{out[key]:.8g}" if out[key] is not None else "-")
@@ -267,7 +271,6 @@ def _chain_text(name: str, out: dict[str, Any]) -> str:
 
 
 def _cmd_chain(args: argparse.Namespace) -> int:
-    from gearopt.chains import WorkGear, evaluate_machine, load_machine
 
     machine = load_machine(args.machine)
     work = WorkGear(
@@ -304,7 +307,6 @@ def _cmd_chain(args: argparse.Namespace) -> int:
 
 
 def _cmd_change_gears(args: argparse.Namespace) -> int:
-    from gearopt.chains import load_machine, select_change_gears
 
     machine = load_machine(args.machine)
     reserved = [] if args.reserve is None else _parse_teeth(args.reserve, "--reserve")
@@ -340,19 +342,7 @@ def _cmd_change_gears(args: argparse.Namespace) -> int:
     return 0
 
 
-def _parse_grid(text: str, option: str = "--grid"):
-    from gearopt.flank import FlankGrid
-
-    try:
-        n_face, n_profile = (int(part) for part in text.split(","))
-    except ValueError:
-        raise DesignError(option, text, "must be two integers n_face,n_profile") from None
-    return FlankGrid(n_face=n_face, n_profile=n_profile)
-
-
 def _cmd_analyze(args: argparse.Namespace) -> int:
-    from gearopt.analysis import AnalysisOptions
-    from gearopt.plugins import evaluators
 
     design = load_design(args.design)
     # the options given on the command line override the design's [analysis] table
@@ -362,7 +352,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
             ("separation", args.separation),
             ("compound_um", args.compound_um),
             ("positions", args.positions),
-            ("grid", None if args.grid is None else list(_parse_grid(args.grid).shape)),
+            ("grid", None if args.grid is None else list(parse_grid(args.grid).shape)),
         )
         if value is not None
     }
@@ -376,8 +366,6 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         results[name] = evaluation
         out.update(evaluation.report)
     if args.plot:
-        from gearopt.plots import plot_analysis
-
         out["plots"] = [str(p) for p in plot_analysis(design, results, args.plot)]
     if args.json:
         print(json.dumps(out, indent=2))
@@ -430,7 +418,6 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from gearopt.bench import run_benchmarks
 
     results = run_benchmarks(args.names or None, repeats=args.repeats)
     out: dict[str, Any] = {"threads": 1, "repeats": args.repeats}

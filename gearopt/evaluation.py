@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from gearopt.errors import PluginError
+from gearopt.errors import PluginError, StudyError
 
 if TYPE_CHECKING:
     import numpy as np
@@ -97,8 +97,6 @@ class BaseObjective(abc.ABC):
         options.
         """
         if options:
-            from gearopt.errors import StudyError
-
             raise StudyError(f"objective {self.name}", sorted(options), "takes no options")
         return {name: name for name in self.requires}
 

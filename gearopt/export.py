@@ -9,6 +9,7 @@ import sqlalchemy as sa
 
 from gearopt.errors import NotAvailableError, StudyError
 from gearopt.results import TABLES, VIEWS
+from gearopt.study import open_study
 from gearopt.studyfile import StudySpec
 
 __all__ = ["export_study"]
@@ -19,8 +20,6 @@ def export_study(
 ) -> list[str]:
     """Write ``trials`` (Optuna's trials dataframe) and every gearopt table and view of the
     study, one file each, into ``out``; returns the paths written."""
-    from gearopt.study import open_study
-
     if fmt not in ("csv", "parquet"):
         raise StudyError("--format", fmt, "must be csv or parquet")
     if fmt == "parquet":

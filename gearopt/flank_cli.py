@@ -77,7 +77,6 @@ def _cmd_flank(args: argparse.Namespace) -> int:
         axial, radius = (float(part) for part in args.at.split(","))
     except ValueError:
         raise DesignError("--at", args.at, "must be two numbers AXIAL_MM,RADIUS_MM") from None
-    from gearopt.cli import _parse_grid
 
     out = flank_point(
         load_design(args.design),
@@ -85,7 +84,7 @@ def _cmd_flank(args: argparse.Namespace) -> int:
         flank=args.flank,
         axial_mm=axial,
         radius_mm=radius,
-        grid=_parse_grid(args.grid),
+        grid=parse_grid(args.grid),
     )
     if args.json:
         print(json.dumps(out, indent=2))
@@ -113,3 +112,13 @@ def add_flank_parser(sub) -> None:
     p.add_argument("--grid", default="25,13", help="FlankMap grid the solve starts from")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_flank)
+
+
+def parse_grid(text: str, option: str = "--grid") -> FlankGrid:
+    """A FlankGrid from the command line's ``n_face,n_profile``."""
+
+    try:
+        n_face, n_profile = (int(part) for part in text.split(","))
+    except ValueError:
+        raise DesignError(option, text, "must be two integers n_face,n_profile") from None
+    return FlankGrid(n_face=n_face, n_profile=n_profile)

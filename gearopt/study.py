@@ -40,18 +40,27 @@ import time
 import uuid
 import warnings
 from collections.abc import Callable, Mapping
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import joblib
 import optuna
 import sqlalchemy as sa
+import sqlalchemy.exc
+import tomli_w
+from joblib.externals.loky import get_reusable_executor
+from joblib.externals.loky.process_executor import TerminatedWorkerError
+from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from optuna.trial import TrialState
+from tqdm import tqdm
 
 from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
+from gearopt.results import ResultsStore
 from gearopt.studyfile import StudySpec
-from gearopt.trial import TrialOutcome, work
+from gearopt.trial import TrialOutcome, evaluate_trial, work
 
 __all__ = [
     "STALE_AFTER_S",
@@ -94,7 +103,6 @@ def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
 def _rdb_storage(url: str, attempts: int = 5) -> optuna.storages.RDBStorage:
     """Optuna's RDB storage; a new database's schema is created by whichever coordinator comes
     first, and one that meets another creating it at the same moment tries again."""
-    import sqlalchemy.exc
 
     for attempt in range(attempts - 1):
         try:
@@ -130,7 +138,6 @@ def open_study(spec: StudySpec, storage: str | None = None):
     """The Optuna study of ``spec`` (created when new) and its :class:`ResultsStore`; a new
     study gets its metric names and the study file's given designs, an existing one the given
     designs added to the file since (a design with a trial already is skipped)."""
-    from gearopt.results import ResultsStore
 
     url = storage or default_storage_url(spec)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -279,7 +286,6 @@ def recover(study, results, spec: StudySpec, me: str) -> list[int]:
 def _executor(jobs: int, backend: str = "loky", scheduler: str | None = None):
     if backend == "dask":
         return _JoblibBatches(jobs, scheduler)
-    from joblib.externals.loky import get_reusable_executor
 
     return get_reusable_executor(max_workers=jobs, timeout=60)
 
@@ -313,7 +319,6 @@ class _JoblibBatches:
         return future
 
     def flush(self) -> None:
-        import joblib
 
         queue, self.queue = self.queue, []
         if not queue:
@@ -335,9 +340,6 @@ class _JoblibBatches:
 
 def _broken(exc: BaseException) -> bool:
     """A worker process died under the trial (loky), or the trial killed Dask workers."""
-    from concurrent.futures.process import BrokenProcessPool
-
-    from joblib.externals.loky.process_executor import TerminatedWorkerError
 
     return isinstance(exc, TerminatedWorkerError | BrokenProcessPool) or (
         type(exc).__name__ == "KilledWorker"
@@ -661,7 +663,6 @@ def artifact_dir(spec: StudySpec) -> Path:
 
 
 def _upload(spec: StudySpec, study, trial, figures) -> None:
-    from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 
     base = artifact_dir(spec)
     base.mkdir(parents=True, exist_ok=True)
@@ -681,7 +682,6 @@ def _upload(spec: StudySpec, study, trial, figures) -> None:
 def _progress(progress: bool, total: int, spec: StudySpec):
     if not progress:
         return None
-    from tqdm import tqdm
 
     return tqdm(total=total, desc=spec.name, unit="trial", file=sys.stderr, dynamic_ncols=True)
 
@@ -738,7 +738,6 @@ def pick_best(study, spec: StudySpec) -> optuna.trial.FrozenTrial | None:
 
 def save_design(spec: StudySpec, trial: optuna.trial.FrozenTrial) -> str:
     """Write the trial's design as ``<study name>_best.toml`` beside the study file."""
-    import tomli_w
 
     data = dict(spec.design_for(trial.params).source)
     meta = data.setdefault("meta", {})
@@ -754,7 +753,6 @@ def trial_objective(spec: StudySpec) -> Callable[[optuna.trial.Trial], Any]:
     notebook, a debugger): it suggests the searched keys, evaluates the trial in this process,
     sets the constraints and returns the objective values. :func:`run_study` is the way to run
     a study on several workers with crash recovery and the gearopt tables."""
-    from gearopt.trial import evaluate_trial
 
     def objective(trial: optuna.trial.Trial):
         params = {d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search}

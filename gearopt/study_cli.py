@@ -10,6 +10,7 @@ import tomllib
 from pathlib import Path
 
 from gearopt.errors import StudyError
+from gearopt.studyfile import load_study_spec
 
 __all__ = ["add_study_parser"]
 
@@ -32,7 +33,6 @@ def _interrupt(signum, frame) -> None:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from gearopt.study import run_study
-    from gearopt.studyfile import load_study_spec
 
     spec = load_study_spec(args.study)
     # a polite stop (a scheduler's SIGTERM) is a Ctrl-C: the trials in hand go back to the queue
@@ -99,7 +99,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _cmd_enqueue(args: argparse.Namespace) -> int:
     from gearopt.study import enqueue
-    from gearopt.studyfile import load_study_spec
 
     spec = load_study_spec(args.study)
     params = dict(_parse_assignment(a) for a in args.assignments)
@@ -112,7 +111,6 @@ def _cmd_enqueue(args: argparse.Namespace) -> int:
 
 def _cmd_export(args: argparse.Namespace) -> int:
     from gearopt.export import export_study
-    from gearopt.studyfile import load_study_spec
 
     spec = load_study_spec(args.study)
     written = export_study(spec, Path(args.out), fmt=args.format, storage=args.storage)

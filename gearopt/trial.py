@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import tempfile
 import time
 import traceback
 from collections.abc import Mapping
@@ -18,7 +19,10 @@ from typing import Any
 
 import numpy as np
 
+from gearopt.analysis import AnalysisOptions
 from gearopt.errors import GearoptError
+from gearopt.plots import plot_evaluations
+from gearopt.plugins import evaluators, get_machine_model, objectives
 from gearopt.studyfile import StudySpec
 
 __all__ = ["TrialOutcome", "evaluate_trial", "pattern_outline"]
@@ -100,7 +104,6 @@ def _curves(label: str, arrays: Mapping[str, np.ndarray]) -> list[tuple]:
 def _patterns(label: str, evaluation) -> list[tuple]:
     """Pattern outlines of an evaluation that carries the ``tca`` evaluator's pattern arrays,
     at the marking compound of its conditions."""
-    from gearopt.analysis import AnalysisOptions
 
     arrays = evaluation.arrays
     if "face_mm" not in arrays or "profile_mm" not in arrays:
@@ -118,7 +121,6 @@ def _patterns(label: str, evaluation) -> list[tuple]:
 
 
 def _settings(design) -> list[tuple[str, str, float]]:
-    from gearopt.plugins import get_machine_model
 
     settings = get_machine_model(design.model).basic_settings(design).as_dict()
     return [
@@ -131,9 +133,6 @@ def _settings(design) -> list[tuple[str, str, float]]:
 
 def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:
     """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`) as (name, bytes)."""
-    import tempfile
-
-    from gearopt.plots import plot_evaluations
 
     with tempfile.TemporaryDirectory() as folder:
         paths = plot_evaluations(evaluations, folder, f"{spec.name}: {design.name}")
@@ -148,7 +147,6 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
     exception too, with its traceback's last lines (a bug, to be reported). Objective values
     that are not finite fail the trial as well, so Optuna never sees a NaN.
     """
-    from gearopt.plugins import evaluators, objectives
 
     start = time.perf_counter()
     pid = os.getpid()

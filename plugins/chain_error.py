@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from gearopt import hookimpl
+from gearopt.bench import time_call_ms
 from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
 from gearopt.design import MEMBERS, Design
 from gearopt.errors import DesignError
@@ -170,7 +171,6 @@ def gearopt_evaluators() -> list[BaseEvaluator]:
 
 def bench_change_gears() -> tuple[float, dict]:
     """Top-5 change gears for seed 000's envelope ratio 0.745356 from the shipped set."""
-    from gearopt.bench import time_call_ms
 
     machine = load_machine(DEFAULT_MACHINE)
     ratio = 0.745356

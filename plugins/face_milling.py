@@ -164,8 +164,13 @@ from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
+from gearopt_plugins import face_milling_synthesis as fs
 from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
-from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily, flank_family
+from gearopt_plugins.face_milling_family import (
+    CutterFlank,
+    design_family,
+)
+from gearopt_plugins.face_milling_inverse import inverse_tca
 from gearopt_plugins.face_milling_synthesis import SIDES
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
@@ -458,8 +463,6 @@ _SYNTHESIS_NOTE = (
 
 
 def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
-    from gearopt_plugins import face_milling_synthesis as fs
-
     check_keys(table, MACHINE_KEYS, "machine")
     targets, options = fs.read_synthesis(synthesis, pair.blank)
     if "gear" in table:
@@ -513,18 +516,6 @@ def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
 # --- the model -----------------------------------------------------------------------------------
 
 
-def _family(design: Design, member: str, flanks, *, tool_pass: int = 0) -> FaceMillingFamily:
-    index = MEMBERS.index(member)
-    teeth = (design.pair.pinion_teeth, design.pair.gear_teeth)[index]
-    spec = design.machine.member(member)
-    return flank_family(
-        design.blank,
-        index,
-        {f: spec.flank(f) for f in flanks},
-        index_rad=2.0 * math.pi * tool_pass / teeth,
-    )
-
-
 class FaceMilling(BaseMachineModel):
     """Gleason face milling with modified roll (Litvin's model), generated pinion and gear."""
 
@@ -551,8 +542,6 @@ class FaceMilling(BaseMachineModel):
         """The pinion's roll on ``side`` fitted by inverse TCA to the design's ``[te_target]``
         (:mod:`gearopt_plugins.face_milling_inverse`): c0 moves the cradle angle, c1 ... c6
         replace ``ratio_of_roll`` and ``roll_c2`` ... ``roll_c6``; the gear is unchanged."""
-        from gearopt_plugins.face_milling_inverse import inverse_tca
-
         if design.te_target is None:
             raise DesignError("te_target", rule="the design has no [te_target] table")
         if side not in SIDES:
@@ -637,7 +626,7 @@ class FaceMilling(BaseMachineModel):
         index = MEMBERS.index(member)
         blank = design.blank
         teeth = (design.pair.pinion_teeth, design.pair.gear_teeth)[index]
-        family = _family(design, member, flanks, tool_pass=tool_pass)
+        family = design_family(design, member, flanks, tool_pass=tool_pass)
         gamma = math.radians(blank.pitch_angle_deg[index])
         solution = solve_envelope(
             family,
@@ -705,7 +694,7 @@ def _mean_pitch_point(design: Design, member: str, flank: str) -> tuple[float, f
     """Polar angle and circumferential component of the normal (out of the material) of the
     right-hand flank as generated (before any turn) at its point of cone distance A_m on the
     pitch cone (solved by Newton from the pitch-line start)."""
-    family = _family(design, member, (flank,))
+    family = design_family(design, member, (flank,))
     a = family.scale_mm
     g = family.pitch_angle_rad
     target = np.array([a * math.cos(g), a * math.sin(g)])

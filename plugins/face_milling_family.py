@@ -21,7 +21,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CutterFlank", "FaceMillingFamily", "edge", "flank_family"]
+__all__ = ["CutterFlank", "FaceMillingFamily", "design_family", "edge", "flank_family"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -297,4 +297,18 @@ def flank_family(blank, index: int, specs, *, index_rad: float = 0.0) -> FaceMil
         ),
         scale_mm=blank.mean_cone_distance_mm,
         pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
+    )
+
+
+def design_family(design, member: str, flanks, *, tool_pass: int = 0) -> FaceMillingFamily:
+    """The family of ``flanks`` of a design's ``member`` (its machine settings), the tool
+    turned by ``tool_pass`` pitches."""
+    index = ("pinion", "gear").index(member)
+    teeth = (design.pair.pinion_teeth, design.pair.gear_teeth)[index]
+    spec = design.machine.member(member)
+    return flank_family(
+        design.blank,
+        index,
+        {f: spec.flank(f) for f in flanks},
+        index_rad=2.0 * math.pi * tool_pass / teeth,
     )

@@ -38,7 +38,8 @@ from gearopt.kinematics import rot_z
 from gearopt.mesh import ToothFrame
 from gearopt.solve import complex_step_jacobian, newton
 from gearopt.te_target import ARCSEC, TETarget
-from gearopt_plugins.face_milling_local import _solve_nodes, hand_sign, mirrored
+from gearopt_plugins.face_milling_family import design_family
+from gearopt_plugins.face_milling_local import hand_sign, mirrored, solve_nodes
 from gearopt_plugins.face_milling_synthesis import SIDES
 
 __all__ = ["InverseTCA", "inverse_tca"]
@@ -96,12 +97,10 @@ class _Pair:
     """The pinion tool, the gear, their placement and the reference contact."""
 
     def __init__(self, design: Design, side: str, mean_point_mm=None, region=None) -> None:
-        from gearopt_plugins.face_milling import _family
-
         pinion_flank, gear_flank = SIDES[side]
         blank = design.blank
-        self.pinion = _family(design, "pinion", (pinion_flank,))
-        self.gear = _family(design, "gear", (gear_flank,))
+        self.pinion = design_family(design, "pinion", (pinion_flank,))
+        self.gear = design_family(design, "gear", (gear_flank,))
         self.hand1, self.hand2 = (hand_sign(h) for h in blank.hand)
         self.b, self.c = Placement(shaft_angle_deg=design.pair.shaft_angle_deg).pinion_to_gear
         self.ratio = design.pair.pinion_teeth / design.pair.gear_teeth
@@ -210,7 +209,7 @@ class _Pair:
         s1 = frame.toe_mm + face
         h1 = frame.root_mm + profile
         start1 = self.pinion.pitch_row(np.array([s1]))[0, 0]
-        sol = _solve_nodes(self.pinion, np.array([s1]), np.array([h1]), start1, g1)
+        sol = solve_nodes(self.pinion, np.array([s1]), np.array([h1]), start1, g1)
         q1 = sol.x[0]
         p = mirrored(self.pinion.geometry(q1[None], self.zero)["point"][0], self.hand1)
         n = mirrored(self.pinion.geometry(q1[None], self.zero)["normal"][0], self.hand1)
@@ -220,7 +219,7 @@ class _Pair:
         big_l2, big_r2 = qg[2], math.hypot(qg[0], qg[1])
         s2, h2 = cone_coordinates(big_l2, big_r2, g2)
         start2 = self.gear.pitch_row(np.array([blank.mean_cone_distance_mm]))[0, 0]
-        q2 = _solve_nodes(self.gear, np.array([s2]), np.array([h2]), start2, g2).x[0]
+        q2 = solve_nodes(self.gear, np.array([s2]), np.array([h2]), start2, g2).x[0]
         r = mirrored(self.gear.geometry(q2[None], self.zero)["point"][0], self.hand2)
         psi0 = math.atan2(qg[1], qg[0]) - math.atan2(r[1], r[0])
         # the tangent basis of the normal equations: the pinion's tangent plane at the guess

@@ -82,7 +82,7 @@ class EnvelopeJet:
     q: NDArray
 
 
-def _solve_nodes(family, s, h, guess, pitch_angle_rad):
+def solve_nodes(family, s, h, guess, pitch_angle_rad):
     """Envelope points at the axial-plane coordinates ``(s, h)`` ``(N,)`` (family's hand)."""
     target_l, target_r = axial_plane(s, h, pitch_angle_rad)
     scale = family.scale_mm
@@ -110,7 +110,7 @@ def envelope_jet(
     ks, kh = np.meshgrid([-1.0, 0.0, 1.0], [-1.0, 0.0, 1.0], indexing="ij")
     s = s_mm + d * ks.ravel()
     h = h_mm + d * kh.ravel()
-    centre = _solve_nodes(family, np.array([s_mm]), np.array([h_mm]), guess, pitch_angle_rad)
+    centre = solve_nodes(family, np.array([s_mm]), np.array([h_mm]), guess, pitch_angle_rad)
     if not centre.all_converged:
         raise SettingsError(
             "local synthesis",
@@ -118,7 +118,7 @@ def envelope_jet(
             "the settings generate no flank point at this position (Newton on the envelope "
             "did not converge)",
         )
-    sol = _solve_nodes(family, s, h, centre.x[0], pitch_angle_rad)
+    sol = solve_nodes(family, s, h, centre.x[0], pitch_angle_rad)
     if not sol.all_converged:
         raise SettingsError(
             "local synthesis", (s_mm, h_mm), "the envelope is not regular around this point"

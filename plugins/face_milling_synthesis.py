@@ -105,16 +105,17 @@ from gearopt.contact import Placement
 from gearopt.design import PairData
 from gearopt.errors import DesignError, SettingsError
 from gearopt.flank import axial_plane, cone_coordinates
+from gearopt.mesh import ToothFrame
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.face_milling_family import flank_family
 from gearopt_plugins.face_milling_local import (
     TaylorJet,
-    _solve_nodes,
     envelope_jet,
     hand_sign,
     local_mesh,
     mirrored,
+    solve_nodes,
 )
 
 __all__ = [
@@ -216,7 +217,6 @@ def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, dict]:
     """``({side: SideTargets}, options)`` from the ``[synthesis]`` table; options:
     ``gear_cutter_radius_mm`` (None: the default) and ``backlash_mm`` (default 0)."""
     check_keys(table, SYNTHESIS_KEYS, "synthesis")
-    from gearopt.mesh import ToothFrame
 
     centre = ToothFrame.from_blank(blank).centre_mm
     common = {k: v for k, v in table.items() if k in TARGET_KEYS}
@@ -545,7 +545,6 @@ class _MeanPoint:
 
 def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) -> _MeanPoint:
     """Where the gear flank meets M's circle about the pinion axis at a point of contact."""
-    from gearopt.mesh import ToothFrame
 
     blank = pair.blank
     frame = ToothFrame.from_blank(blank)
@@ -571,7 +570,7 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
         q = p @ b.T + c
         big_l2, big_r2 = q[:, 2], np.hypot(q[:, 0], q[:, 1])
         s2, h2 = cone_coordinates(big_l2, big_r2, g2)
-        sol = _solve_nodes(family, s2, h2, start, g2)
+        sol = solve_nodes(family, s2, h2, start, g2)
         geo = family.geometry(sol.x, np.zeros(len(omega), int))
         point, normal = mirrored(geo["point"], hand2), mirrored(geo["normal"], hand2)
         turn = np.arctan2(q[:, 1], q[:, 0]) - np.arctan2(point[:, 1], point[:, 0])

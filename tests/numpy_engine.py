@@ -274,8 +274,6 @@ def _differences() -> NDArray:
     return d
 
 
-
-
 DIFFERENCES = _differences()
 
 

@@ -30,9 +30,9 @@ from gearopt_plugins.face_milling import (
     FaceMilling,
     FaceMillingMachine,
     FaceMillingMember,
-    _family,
     _parse_flank,
 )
+from gearopt_plugins.face_milling_family import design_family
 
 from .conftest import STUDIES
 
@@ -191,7 +191,7 @@ def test_gear_from_blank_cuts_the_dedendum_deep(blank_gear, flank):
     blank = design.blank
     gamma = math.radians(blank.pitch_angle_deg[1])
     am = blank.mean_cone_distance_mm
-    family = _family(design, "gear", (flank,))
+    family = design_family(design, "gear", (flank,))
     start = family.pitch_row(np.array([am]))[0, 0]
 
     def coords(theta, phi):
