@@ -3,7 +3,7 @@
 Machine-independent: it sees a pinion flank and a gear flank (FlankMaps, member frames as in
 :mod:`gearopt.flank`), the shaft angle and the misalignment, nothing else.
 
-Housing frame S_f (DESIGN.md): origin at the nominal crossing point of the axes, x_f along the
+Housing frame S_f (docs/architecture.md, Frames and signs): origin at the nominal crossing point of the axes, x_f along the
 pinion axis toward the pinion's back, the gear axis in the x_f-z_f plane at the shaft angle Sigma
 from x_f, y_f = z_f x x_f. The pinion frame maps x_p -> z_f, y_p -> -y_f, z_p -> x_f, so the
 pitch point of tooth 0 (polar angle 0) lies in the x_f-z_f plane on the side z_f > 0; the gear

@@ -1,0 +1,280 @@
+"""The package's structure (docs/architecture.md, Layers): an import graph of ``gearopt`` and
+the built-in plugins (``gearopt_plugins``) built from the source (AST, imports inside functions
+included, imports under ``if TYPE_CHECKING:`` left out), and the rules it must keep:
+
+- no import cycle between modules;
+- no private name (a leading underscore) imported from another module, no private attribute of
+  another module's object read;
+- no module of ``gearopt`` imports the package root;
+- imports inside functions only to load an optional dependency lazily, or the Optuna study layer
+  (:data:`LAZY`);
+- the textbook TCA (:mod:`gearopt.newton_tca`, the engine's reference) imported by no production
+  module but the benchmarks;
+- no module of ``gearopt`` over 800 lines; no source, test or document citing a file outside the
+  repository.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = {"gearopt": ROOT / "gearopt", "gearopt_plugins": ROOT / "plugins"}
+
+#: optional dependencies, loaded where they are used
+OPTIONAL = {"matplotlib", "pyarrow", "dask", "psycopg"}
+#: the study layer imports Optuna and SQLAlchemy (about 2 s of start-up): the package root and
+#: the study commands load it when asked, so that the CLI and the worker processes start
+#: without it
+LAZY = {
+    ("gearopt", "gearopt.study"),
+    ("gearopt.study_cli", "gearopt.study"),
+    ("gearopt.study_cli", "gearopt.export"),
+}
+#: the reference TCA's importers outside the tests
+REFERENCE = "gearopt.newton_tca"
+REFERENCE_USERS = {"gearopt.bench"}
+MAX_LINES = 800
+#: Optuna's private attributes the study coordinator still reads (its trial ids and storage);
+#: "One house, part 2" moves the coordinator onto Optuna's public API
+OPTUNA_PRIVATE = {("gearopt.study", "_trial_id"), ("gearopt.study", "_storage")}
+OPTUNA_PRIVATE |= {("gearopt.study", "_study_id")}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for name, folder in PACKAGES.items():
+        for path in sorted(folder.rglob("*.py")):
+            parts = [name, *path.relative_to(folder).with_suffix("").parts]
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join(parts)] = path
+    return out
+
+
+MODULES = _modules()
+
+
+def _type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+class _Imports(ast.NodeVisitor):
+    """Every import of a module: ``(line, target module, imported name or None, in a function)``."""
+
+    def __init__(self, module: str, package: bool) -> None:
+        self.module, self.package = module, package
+        self.found: list[tuple[int, str, str | None, bool]] = []
+        self.depth = 0
+
+    def visit_FunctionDef(self, node) -> None:
+        self.depth += 1
+        self.generic_visit(node)
+        self.depth -= 1
+
+    visit_AsyncFunctionDef = visit_FunctionDef
+
+    def visit_If(self, node: ast.If) -> None:
+        if _type_checking(node):
+            for child in node.orelse:
+                self.visit(child)
+            return
+        self.generic_visit(node)
+
+    def visit_Import(self, node: ast.Import) -> None:
+        for alias in node.names:
+            self.found.append((node.lineno, alias.name, None, self.depth > 0))
+
+    def visit_ImportFrom(self, node: ast.ImportFrom) -> None:
+        if node.level:
+            base = self.module.split(".")
+            if not self.package:
+                base = base[:-1]
+            base = base[: len(base) - (node.level - 1)]
+            source = ".".join(base + ([node.module] if node.module else []))
+        else:
+            source = node.module
+        for alias in node.names:
+            full = f"{source}.{alias.name}"
+            if full in MODULES:  # a submodule
+                self.found.append((node.lineno, full, None, self.depth > 0))
+            else:
+                self.found.append((node.lineno, source, alias.name, self.depth > 0))
+
+
+def _imports() -> dict[str, list[tuple[int, str, str | None, bool]]]:
+    out = {}
+    for module, path in MODULES.items():
+        visitor = _Imports(module, path.name == "__init__.py")
+        visitor.visit(ast.parse(path.read_text(encoding="utf-8")))
+        out[module] = visitor.found
+    return out
+
+
+IMPORTS = _imports()
+
+
+def _internal(target: str) -> bool:
+    return target.split(".")[0] in PACKAGES
+
+
+def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan)."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in edges.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_the_graph_sees_the_imports():
+    # the graph is built from the real sources: it finds the modules and their imports
+    assert {"gearopt.contact.engine", "gearopt.mesh", "gearopt_plugins.tca"} <= set(MODULES)
+    assert any(t == "gearopt.contact.kernels" for _, t, _, _ in IMPORTS["gearopt.contact.engine"])
+
+
+def test_no_import_cycle():
+    edges = defaultdict(set)
+    for module, found in IMPORTS.items():
+        for _, target, _, _ in found:
+            if target in MODULES and target != module:
+                edges[module].add(target)
+    assert _cycles(edges) == []
+
+
+def test_no_private_name_crosses_a_module():
+    crossing = [
+        f"{module}:{line} imports {name} from {target}"
+        for module, found in IMPORTS.items()
+        for line, target, name, _ in found
+        if _internal(target) and name and name.startswith("_") and not name.startswith("__")
+    ]
+    assert crossing == []
+
+
+def test_no_module_imports_the_package_root():
+    rooted = [
+        f"{module}:{line}"
+        for module, found in IMPORTS.items()
+        if module.startswith("gearopt.")
+        for line, target, _, _ in found
+        if target == "gearopt"
+    ]
+    assert rooted == []
+
+
+def test_imports_inside_functions_only_load_optional_dependencies():
+    inner = [
+        f"{module}:{line} imports {target}"
+        for module, found in IMPORTS.items()
+        for line, target, _, in_function in found
+        if in_function
+        and target.split(".")[0] not in OPTIONAL
+        and (module, target) not in LAZY
+        and _internal(target)
+    ]
+    assert inner == []
+
+
+def test_the_reference_tca_is_no_production_dependency():
+    users = {
+        module
+        for module, found in IMPORTS.items()
+        for _, target, _, _ in found
+        if target == REFERENCE and module != REFERENCE
+    }
+    assert users <= REFERENCE_USERS
+
+
+def _own_private_names(tree: ast.AST) -> set[str]:
+    """Private names a module defines: functions, classes, attributes it assigns (``x._a =``,
+    class bodies), ``__slots__`` entries."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.add(node.name)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            names.add(node.attr)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            names.add(node.value)  # __slots__, setattr and getattr names
+    return {n for n in names if n.startswith("_")}
+
+
+def test_no_private_attribute_of_another_modules_object_is_read():
+    reads = []
+    for module, path in MODULES.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        own = _own_private_names(tree)
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Load)):
+                continue
+            attr = node.attr
+            if not attr.startswith("_") or attr.startswith("__") or attr in own:
+                continue
+            if (module, attr) in OPTUNA_PRIVATE:
+                continue
+            reads.append(f"{module}:{node.lineno} reads .{attr}")
+    assert reads == []
+
+
+@pytest.mark.parametrize("module", [m for m in MODULES if m.split(".")[0] == "gearopt"])
+def test_no_module_over_800_lines(module):
+    lines = MODULES[module].read_text(encoding="utf-8").count("\n")
+    assert lines <= MAX_LINES, f"{module}: {lines} lines"
+
+
+OUTSIDE = re.compile(r"DESIGN\.md|\.\./shared|shared/(?:reference|seeds|DESIGN)")
+
+
+def test_nothing_cites_a_file_outside_the_repository():
+    files = [
+        *ROOT.glob("gearopt/**/*.py"),
+        *ROOT.glob("plugins/**/*.py"),
+        *ROOT.glob("tests/**/*.py"),
+        *ROOT.glob("studies/**/*.py"),
+        *ROOT.glob("studies/**/*.toml"),
+        *ROOT.glob("docs/**/*.md"),
+        ROOT / "README.md",
+    ]
+    citing = [
+        f"{path.relative_to(ROOT)}:{k + 1}"
+        for path in files
+        if path != Path(__file__)
+        for k, line in enumerate(path.read_text(encoding="utf-8").splitlines())
+        if OUTSIDE.search(line)
+    ]
+    assert citing == []
