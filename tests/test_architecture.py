@@ -40,6 +40,44 @@ LAZY = {
 REFERENCE = "gearopt.newton_tca"
 REFERENCE_USERS = {"gearopt.bench"}
 MAX_LINES = 800
+#: the layers of ``gearopt`` (docs/architecture.md, Layers), lowest first: a module imports
+#: from its own layer or the ones below (a prefix names a package and its modules)
+LAYERS = (
+    ("numerics", ("gearopt.errors", "gearopt.validate", "gearopt.kinematics", "gearopt.solve")),
+    (
+        "geometry",
+        (
+            "gearopt.flank",
+            "gearopt.flank_jet",
+            "gearopt.envelope",
+            "gearopt.blank",
+            "gearopt.thickness",
+            "gearopt.assembly",
+            "gearopt.te_target",
+            "gearopt.chains",
+        ),
+    ),
+    ("design", ("gearopt.design", "gearopt.analysis_options")),
+    (
+        "plugin API",
+        (
+            "gearopt.hookspecs",
+            "gearopt.machine",
+            "gearopt.evaluation",
+            "gearopt.plugins",
+            "gearopt.design_files",
+            "gearopt.testing",
+        ),
+    ),
+    ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca")),
+    ("analysis", ("gearopt.analysis", "gearopt.plots")),
+    ("trial", ("gearopt.studyfile", "gearopt.trial")),
+    ("study", ("gearopt.results", "gearopt.study", "gearopt.export")),
+    (
+        "cli",
+        ("gearopt.cli", "gearopt.flank_cli", "gearopt.study_cli", "gearopt.bench", "gearopt"),
+    ),
+)
 #: Optuna's private attributes the study coordinator still reads (its trial ids and storage);
 #: "One house, part 2" moves the coordinator onto Optuna's public API
 OPTUNA_PRIVATE = {("gearopt.study", "_trial_id"), ("gearopt.study", "_storage")}
@@ -172,6 +210,25 @@ def test_no_import_cycle():
             if target in MODULES and target != module:
                 edges[module].add(target)
     assert _cycles(edges) == []
+
+
+def _layer(module: str) -> int:
+    for k, (_, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if module == prefix or (prefix != "gearopt" and module.startswith(prefix + ".")):
+                return k
+    raise AssertionError(f"{module} is in no layer: add it to LAYERS and docs/architecture.md")
+
+
+def test_layers_import_one_way():
+    upward = [
+        f"{module} ({LAYERS[_layer(module)][0]}) imports {target} ({LAYERS[_layer(target)][0]})"
+        for module, found in IMPORTS.items()
+        if module.split(".")[0] == "gearopt"
+        for _, target, _, _ in found
+        if target in MODULES and _layer(target) > _layer(module) and (module, target) not in LAZY
+    ]
+    assert upward == []
 
 
 def test_no_private_name_crosses_a_module():
