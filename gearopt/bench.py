@@ -120,7 +120,11 @@ def _meshed_section53():
 
 def _tca_info(options) -> dict:
 
-    kernels = f"numba {contact_kernels.numba.__version__}" if contact_kernels.ENABLED else "numpy"
+    kernels = (
+        f"numba {contact_kernels.numba.__version__}"
+        if contact_kernels.ENABLED
+        else "plain Python (GEAROPT_JIT=0)"
+    )
     return {
         "tca_grid": list(options.grid.shape),
         "tca_kernels": kernels,

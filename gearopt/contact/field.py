@@ -3,13 +3,13 @@
 Machine-independent: it sees a pinion flank and a gear flank (FlankMaps, member frames as in
 :mod:`gearopt.flank`), the shaft angle and the misalignment, nothing else.
 
-Housing frame S_f (docs/architecture.md, Frames and signs): origin at the nominal crossing point of the axes, x_f along the
-pinion axis toward the pinion's back, the gear axis in the x_f-z_f plane at the shaft angle Sigma
-from x_f, y_f = z_f x x_f. The pinion frame maps x_p -> z_f, y_p -> -y_f, z_p -> x_f, so the
-pitch point of tooth 0 (polar angle 0) lies in the x_f-z_f plane on the side z_f > 0; the gear
-frame is S_f turned about y_f so that z_g = (cos Sigma, 0, sin Sigma). Misalignment: the pinion
-moves by (dA1, dE, 0), the gear along its own axis by dA2 and its axis turns about y_f to
-Sigma + dGamma.
+Housing frame S_f (docs/architecture.md, Frames and signs; :mod:`gearopt.assembly`): origin at
+the nominal crossing point of the axes, x_f along the pinion axis toward the pinion's back, the
+gear axis in the x_f-z_f plane at the shaft angle Sigma from x_f, y_f = z_f x x_f. The pinion
+frame maps x_p -> z_f, y_p -> -y_f, z_p -> x_f, so the pitch point of tooth 0 (polar angle 0)
+lies in the x_f-z_f plane on the side z_f > 0; the gear frame is S_f turned about y_f so that
+z_g = (cos Sigma, 0, sin Sigma). Misalignment: the pinion moves by (dA1, dE, 0), the gear along
+its own axis by dA2 and its axis turns about y_f to Sigma + dGamma.
 
 Kinematics. The pinion turns by phi about +z_p; a pitch point then moves along -y_f, and the gear
 follows by turning -(N1/N2) phi about +z_g. For a pinion node P turned by phi and expressed in the

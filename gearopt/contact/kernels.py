@@ -1,27 +1,25 @@
-"""Compiled kernels of the contact engine (numba).
+"""Compiled kernels of the contact engine (numba), its one implementation of each hot loop.
 
-The same arithmetic as the numpy paths of :class:`gearopt.contact._Engine`, written point by
-point in compiled loops, so that a small batch costs its points rather than numpy's fixed
-overhead per call (the engine's refinement evaluates a few hundred points at a time, many times
-over):
+Written point by point in compiled loops, so that a small batch costs its points rather than
+numpy's fixed overhead per call (the engine's refinement evaluates a few hundred points at a
+time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares their tables:
 
 - :func:`node_xy`, :func:`node_fields`: the clearance, the normal factor and R2 at every
   generated node of the pinion flank for each row (side, pinion angle, gear angle), off-mask
-  nodes +inf / 0 / 0 (``_Engine.sample``'s node fields; the polar angles between the two by
-  numpy's vectorised arctan2);
+  nodes +inf / 0 / 0 (the nodes' polar angles between the two by numpy's vectorised arctan2);
 - :func:`clearance_at`: the clearance at pinion grid coordinates by the pinion's local
-  interpolant, and whether the point is on both flanks and in a refinable pinion cell
-  (``_Engine._at``);
+  interpolant, and whether the point is on both flanks and in a refinable pinion cell;
 - :func:`lowest_nodes`, :func:`refine`: the refinement's candidate nodes and its constrained
-  Newton steps (``_Engine._refined``, ``_Engine.refine``);
+  Newton steps;
 - :func:`tangency`, :func:`interval_end`: the tangency point (the least clearance over the
   smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends);
-  these have no numpy twin: without the kernels they run point by point in Python.
+- :func:`zone_widths`: the pattern's widths along lines.
 
-The results equal the numpy paths' to rounding (the order of the operations is kept; a BLAS
-product there may fuse a multiply-add; the refinement's closed-form step is chosen row by row).
-Where numba cannot be imported, or with the environment variable ``GEAROPT_JIT=0``,
-:data:`ENABLED` is False and the engine runs its numpy paths.
+A numpy reference of the node fields, the point clearance and the refinement (the engine's
+whole-array paths before these kernels) lives with the tests (``tests/numpy_engine.py``); the
+kernels' parity test holds the two to the same results. Where numba cannot be imported, or
+with the environment variable ``GEAROPT_JIT=0``, :data:`ENABLED` is False and the same
+functions run as plain Python (slow: for checks, not for studies).
 """
 
 from __future__ import annotations
@@ -53,14 +51,15 @@ ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
 
 _TO_TURNS = 0.5 / math.pi
 _TURN = 2.0 * math.pi
-# the refinement's stencil (``_Engine._STENCIL``) in steps of a fraction of a cell
+# the refinement's stencil (centre, the four neighbours, the four corners) in steps of a
+# fraction of a cell
 _STENCIL_S = np.array([0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 1.0, -1.0, -1.0])
 _STENCIL_T = np.array([0.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
 
 
 def _compiled(func=None, *, inline=False):
     """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (plain
-    Python: only the interval ends' search, which has no numpy twin, runs it); ``inline``:
+    Python); ``inline``:
     inlined into its callers (the point evaluations, which take tuples of tables: a call
     boundary would cost more than the evaluation)."""
     if func is None:
@@ -94,7 +93,7 @@ def _corner(x, limit):
 
 @_compiled(inline=True)
 def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
-    """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``_Engine``'s
+    """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``ContactEngine``'s
     qx, qy and the qz parts of the gear's unit coordinates; ``theta`` = atan2(o1, o0)) on a
     row: ``(delta, valid, R2)``. ``gear``: rho coefficients, limits, columns, taper (flag and
     constants), coefficients, valid cells."""
@@ -298,7 +297,7 @@ def refine(
     gear,
     edge,
 ):
-    """:meth:`gearopt.contact._Engine.refine` row by row: constrained Newton steps from
+    """:meth:`gearopt.contact.engine.ContactEngine.refine` row by row: constrained Newton steps from
     ``(s, t)`` (updated in place with ``best``, the start values, NaN: the interpolated value
     there; and ``edge``), at most ``caps[g]`` steps for the rows of group g, a group stopping
     when none of its rows moved more than a thousandth of a cell."""
