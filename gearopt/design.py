@@ -1,4 +1,5 @@
-"""Design files (TOML) and the frozen, validated dataclasses they load into.
+"""The frozen, validated dataclasses a design file (TOML) loads into (reading the file, which
+needs the plugin registry for its ``[machine]`` table, is :mod:`gearopt.design_files`).
 
 A design file has the tables ``[meta]`` (optional), ``[pair]`` (the blank data of the pair),
 ``[machine]`` (``model = "..."`` plus the machine model's own keys, parsed by that model's plugin),
