@@ -69,7 +69,7 @@ class Blank:
         m_mn, m_mn / cos psi_m, m_mt A_o / A_m.
     mean_pitch_radius_mm, outer_pitch_radius_mm
         A_m sin g and A_o sin g; the gear's outer pitch radius (m_ot N2 / 2) is the backlash
-        radius of DESIGN.md.
+        radius (docs/architecture.md, Backlash and ease-off).
     crown_gear_teeth
         N_c = N / sin g (the same for both members).
     mean_addendum_mm, mean_dedendum_mm, whole_depth_mm, clearance_mm

@@ -12,11 +12,12 @@ flank: Jacobians by complex step (all three perturbations in one call), a second
 from the pitch line (h = 0, where the model knows a start), step clipping per unknown, and one
 repair pass that restarts a failed node from its converged neighbour.
 
-Then the region the tool really generates (DESIGN.md, pitfalls): a node is generated when Newton
-converged there, the Jacobian keeps the sign it has on the pitch line (a sign change marks the
-envelope's fold: below it Newton lands on the folded-back sheet), it is connected to the pitch row
-through such nodes of its face column, it lies ``fold_trim_mm`` or more above the first folded or
-failed node of its column, and the model says the tool reaches it (the blade's tip).
+Then the region the tool really generates (docs/architecture.md, Numerical notes): a node is
+generated when Newton converged there, the Jacobian keeps the sign it has on the pitch line (a
+sign change marks the envelope's fold: below it Newton lands on the folded-back sheet), it is
+connected to the pitch row through such nodes of its face column, it lies ``fold_trim_mm`` or
+more above the first folded or failed node of its column, and the model says the tool reaches it
+(the blade's tip).
 """
 
 from __future__ import annotations

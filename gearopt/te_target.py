@@ -2,19 +2,20 @@
 
     delta_phi2(x) = quadratic x^2 + quartic x^4,     x = phi1 - phi1_0   (rad of pinion)
 
-in rad of gear, negative away from the reference point phi1_0 (the TE convention of DESIGN.md:
-the maximum is 0). The classic parabola is ``quartic = 0``. The ``[te_target]`` table of a design
-gives either the coefficients (``quadratic``, ``quartic``) or the two boundary conditions of
-seed 002: ``pitch_point_te_arcsec`` at the transfer point x_T = pi / N1 (half a pinion pitch
-from phi1_0, where the next pair takes over) and ``mesh_in_te_arcsec`` at the mesh-in point
-x_in = CR pi / N1, with ``contact_ratio`` CR the pinion rotation in contact on the flank over the
-angular pitch (entry and exit symmetric about phi1_0). Then
+in rad of gear, negative away from the reference point phi1_0 (the TE convention of
+docs/architecture.md, Transmission error: the maximum is 0). The classic parabola is
+``quartic = 0``. The ``[te_target]`` table of a design gives either the coefficients
+(``quadratic``, ``quartic``) or the two boundary conditions of seed 002: ``pitch_point_te_arcsec``
+at the transfer point x_T = pi / N1 (half a pinion pitch from phi1_0, where the next pair takes
+over) and ``mesh_in_te_arcsec`` at the mesh-in point x_in = CR pi / N1, with ``contact_ratio`` CR
+the pinion rotation in contact on the flank over the angular pitch (entry and exit symmetric
+about phi1_0). Then
 
     [x_T^2  x_T^4 ] [quadratic]   [pitch_point_te]
     [x_in^2 x_in^4] [quartic  ] = [mesh_in_te    ]      (rad; seed 002's two conditions)
 
-Seed 002's Table 2 lists its "a" and "b"; ``seed_cases.json`` explains why its columns must be
-read as a = quadratic and b = quartic to be consistent.
+Seed 002's Table 2 lists its "a" and "b"; ``tests/data/seed_cases.json`` explains why its
+columns must be read as a = quadratic and b = quartic to be consistent.
 """
 
 from __future__ import annotations

@@ -1,11 +1,11 @@
 """Mean normal chordal tooth thickness, measured on generated flanks (seed 001 eqs 39-48).
 
-The frame S_n of DESIGN.md: origin at the tooth's pitch point M (on the pitch cone at the mean
-cone distance, in the tooth's middle), ``x_n`` along the tooth depth toward the tip (the pitch
-cone's outward normal in the axial plane), ``z_n`` along the tooth's lengthwise tangent at M (it
-makes the mean spiral angle with the cone generatrix; it is the normal of the normal section),
-``y_n = z_n x x_n`` across the tooth. The chordal points lie in the plane z_n = 0 at
-x_n = a_m - a_c (the mean addendum minus the chordal addendum), one on each flank, symmetric
+The frame S_n (docs/architecture.md, Frames and signs): origin at the tooth's pitch point M (on the
+pitch cone at the mean cone distance, in the tooth's middle), ``x_n`` along the tooth depth toward
+the tip (the pitch cone's outward normal in the axial plane), ``z_n`` along the tooth's lengthwise
+tangent at M (it makes the mean spiral angle with the cone generatrix; it is the normal of the
+normal section), ``y_n = z_n x x_n`` across the tooth. The chordal points lie in the plane z_n = 0
+at x_n = a_m - a_c (the mean addendum minus the chordal addendum), one on each flank, symmetric
 about the tooth's middle: y_n = -t/2 and +t/2.
 
 The measurement works on any pair of FlankMaps (convex and concave flank of the same tooth) and

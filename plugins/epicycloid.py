@@ -103,7 +103,8 @@ FLANK_KEYS = (
 )
 MEMBER_KEYS = (*FLANK_KEYS, *FLANKS)
 MACHINE_KEYS = ("blade_groups", "blade_module_mm", *MEMBERS, *FLANK_KEYS)
-#: seed 003's drive side: pinion convex driving gear concave (DESIGN.md)
+#: seed 003's drive side, pinion convex driving gear concave
+#: (docs/architecture.md, Drive and coast)
 DRIVE_FLANK = {"pinion": "convex", "gear": "concave"}
 COAST_FLANK = {"pinion": "concave", "gear": "convex"}
 

@@ -13,7 +13,7 @@ here and a tooth contact analysis of the generated FlankMaps are independent com
 * :func:`local_mesh` -- the mesh of a pinion patch and a gear patch near their contact point M:
   the second derivative of the lag (the parabolic transmission error, m'21), the direction of
   the path of contact on the gear flank, and the contact ellipse's major axis in the pattern
-  coordinates of the pinion flank (DESIGN.md), all at M.
+  coordinates of the pinion flank (docs/architecture.md, Pattern coordinates), all at M.
 """
 
 from __future__ import annotations

@@ -60,9 +60,10 @@ back (``[machine.pinion]`` / ``[machine.pinion.<flank>]``, defaults below). Solv
 setting, cradle angle, blank offset, sliding base, ratio of roll c1 and the second-order roll
 term c2, from six conditions at the mean contact point M:
 
-1. M (given in the pinion's pattern coordinates, DESIGN.md) is generated at centre roll
-   (phi_p = 0, so the modified roll is expanded about M): the meshing equation of the pinion's
-   generation holds at the centre-roll tool point that lies at M's axial position and radius;
+1. M (given in the pinion's pattern coordinates, docs/architecture.md, Pattern coordinates) is
+   generated at centre roll (phi_p = 0, so the modified roll is expanded about M): the meshing
+   equation of the pinion's generation holds at the centre-roll tool point that lies at M's
+   axial position and radius;
 2. and 3. the pinion's normal there equals the gear's at M, in M's cylindrical frame (the
    pinion's angular position is free: that is the index of the cut);
 4. the path of contact on the gear flank at M has the direction ``path_angle_deg``
@@ -747,11 +748,11 @@ def synthesize_pinion_flank(
     """The pinion flank's settings (a ``flank_type`` instance) by local synthesis;
     ``place_tip``: then put a straight blade's tip on the root line (:func:`_tip_on_root`;
     the chosen cutter radius is then the blade's radius at M's height, not at its tip).
-    ``work_phase_deg`` is set so that the flank meets the gear at M in the assembly, the coast
-    flank turned further by ``backlash_mm`` (circumferential at the gear's outer pitch radius,
-    DESIGN.md) to thin the tooth; ``reference_gear_turn_rad``: the gear's angle when the
-    other side touched at its M at pinion angle 0 (the report's ``gear_turn_rad``), so that
-    both flanks sit in one assembly."""
+    ``work_phase_deg`` is set so that the flank meets the gear at M in the assembly, the coast flank
+    turned further by ``backlash_mm`` (circumferential at the gear's outer pitch radius,
+    docs/architecture.md, Backlash and ease-off) to thin the tooth; ``reference_gear_turn_rad``: the
+    gear's angle when the other side touched at its M at pinion angle 0 (the report's
+    ``gear_turn_rad``), so that both flanks sit in one assembly."""
     blank = pair.blank
     key = repr((pair, flank, sorted(chosen.items()), targets, sorted(gear_specs.items())))
     if key not in _SOLVED:

@@ -18,7 +18,8 @@ from gearopt.studyfile import parse_study_spec
 
 HERE = Path(__file__).resolve().parent
 
-# seed 001 section 5.4: the four assembly errors together (housing frame of DESIGN.md)
+# seed 001 section 5.4: the four assembly errors together (housing frame and signs:
+# docs/architecture.md, Frames and signs)
 SECTION_5_4 = {
     "offset_mm": 0.221,
     "pinion_axial_mm": -0.005,

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -15,7 +14,8 @@ import gearopt
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
 TOY = Path(__file__).parent / "toy_plugin"
-SEED_CASES = ROOT.parent / "shared" / "reference" / "seed_cases.json"
+#: the seeds' published inputs and outputs (provenance: tests/data/README.md)
+SEED_CASES = Path(__file__).parent / "data" / "seed_cases.json"
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -30,14 +30,7 @@ def _compiled_kernels():
 
 @pytest.fixture(scope="session")
 def seed_cases() -> dict:
-    """The seeds' published inputs and outputs (../shared/reference/seed_cases.json).
-
-    CI always has ../shared; elsewhere the published-number tests are skipped if it is missing.
-    """
-    if not SEED_CASES.exists():
-        if os.environ.get("CI"):
-            pytest.fail(f"{SEED_CASES} is missing on CI")
-        pytest.skip(f"{SEED_CASES} not found (the shared folder beside the project)")
+    """The seeds' published inputs and outputs (tests/data/seed_cases.json)."""
     return json.loads(SEED_CASES.read_text())
 
 

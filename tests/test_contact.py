@@ -3,8 +3,9 @@ corrections of seed 003 (sections 1 and 7), ease-off, misalignment and compensat
 5.3, 5.4), and ill-posed requests.
 
 Every check reads the outputs (TE curves, separations on the pinion nodes, backlash, ease-off
-maps), never what a solver was told to satisfy. Tolerances: DESIGN.md's numerical targets and
-the issue's done-when figures; each test says where its number comes from.
+maps), never what a solver was told to satisfy. Tolerances: the accuracy figures of
+docs/architecture.md, Numerical notes, and the issue's done-when figures; each test says where
+its number comes from.
 """
 
 from __future__ import annotations

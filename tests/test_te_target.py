@@ -18,10 +18,10 @@ from gearopt.errors import DesignError
 from gearopt.newton_tca import newton_tca
 from gearopt.te_target import ARCSEC, TETarget, compare
 
-from .conftest import STUDIES
+from .conftest import SEED_CASES, STUDIES
 
 CASES = STUDIES / "fourth_order_te"
-REFERENCE = json.loads((STUDIES.parent / "../shared/reference/seed_cases.json").read_text())
+REFERENCE = json.loads(SEED_CASES.read_text())
 SEED = REFERENCE["fourth_order_te_seed002"]
 
 

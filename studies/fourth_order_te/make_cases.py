@@ -1,8 +1,8 @@
 """Write seed 002's five fourth-order TE designs (Table 2) from base.toml.
 
 Each case keeps the base pair and asks, in ``[te_target]``, for the paper's pitch-point TE with
-the same mesh-in TE and contact ratio (seed_cases.json: the cases share them; its caveat reads
-the table's a as the quadratic and b as the quartic coefficient).
+the same mesh-in TE and contact ratio (tests/data/seed_cases.json: the cases share them; its
+caveat reads the table's a as the quadratic and b as the quartic coefficient).
 
 1. ``--adjust`` (slow, about a minute a case): as seed 002 does, the reference point M is moved
    along the tooth height and the drive side's path direction turned until the contact of the
