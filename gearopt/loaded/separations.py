@@ -85,6 +85,10 @@ class PairPatches:
     length_mm, width_mm
         ``(along, across)`` the patches' sides along and across the contact line (mm, on the
         flank).
+    x_mm, y_mm
+        ``(along, across)`` the patch centres' coordinates along and across the contact line
+        (mm on the flank, from the unloaded contact point): where the local contact
+        compliance of the half-spaces is evaluated.
     valid
         ``(along, across)`` True where the patch lies on both flanks.
     boundary
@@ -105,6 +109,8 @@ class PairPatches:
     area_mm2: NDArray
     length_mm: NDArray
     width_mm: NDArray
+    x_mm: NDArray
+    y_mm: NDArray
     valid: NDArray
     boundary: NDArray
     contact_rad: float
@@ -205,8 +211,12 @@ def contact_patches(
         gs, gh = gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
         dt = t[1] - t[0]
         dw = w[1] - w[0]
-        along_mm = np.linalg.norm(p_s * major[0] + p_t * major[1], axis=-1) * dt
-        across_mm = np.linalg.norm(p_s * minor[0] + p_t * minor[1], axis=-1) * dw
+        scale_a = np.linalg.norm(p_s * major[0] + p_t * major[1], axis=-1)
+        scale_w = np.linalg.norm(p_s * minor[0] + p_t * minor[1], axis=-1)
+        along_mm, across_mm = scale_a * dt, scale_w * dw
+        centre = (grid.along // 2, grid.across // 2)
+        x_mm = np.broadcast_to(t[:, None] * scale_a[centre], s.shape)
+        y_mm = (shift[:, None] + w[None, :]) * scale_w[centre]
         outward = np.zeros_like(valid)
         outward[0, :] = outward[-1, :] = True
         outward[1:-1, :] = ~valid[:-2, :] | ~valid[2:, :]
@@ -224,6 +234,8 @@ def contact_patches(
                 area_mm2=np.linalg.norm(np.cross(p_s, p_t), axis=-1) * dt * dw,
                 length_mm=along_mm,
                 width_mm=across_mm,
+                x_mm=np.array(x_mm),
+                y_mm=y_mm,
                 valid=valid,
                 boundary=boundary,
                 contact_rad=m0,

@@ -1,0 +1,353 @@
+"""Loaded tooth contact analysis: load sharing, loaded transmission error, contact pressure.
+
+At every mesh position of the unloaded TCA (the same positions, ``tca.phi1_deg``) the tooth pairs
+that can come into contact are sampled finely around their unloaded contact points
+(:mod:`gearopt.loaded.separations`): patch i has the angular clearance delta_i and the normal
+factor f_i of the clearance field. With the gear turned back by theta from its ideal position,
+the gap at patch i is
+
+    g_i = delta_i f_i + sum_j C_ij F_j - theta f_i  >= 0,   F_i >= 0,   g_i F_i = 0,
+    sum_i f_i F_i = T                                                  (gear torque, N mm)
+
+with C the compliance: the bending and shear of both teeth (finite-element influence numbers of
+each member's tooth, :mod:`gearopt.loaded.compliance`) plus the local contact compliance of the
+two half-spaces (:mod:`gearopt.loaded.halfspace`) between patches of one pair. Teeth of different
+pairs are separate bodies in the tooth models, so C couples patches of one pair only. f_i is
+both the normal separation per radian of gear rotation and the moment arm of a normal force about
+the gear axis, so the rigid-body approach and the torque balance share it. The complementarity
+problem is solved exactly per position and torque (:mod:`gearopt.loaded.lcp`).
+
+The loaded TE is theta as an angle of the gear on the unloaded TE's convention: LTE = (g_min -
+theta) in arcsec, with g_min the unloaded TCA's reference lag, so at zero torque the LTE is the
+unloaded TE at every position.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import ClearanceField
+from gearopt.errors import GearoptError
+from gearopt.loaded.separations import PairPatches, PatchGrid, contact_patches
+
+__all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact", "check_torques"]
+
+ARCSEC = 180.0 * 3600.0 / math.pi
+
+
+def check_torques(torque_nm) -> tuple[float, ...]:
+    """The output torques (N m) as a tuple of finite non-negative numbers, or a GearoptError
+    naming ``load.torque_nm``."""
+    values = torque_nm if isinstance(torque_nm, list | tuple) else [torque_nm]
+    if not values:
+        raise GearoptError("load.torque_nm", torque_nm, "must name at least one torque")
+    out = []
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise GearoptError("load.torque_nm", v, "must be a finite number of N m")
+        if v < 0.0:
+            raise GearoptError("load.torque_nm", v, "must not be negative (output torque, N m)")
+        out.append(float(v))
+    return tuple(out)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PositionLoad:
+    """The load distribution at one position and torque: patch forces of each pair in contact.
+
+    Attributes
+    ----------
+    theta_rad
+        The gear's loaded lag behind its ideal position.
+    pairs
+        The pairs' offsets (pitches from the base pair), in the order of ``forces_n``.
+    forces_n, pressure_mpa
+        One ``(along, across)`` array per pair.
+    """
+
+    theta_rad: float
+    pairs: tuple[int, ...]
+    forces_n: tuple[NDArray, ...]
+    pressure_mpa: tuple[NDArray, ...]
+
+
+@dataclass(frozen=True, kw_only=True)
+class LoadedContact:
+    """Loaded TCA of one side at one torque (module docstring for the definitions).
+
+    Attributes
+    ----------
+    side, torque_nm
+        The side and the output torque on the gear (N m).
+    phi1_deg, lte_arcsec
+        ``(n,)`` the unloaded TCA's positions and the loaded TE there.
+    lte_peak_to_peak_arcsec
+        Maximum minus minimum of the LTE, each refined by a parabola through its neighbours.
+    load_share
+        ``(n, k)`` the share of the load of each pair in contact, earliest pair in its cycle
+        first (zero where a pair does not carry).
+    max_contact_pressure_mpa, max_line_load_n_per_mm
+        The largest patch pressure and the largest load per unit length of contact line over
+        the positions.
+    mesh_stiffness_n_per_mm_um
+        The total normal load per unit face width in contact over the normal approach (the
+        loaded lag beyond the unloaded one times the normal factor at the contact), mean over
+        the positions.
+    edge_loading
+        True where a loaded patch lies on a flank's boundary at any position.
+    pattern_face_mm, pattern_profile_mm
+        The centres of the loaded patches over the cycle (pattern coordinates): the loaded
+        pattern, whose outline ``outline_mm`` is their convex hull.
+    positions
+        The load distribution of every position (:class:`PositionLoad`).
+    """
+
+    side: str
+    torque_nm: float
+    phi1_deg: NDArray
+    lte_arcsec: NDArray
+    lte_peak_to_peak_arcsec: float
+    load_share: NDArray
+    max_contact_pressure_mpa: float
+    max_line_load_n_per_mm: float
+    mesh_stiffness_n_per_mm_um: float
+    edge_loading: bool
+    pattern_face_mm: NDArray
+    pattern_profile_mm: NDArray
+    outline_mm: NDArray
+    positions: tuple[PositionLoad, ...] = field(repr=False)
+
+    def as_dict(self) -> dict:
+        """JSON-ready form (the ``ltca`` entries of ``gearopt analyze --json``)."""
+        return {
+            "torque_nm": self.torque_nm,
+            "lte_arcsec": [float(v) for v in self.lte_arcsec],
+            "lte_peak_to_peak_arcsec": self.lte_peak_to_peak_arcsec,
+            "load_share": [[float(v) for v in row] for row in self.load_share],
+            "max_contact_pressure_mpa": self.max_contact_pressure_mpa,
+            "max_line_load_n_per_mm": self.max_line_load_n_per_mm,
+            "mesh_stiffness_n_per_mm_um": self.mesh_stiffness_n_per_mm_um,
+            "edge_loading": self.edge_loading,
+            "pattern_outline_mm": [[float(a), float(b)] for a, b in self.outline_mm],
+        }
+
+
+def _peak(values: NDArray, sign: float) -> float:
+    """The extreme of sampled values (max for sign +1, min for -1) refined by the parabola
+    through the extreme sample and its neighbours (the sample itself at an end)."""
+    y = sign * np.asarray(values, float)
+    k = int(np.argmax(y))
+    if 0 < k < len(y) - 1:
+        a, b, c = y[k - 1], y[k], y[k + 1]
+        curve = a - 2.0 * b + c
+        if curve < 0.0:
+            return sign * float(b - 0.125 * (c - a) ** 2 / curve)
+    return sign * float(y[k])
+
+
+def _hull(points: NDArray) -> NDArray:
+    """Convex hull (Andrew's monotone chain) of ``(n, 2)`` points, counter-clockwise."""
+    pts = np.unique(np.round(points, 9), axis=0)
+    if len(pts) < 3:
+        return pts
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in pts[::-1]:
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Position:
+    """One position's candidate patches and their compliance (the same for every torque)."""
+
+    patches: tuple[PairPatches, ...]
+    keep: tuple[NDArray, ...]  # flat indices of each pair's candidate patches
+    separation_mm: NDArray
+    lever_mm: NDArray
+    area_mm2: NDArray
+    compliance_mm_per_n: NDArray
+    lag_rad: float  # the unloaded lag (least clearance over the pairs)
+    contact_factor_mm: float  # the normal factor at the unloaded contact
+
+
+def loaded_contact(
+    field: ClearanceField,
+    tca,
+    torques_nm,
+    *,
+    compliance,
+    solve,
+    frame,
+    grid: PatchGrid | None = None,
+    side: str = "drive",
+) -> list[LoadedContact]:
+    """Loaded TCA of one side at the unloaded TCA's positions, one result per torque.
+
+    Parameters
+    ----------
+    field
+        The side's clearance field.
+    tca
+        The side's unloaded TCA (:class:`gearopt.mesh.ToothContact`): its positions and its TE
+        convention.
+    torques_nm
+        Output torques on the gear (N m).
+    compliance
+        ``compliance(pair_patches, keep) -> (m, m)`` the compliance (mm/N) between a pair's
+        candidate patches: both teeth's bending and the contact's local compliance.
+    solve
+        ``solve(separation_mm, compliance_mm_per_n, lever_mm, torque_nmm) -> (forces_n,
+        theta_rad)`` the load distribution (:mod:`gearopt.loaded.lcp`).
+    frame
+        The pattern coordinates (:class:`gearopt.mesh.ToothFrame`).
+    grid
+        The patch grid of the potential contact zone.
+    """
+    torques = check_torques(list(torques_nm))
+    grid = grid or PatchGrid()
+    pitch = field.pinion.pitch_rad
+    u = np.radians(np.asarray(tca.phi1_deg, float))
+    reach_mm = grid.reach_um * 1e-3
+    prepared = []
+    for uj in u:
+        base = round(-uj / pitch)
+        pairs = [base + k for k in (-2, -1, 0, 1, 2)]
+        patches = contact_patches(field, float(uj), pairs, grid)
+        if not patches:
+            raise GearoptError(
+                "load", math.degrees(uj), "no tooth pair touches at this position (deg)"
+            )
+        lag = min(p.contact_rad for p in patches)
+        seps, levers, areas, blocks, keeps, kept = [], [], [], [], [], []
+        for p in patches:
+            sep = (p.clearance_rad - lag) * p.factor_mm
+            keep = np.flatnonzero((p.valid & (sep <= reach_mm)).ravel())
+            if keep.size == 0:
+                continue
+            kept.append(p)
+            keeps.append(keep)
+            seps.append(p.clearance_rad.ravel()[keep] * p.factor_mm.ravel()[keep])
+            levers.append(p.factor_mm.ravel()[keep])
+            areas.append(p.area_mm2.ravel()[keep])
+            blocks.append(compliance(p, keep))
+        size = sum(b.shape[0] for b in blocks)
+        c = np.zeros((size, size))
+        start = 0
+        for b in blocks:
+            c[start : start + b.shape[0], start : start + b.shape[0]] = b
+            start += b.shape[0]
+        best = min(kept, key=lambda p: p.contact_rad)
+        centre = tuple(np.array(best.factor_mm.shape) // 2)
+        prepared.append(
+            _Position(
+                patches=tuple(kept),
+                keep=tuple(keeps),
+                separation_mm=np.concatenate(seps),
+                lever_mm=np.concatenate(levers),
+                area_mm2=np.concatenate(areas),
+                compliance_mm_per_n=c,
+                lag_rad=lag,
+                contact_factor_mm=float(best.factor_mm[centre]),
+            )
+        )
+    lags = np.array([p.lag_rad for p in prepared])
+    reference = lags + np.asarray(tca.te_arcsec, float) / ARCSEC
+    g_min = float(np.median(reference))
+    if np.ptp(reference) * ARCSEC > 1e-3:
+        raise GearoptError(
+            "load",
+            float(np.ptp(reference) * ARCSEC),
+            "the loaded contact's unloaded lags disagree with the TCA's (arcsec)",
+        )
+    return [_at_torque(t, prepared, tca, g_min, frame, side, solve) for t in torques]
+
+
+def _at_torque(torque_nm, prepared, tca, g_min, frame, side, solve) -> LoadedContact:
+    n = len(prepared)
+    theta = np.empty(n)
+    shares, loads = [], []
+    p_max = line_max = 0.0
+    stiffness = []
+    edge = False
+    face, profile = [], []
+    for j, pos in enumerate(prepared):
+        forces, th = solve(
+            pos.separation_mm, pos.compliance_mm_per_n, pos.lever_mm, torque_nm * 1e3
+        )
+        theta[j] = th
+        per_pair, pressures, start = [], [], 0
+        total = float(forces.sum())
+        share = []
+        for p, keep in zip(pos.patches, pos.keep, strict=True):
+            f = np.zeros(p.valid.size)
+            f[keep] = forces[start : start + keep.size]
+            start += keep.size
+            f = f.reshape(p.valid.shape)
+            pressure = np.where(p.area_mm2 > 0.0, f / p.area_mm2, 0.0)
+            per_pair.append(f)
+            pressures.append(pressure)
+            share.append(float(f.sum()) / total if total > 0.0 else 0.0)
+            loaded = f > 0.0
+            if loaded.any():
+                p_max = max(p_max, float(pressure.max()))
+                line = f.sum(axis=1) / np.median(p.length_mm, axis=1)
+                line_max = max(line_max, float(line.max()))
+                edge = edge or bool((loaded & p.boundary).any())
+                face.append(p.face_mm[loaded] - frame.toe_mm)
+                profile.append(p.profile_mm[loaded] - frame.root_mm)
+        order = np.argsort([-p.pair for p in pos.patches])  # the earliest in its cycle first
+        shares.append([share[k] for k in order])
+        loads.append(
+            PositionLoad(
+                theta_rad=float(th),
+                pairs=tuple(p.pair for p in pos.patches),
+                forces_n=tuple(per_pair),
+                pressure_mpa=tuple(pressures),
+            )
+        )
+        if total > 0.0:
+            approach_um = (th - pos.lag_rad) * pos.contact_factor_mm * 1e3
+            loaded_face = np.concatenate(
+                [p.face_mm[f > 0.0] for p, f in zip(pos.patches, per_pair, strict=True)]
+            )
+            width = float(np.ptp(loaded_face)) if loaded_face.size > 1 else 0.0
+            if approach_um > 0.0 and width > 0.0:
+                stiffness.append(total / width / approach_um)
+    lte = (g_min - theta) * ARCSEC
+    k = max(len(s) for s in shares)
+    share = np.array([s + [0.0] * (k - len(s)) for s in shares])
+    face_all = np.concatenate(face) if face else np.zeros(0)
+    profile_all = np.concatenate(profile) if profile else np.zeros(0)
+    outline = (
+        _hull(np.stack([face_all, profile_all], axis=1)) if face_all.size else np.zeros((0, 2))
+    )
+    return LoadedContact(
+        side=side,
+        torque_nm=float(torque_nm),
+        phi1_deg=np.asarray(tca.phi1_deg, float),
+        lte_arcsec=lte,
+        lte_peak_to_peak_arcsec=_peak(lte, 1.0) - _peak(lte, -1.0),
+        load_share=share,
+        max_contact_pressure_mpa=p_max,
+        max_line_load_n_per_mm=line_max,
+        mesh_stiffness_n_per_mm_um=float(np.mean(stiffness)) if stiffness else 0.0,
+        edge_loading=edge,
+        pattern_face_mm=face_all,
+        pattern_profile_mm=profile_all,
+        outline_mm=outline,
+        positions=tuple(loads),
+    )
