@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
-from gearopt.loaded.separations import PairPatches, PatchGrid, contact_patches
+from gearopt.loaded.separations import PairPatches, PatchOptions, contact_patches
 
 __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact", "check_torques"]
 
@@ -192,7 +192,7 @@ def loaded_contact(
     compliance,
     solve,
     frame,
-    grid: PatchGrid | None = None,
+    grid: PatchOptions | None = None,
     side: str = "drive",
 ) -> list[LoadedContact]:
     """Loaded TCA of one side at the unloaded TCA's positions, one result per torque.
@@ -218,7 +218,7 @@ def loaded_contact(
         The patch grid of the potential contact zone.
     """
     torques = check_torques(list(torques_nm))
-    grid = grid or PatchGrid()
+    grid = grid or PatchOptions()
     pitch = field.pinion.pitch_rad
     u = np.radians(np.asarray(tca.phi1_deg, float))
     reach_mm = grid.reach_um * 1e-3

@@ -30,7 +30,7 @@ from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
 from gearopt.flank import FlankMap, axial_plane
 
-__all__ = ["PatchGrid", "PairPatches", "contact_patches", "flank_points"]
+__all__ = ["PatchOptions", "PairPatches", "contact_patches", "flank_points"]
 
 #: finite-difference step of the separation's curvature and of the surface's tangents (mm)
 _STEP_MM = 0.05
@@ -117,7 +117,7 @@ class PairPatches:
 
 
 @dataclass(frozen=True, kw_only=True)
-class PatchGrid:
+class PatchOptions:
     """The patch counts of the potential contact zone: ``along`` the contact line (strips) and
     ``across`` it, and how far it reaches: up to a separation of ``reach_um`` above the contact
     (the approach the largest load may bring), and at most ``max_half_width_mm`` across."""
@@ -153,12 +153,12 @@ def _curvature(field: ClearanceField, phi: float, s0: float, h0: float, factor: 
 
 
 def contact_patches(
-    field: ClearanceField, u_rad: float, pairs, grid: PatchGrid | None = None
+    field: ClearanceField, u_rad: float, pairs, grid: PatchOptions | None = None
 ) -> list[PairPatches]:
     """The contact patches of the tooth pairs ``pairs`` (offsets in pitches from the base pair)
     at relative pinion rotation ``u_rad`` (direction of motion), each around its refined
     unloaded contact point (module docstring). Pairs that do not touch are left out."""
-    grid = grid or PatchGrid()
+    grid = grid or PatchOptions()
     pinion, gear = field.pinion, field.gear
     pitch = pinion.pitch_rad
     phis = field.sense * (u_rad + np.asarray(pairs, float) * pitch)
