@@ -40,6 +40,7 @@ from gearopt.contact import ClearanceField
 from gearopt.contact.tangency import TangencySystem
 from gearopt.errors import GearoptError
 from gearopt.flank_jet import FlankJet
+from gearopt.mesh import PairCurve
 
 __all__ = ["NewtonTCA", "contact_interval_end", "newton_tca", "tangency_equations"]
 
@@ -176,9 +177,7 @@ def newton_tca(
     system = TangencySystem(field)
     phi0, _ = system.angles(float(u[0]), gear_angle_rad)
     if start is None:
-        from gearopt.mesh import _PairCurve
-
-        first = _PairCurve(field, gear_angle_rad).sample(u[:1])
+        first = PairCurve(field, gear_angle_rad).sample(u[:1])
         s1, h1 = float(first.contact_face_mm[0]), float(first.contact_profile_mm[0])
         lag = float(first.minimum_rad[0])
     else:

@@ -20,7 +20,7 @@ from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_b
 from gearopt.contact import ContactError, JointField
 from gearopt.design import Misalignment
 from gearopt.errors import GearoptError
-from gearopt.mesh import ease_off
+from gearopt.mesh import SideCycle, ease_off
 
 from .conftest import STUDIES
 
@@ -501,21 +501,19 @@ def test_hand_over_guessed_from_interpolated_lags_agrees_with_the_iteration(alig
     # the two pairs' interpolated lags cross and checked by evaluations around the guess; the
     # iteration on the bracket (secant, parabola, secant on evaluated differences) must find
     # the same hand-over, TE and mean point
-    import gearopt.mesh as mesh
-
     pair = aligned53["pair"]
     opts = AnalysisOptions()
     guesses = []
-    crossing = mesh._crossing
+    crossing = SideCycle.crossing
 
-    def recorded(*args):
-        guesses.append(crossing(*args))
+    def recorded(side, *args):
+        guesses.append(crossing(side, *args))
         return guesses[-1]
 
-    monkeypatch.setattr(mesh, "_crossing", recorded)
+    monkeypatch.setattr(SideCycle, "crossing", recorded)
     fit = contact_sides(pair, opts)
     assert len(guesses) == 2 and all(g is not None for g in guesses)  # both sides guessed
-    monkeypatch.setattr(mesh, "_crossing", lambda *args: None)
+    monkeypatch.setattr(SideCycle, "crossing", lambda side, *args: None)
     iterated = contact_sides(pair, opts)
     for side in ("drive", "coast"):
         a, b = fit[side], iterated[side]

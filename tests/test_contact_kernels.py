@@ -30,9 +30,10 @@ from gearopt.analysis import (
 from gearopt.contact import kernels as contact_kernels
 from gearopt.design import Misalignment
 from gearopt.flank import FlankGrid
+from gearopt.mesh import cycle as mesh_cycle
 from gearopt.mesh import mesh_pair
 
-from . import numpy_engine
+from . import numpy_engine, numpy_reference
 from .conftest import STUDIES
 
 pytestmark = pytest.mark.skipif(
@@ -123,3 +124,37 @@ def test_kernels_give_the_numpy_paths_results(case, monkeypatch):
                 continue
             checked += 1
     assert checked > 40  # (every side's curves, pattern, flags, backlash and ease-off maps)
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_zone_widths_kernel_gives_the_numpy_reference(case, monkeypatch):
+    # the pattern widths and contact-ellipse axes of a real TCA (both sides: the whole
+    # pattern across the path at M, the zone at M along its long axis), measured by the
+    # compiled kernel and by the numpy reference on the same inputs: the same samples and
+    # arithmetic, so the same widths to the bit
+    name, overrides, conditions = CASES[case]
+    design = gearopt.with_overrides(gearopt.load_design(STUDIES / name), overrides)
+    options = AnalysisOptions(**conditions)
+    pair = mesh_pair(
+        design, generated_flanks(design, options.grid), misalignment=options.misalignment
+    )
+    calls = []
+    widths = mesh_cycle.widths
+
+    def recorded(*args):
+        calls.append((args, widths(*args)))
+        return calls[-1][1]
+
+    monkeypatch.setattr(mesh_cycle, "widths", recorded)
+    sides = contact_sides(pair, options)
+    assert len(calls) == 1
+    args, compiled = calls[0]
+    assert compiled.shape == (4,) and np.all(compiled > 0.0)
+    reference = numpy_reference.widths(*args)
+    np.testing.assert_array_equal(compiled, reference)
+    got = [
+        getattr(sides[s], k)
+        for s in ("drive", "coast")
+        for k in ("width_mm", "ellipse_major_axis_mm")
+    ]
+    assert got == compiled.tolist()

@@ -450,9 +450,9 @@ def _bias_cases(seed_cases_path):
 
 
 # known gaps: none since the contact interval's ends are where the tangency point leaves the
-# flanks (gearopt.mesh._tangency_end); before, the engine's edge flag let the contact slide along
-# the pinion's top (R_h 135.6 read 42.3 against 40.406) and stopped the path of R_b 250 at the
-# pinion's lowest generated cells, 2.2 mm short of the toe corner
+# flanks (gearopt.mesh.SideCycle.tangency_end); before, the engine's edge flag let the contact
+# slide along the pinion's top (R_h 135.6 read 42.3 against 40.406) and stopped the path of
+# R_b 250 at the pinion's lowest generated cells, 2.2 mm short of the toe corner
 _KNOWN_GAPS: set[str] = set()
 
 

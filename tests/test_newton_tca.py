@@ -18,7 +18,7 @@ import gearopt
 from gearopt.analysis import generated_flanks
 from gearopt.flank import FlankGrid
 from gearopt.flank_jet import FlankJet
-from gearopt.mesh import _PairCurve, mesh_pair
+from gearopt.mesh import PairCurve, mesh_pair
 from gearopt.newton_tca import newton_tca, tangency_equations
 
 STUDIES = Path(__file__).resolve().parents[1] / "studies"
@@ -39,7 +39,7 @@ def solved(pair):
     out = {}
     for side in SIDES:
         field = getattr(pair, side)
-        out[side] = (newton_tca(field, U_RAD), _PairCurve(field).sample(U_RAD))
+        out[side] = (newton_tca(field, U_RAD), PairCurve(field).sample(U_RAD))
     return out
 
 
@@ -157,7 +157,7 @@ def test_engine_reports_edge_contact_where_newton_fails(pair, side):
     # the contact there (flagged) with a finite lag
     field = getattr(pair, side)
     u = np.linspace(-1.5, 1.5, 25) * (2.0 * math.pi / 16)
-    engine = _PairCurve(field).sample(u)
+    engine = PairCurve(field).sample(u)
     edge = np.flatnonzero(engine.edge)
     assert edge.size >= 1
     assert np.all(np.isfinite(engine.minimum_rad))

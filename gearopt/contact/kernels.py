@@ -533,7 +533,7 @@ def lowest_nodes(field, keep, side, pick, values):
 @_compiled(inline=True)
 def _zone_value(f, k, compound, face, profile, points, perp, tk, big):
     """The separation on line k at ``tk`` minus the compound (``big`` minus it off the grid),
-    bilinear as :func:`gearopt.mesh._widths`'s ``value``."""
+    bilinear as :func:`gearopt.mesh.pattern.widths`'s ``value``."""
     s = points[k, 0] + tk * perp[k, 0]
     h = points[k, 1] + tk * perp[k, 1]
     if not (face[0] <= s <= face[-1] and profile[0] <= h <= profile[-1]):
@@ -554,7 +554,7 @@ def _zone_value(f, k, compound, face, profile, points, perp, tk, big):
 
 @_compiled
 def zone_widths(f, compound, face, profile, points, perp, tau, big, out):
-    """:func:`gearopt.mesh._widths` line by line: the extent of {f < compound} (``f``:
+    """:func:`gearopt.mesh.pattern.widths` line by line: the extent of {f < compound} (``f``:
     ``(K, n_f, n_p)`` separations, capped at ``big``, bilinear between the nodes) along each
     line ``points[k] + tau perp[k]``, from the middle sample outward on each side to the first
     sample out of the zone (interpolated; the line's end when there is none), into ``out``; 0

@@ -1,0 +1,145 @@
+"""Pattern coordinates on the pinion flank, the direction of a path of contact, and the units
+of the mesh analyses' results.
+
+Pattern coordinates (docs/architecture.md, "Pattern coordinates"): on the pinion flank projected
+to the axial plane, ``face`` from the toe (0) toward the heel, ``profile`` from the root (0)
+toward the top.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gearopt.contact import ClearanceField, FieldSample
+from gearopt.flank_jet import FlankJet, cross
+
+__all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
+
+#: arcsec per radian
+ARCSEC = 180.0 * 3600.0 / math.pi
+
+
+def as_list(values) -> list[float]:
+    """The values of an array, flattened, as a list of floats (the results' JSON)."""
+    return [float(v) for v in np.asarray(values).ravel()]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ToothFrame:
+    """Pattern coordinates on the pinion flank: ``face = s - toe_mm``, ``profile = h - root_mm``
+    and the flank centre C in those coordinates.
+
+    Attributes
+    ----------
+    toe_mm
+        Pinion grid face coordinate s of the toe (mean cone distance minus half the face width).
+    root_mm
+        Pinion grid profile coordinate h of the root (minus the pinion's mean dedendum).
+    centre_mm
+        The flank centre C ``(face, profile)``: the mean cone distance, mid working depth
+        (h = (a1 - a2) / 2 with a the mean addenda).
+    face_width_mm
+        Face width.
+    gear_root_angle_deg
+        The gear's root angle (the reference line of :func:`path_angle`).
+    """
+
+    toe_mm: float
+    root_mm: float
+    centre_mm: tuple[float, float]
+    face_width_mm: float
+    gear_root_angle_deg: float = 90.0
+
+    @classmethod
+    def from_blank(cls, blank) -> ToothFrame:
+        """The frame of a pair's blank (:class:`gearopt.blank.Blank`)."""
+        a1, a2 = blank.mean_addendum_mm
+        root = -blank.mean_dedendum_mm[0]
+        return cls(
+            toe_mm=blank.mean_cone_distance_mm - 0.5 * blank.face_width_mm,
+            root_mm=root,
+            centre_mm=(0.5 * blank.face_width_mm, 0.5 * (a1 - a2) - root),
+            face_width_mm=blank.face_width_mm,
+            gear_root_angle_deg=blank.root_angle_deg[1],
+        )
+
+
+def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
+    """Direction of a path of contact on the gear flank.
+
+    The angle from the gear's root line -- the root cone's generatrix through the point,
+    projected on the tangent plane, toward the heel -- to the path's tangent (oriented toward
+    the heel too), positive when the path rises toward the tooth top: Litvin's eta_2 of local
+    synthesis with this sign.
+
+    Parameters
+    ----------
+    tangent
+        ``(3,)`` the path's tangent (either orientation).
+    normal
+        ``(3,)`` the gear flank's normal at ``point`` (any length).
+    point
+        ``(3,)`` the point, gear member frame.
+    root_angle_rad
+        The gear's root angle.
+
+    Returns
+    -------
+    float
+        The angle in degrees, range (-90, 90].
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    theta = math.atan2(point[1], point[0])
+    e_r = np.array([math.cos(theta), math.sin(theta), 0.0])
+    e_z = np.array([0.0, 0.0, 1.0])
+    along = math.sin(root_angle_rad) * e_r + math.cos(root_angle_rad) * e_z
+    up = math.cos(root_angle_rad) * e_r - math.sin(root_angle_rad) * e_z
+    along = along - (along @ n) * n
+    along /= np.linalg.norm(along)
+    up = up - (up @ n) * n - (up @ along) * along
+    up /= np.linalg.norm(up)
+    t = np.asarray(tangent, float)
+    t = t - (t @ n) * n
+    if t @ along < 0.0:
+        t = -t
+    angle = math.degrees(math.atan2(t @ up, t @ along))
+    return 90.0 if angle <= -90.0 + 1e-12 else angle
+
+
+def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -> float:
+    """The path's direction on the gear flank at M (:func:`path_angle`).
+
+    Parameters
+    ----------
+    field
+        The side's clearance field.
+    ex
+        The side's extra positions (:class:`gearopt.mesh.side.SideCycle`); rows 4 and 5 are
+        the two positions either side of M, whose contact points are carried into the gear's
+        frame at their contact angles.
+    frame
+        Pattern coordinates (the gear's root angle).
+
+    Returns
+    -------
+    float
+        The angle in degrees.
+    """
+    phi = ex.phi_rad[4:6]
+    p = field.pinion.point_at(ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6])
+    cp, sp = np.cos(phi), np.sin(phi)
+    p = np.stack([cp * p[:, 0] - sp * p[:, 1], sp * p[:, 0] + cp * p[:, 1], p[:, 2]], -1)
+    q = p @ field.b.T + field.c
+    turn = -field.ratio * phi + field.gear_offset_rad - field.gear_sense * ex.minimum_rad[4:6]
+    ct, st = np.cos(turn), np.sin(turn)
+    points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
+    mid = 0.5 * (points[0] + points[1])
+    s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
+    _, p_s, p_h, *_ = FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
+    return path_angle(
+        points[1] - points[0], cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+    )

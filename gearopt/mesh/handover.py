@@ -1,0 +1,302 @@
+"""The hand-over between two successive tooth pairs: where their TE curves intersect.
+
+The search (:class:`HandOver`) works on a bracket [lo, hi] of relative pinion rotations
+(direction of motion, the leaving pair's) over which the lag difference D = G_leaving -
+G_incoming changes sign. Where the lags around it are interior contacts (smooth), the first
+guess is where the cubic interpolants of the two pairs' sampled lags cross
+(:func:`lag_crossing`), checked by evaluations at the guess and an eighth of a position step to
+either side: the root of the parabola through the three differences stands when it is within a
+tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
+a guess that does not settle) an iteration on the bracket: a secant step, the parabola through
+three differences, a last secant step.
+
+Evaluations are asked for as :class:`Request` rows, answered by the joint field's
+refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import FieldSample
+
+__all__ = [
+    "FIT_TAGS",
+    "ITERATION_TAGS",
+    "HandOver",
+    "Request",
+    "illinois",
+    "lag_crossing",
+    "newton_form",
+    "newton_value",
+    "parabola",
+    "parabola_at",
+    "parabola_root",
+]
+
+
+class Request(NamedTuple):
+    """A refinement asked of the joint field: the least clearance of a side's base pair at
+    relative rotation ``v``, started from the pinion grid point ``(face, profile)``; the answer
+    ``(minimum_rad, face, profile, edge)`` is filed under ``tag``."""
+
+    v: float
+    face: float
+    profile: float
+    tag: tuple
+
+
+#: the answers of a guess's check: both pairs (0 leaving, 1 incoming) a delta before and after
+FIT_TAGS = tuple(("ho", pair, sign) for pair in (0, 1) for sign in (-1, 1))
+#: the answers of an iteration step: both pairs at the point
+ITERATION_TAGS = (("ho", 0, 0), ("ho", 1, 0))
+
+
+class HandOver:
+    """The search for one hand-over on its bracket (see the module docstring).
+
+    Parameters
+    ----------
+    lo, hi
+        The bracket (relative rotations of the leaving pair, consecutive positions).
+    d_lo, d_hi
+        The lag difference D (leaving minus incoming) at ``lo`` (<= 0) and ``hi`` (>= 0).
+    ends
+        The two pairs' contact points at the bracket's ends, ``ends[pair] = ((face, profile)
+        at lo, (face, profile) at hi)``, pair 0 leaving, 1 incoming: the starts of the
+        refinements.
+    step
+        The position step.
+
+    Attributes
+    ----------
+    lo, hi, d_lo, d_hi, ends
+        As given.
+    x0
+        The secant guess on the bracket; once the iteration has evaluated it, the iteration's
+        first point.
+    d0
+        D at ``x0`` once evaluated (the last secant step's other point), else None.
+    delta
+        Offset of a guess's check evaluations (an eighth of a step).
+    mode
+        ``"fit"`` (checking a guess from smooth lags) or ``"iterate"`` (the iteration).
+    x
+        The point being evaluated, then the hand-over when ``done``.
+    lag
+        The lag at the hand-over when interpolated by the check's parabolas, else None (it is
+        then taken from the extra positions' evaluation at ``x``).
+    round
+        0 at a first evaluation, 1 at the second (a guess's second check; the iteration's
+        parabola step).
+    bracket
+        The part of the bracket that holds the root after the iteration's first evaluation.
+    done
+        True once settled.
+    """
+
+    def __init__(self, lo, hi, d_lo, d_hi, ends, step):
+        self.lo, self.hi, self.d_lo, self.d_hi, self.ends = lo, hi, d_lo, d_hi, ends
+        self.x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
+        self.d0 = None
+        self.delta = step / 8.0
+        self.mode = None
+        self.x = None
+        self.lag = None
+        self.round = 0
+        self.bracket = None
+        self.done = False
+
+    def fit_requests(self, x, pitch: float) -> list[Request]:
+        """Check a guess ``x``: both pairs a delta either side of it (the evaluations at ``x``
+        itself are the side's extra positions), started from the contact points interpolated
+        along the bracket."""
+        self.mode, self.x = "fit", float(x)
+        f = (x - self.lo) / (self.hi - self.lo)
+        out = []
+        for pair, shift in ((0, 0.0), (1, -pitch)):
+            (s0, h0), (s1, h1) = self.ends[pair]
+            s, h = (1.0 - f) * s0 + f * s1, (1.0 - f) * h0 + f * h1
+            for sign in (-1, 1):
+                out.append(Request(x + shift + sign * self.delta, s, h, ("ho", pair, sign)))
+        return out
+
+    def iteration_requests(self, x, pitch: float) -> list[Request]:
+        """An iteration step: both pairs at ``x``, started from the middle of each pair's
+        contact points at the bracket's ends."""
+        self.mode, self.x = "iterate", float(x)
+        out = []
+        for pair, shift in ((0, 0.0), (1, -pitch)):
+            (s0, h0), (s1, h1) = self.ends[pair]
+            out.append(Request(x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ("ho", pair, 0)))
+        return out
+
+    def take_fit(self, got: list, ex: FieldSample) -> tuple[str, float]:
+        """Take in a guess's check.
+
+        Parameters
+        ----------
+        got
+            The answers of :data:`FIT_TAGS`, in that order.
+        ex
+            The extra positions' sample: rows 0 and 1 are both pairs at the guess.
+
+        Returns
+        -------
+        tuple
+            ``("settled", x)`` (``lag`` set), ``("fit", x)``: check ``x`` next, or
+            ``("iterate", x)``: start the iteration at ``x``.
+        """
+        gl = np.array([got[0][0], ex.minimum_rad[0], got[1][0]])
+        gi = np.array([got[2][0], ex.minimum_rad[1], got[3][0]])
+        interior = np.all(np.isfinite(gl)) and np.all(np.isfinite(gi))
+        interior = interior and not (ex.edge[:2].any() or any(a[3] for a in got))
+        interior = interior and bool(np.all(np.isfinite(ex.minimum_rad)))
+        z = parabola_root(gl - gi) if interior else math.inf
+        x = self.x + self.delta * z
+        # the root within a tenth of a delta of the guess: the extra positions (M among them)
+        # stand; further off: the root is evaluated anew once
+        if abs(z) <= 0.1 and self.lo <= x <= self.hi:
+            self.done = True
+            self.x = float(x)
+            self.lag = float(max(parabola_at(gl, z), parabola_at(gi, z)))
+            return "settled", self.x
+        if abs(z) <= 2.0 and self.round == 0:
+            self.round += 1
+            return "fit", min(max(x, self.lo), self.hi)
+        self.round = 0  # not smooth there after all: the iteration on the bracket
+        return "iterate", self.x0
+
+    def take_iteration(self, d: float) -> float | None:
+        """Take in D at ``x``: the next point to evaluate, or None once settled (at ``x``)."""
+        if not np.isfinite(d):
+            self.done = True
+            return None
+        lo, hi, d_lo, d_hi = self.lo, self.hi, self.d_lo, self.d_hi
+        if self.round == 0:
+            x0 = self.x
+            self.x0, self.d0 = x0, d
+            a, b, c = parabola(lo - x0, hi - x0, d_lo, d, d_hi)
+            roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
+            roots = np.real(roots[np.isreal(roots)]) + x0
+            self.bracket = (lo, x0) if d > 0.0 else (x0, hi)
+            good = roots[(roots >= self.bracket[0]) & (roots <= self.bracket[1])]
+            self.round = 1
+            return float(good[0]) if good.size else x0
+        x0, d0, x1 = self.x0, self.d0, self.x
+        if d != d0:  # one last secant step between the two best points
+            x2 = x1 - d * (x1 - x0) / (d - d0)
+            if self.bracket[0] <= x2 <= self.bracket[1]:
+                self.x = float(x2)
+        self.done = True
+        return None
+
+
+def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:
+    """Where the lag of the leaving pair G(x) meets the incoming pair's G(x - pitch) in
+    [lo, hi], both interpolated (cubic) through the four nearest samples of G.
+
+    Parameters
+    ----------
+    v, minimum, edge
+        The samples of G: relative rotations, lags and edge flags.
+    lo, hi
+        The bracket.
+    pitch, step
+        The angular pitch and the position step.
+
+    Returns
+    -------
+    float or None
+        The crossing; None when any of the samples is missing or not an interior contact (the
+        lags are smooth only there).
+    """
+    mid = 0.5 * (lo + hi)
+    fits = []
+    for centre in (mid, mid - pitch):
+        near = np.argsort(np.abs(v - centre))[:4]
+        z = (v[near] - centre) / step
+        g = minimum[near]
+        if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or edge[near].any():
+            return None
+        fits.append(newton_form(z.tolist(), g.tolist()))
+    (za, ca), (zb, cb) = fits
+
+    def difference(x: float) -> float:
+        return newton_value(za, ca, x) - newton_value(zb, cb, x)
+
+    half = 0.5 * (hi - lo) / step
+    root = illinois(difference, -half, half)
+    return None if root is None else mid + step * root
+
+
+def newton_form(z: list, g: list) -> tuple[list, list]:
+    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
+    for :func:`newton_value`."""
+    c = list(g)
+    for j in range(1, len(z)):
+        for i in range(len(z) - 1, j - 1, -1):
+            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
+    return z, c
+
+
+def newton_value(z: list, c: list, x: float) -> float:
+    """The polynomial of :func:`newton_form` at x (nested multiplication)."""
+    value = c[-1]
+    for i in range(len(c) - 2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
+
+
+def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):
+    """A root of ``func`` in [a, b] by the Illinois method (None without a sign change)."""
+    fa, fb = func(a), func(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if fa * fb > 0.0:
+        return None
+    for _ in range(100):
+        c = b - fb * (b - a) / (fb - fa)
+        fc = func(c)
+        if fc == 0.0 or abs(c - b) <= tol:
+            return c
+        if fc * fb < 0.0:
+            a, fa = b, fb
+        else:
+            fa *= 0.5
+        b, fb = c, fc
+    return b
+
+
+def parabola(xa: float, xb: float, ya: float, y0: float, yb: float):
+    """``(a, b, c)`` of the parabola a x^2 + b x + c through (xa, ya), (0, y0), (xb, yb)."""
+    sa, sb = (ya - y0) / xa, (yb - y0) / xb
+    a = (sb - sa) / (xb - xa)
+    return a, sa - a * xa, y0
+
+
+def parabola_root(d: NDArray) -> float:
+    """The root nearest 0 of the parabola through (-1, d0), (0, d1), (1, d2) (inf if none)."""
+    a = 0.5 * (d[0] + d[2]) - d[1]
+    b = 0.5 * (d[2] - d[0])
+    c = d[1]
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0 or (a == 0.0 and b == 0.0):
+        return math.inf
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    roots = [c / q] if q != 0.0 else []
+    if a != 0.0:
+        roots.append(q / a)
+    return min(roots, key=abs, default=math.inf)
+
+
+def parabola_at(y: NDArray, z: float) -> float:
+    """The parabola through (-1, y0), (0, y1), (1, y2) at z."""
+    return float(y[1] + 0.5 * (y[2] - y[0]) * z + (0.5 * (y[0] + y[2]) - y[1]) * z * z)

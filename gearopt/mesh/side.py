@@ -1,0 +1,510 @@
+"""One side's mesh cycle: its samples, contact interval, hand-over and extra positions, between
+the joint evaluations that :class:`gearopt.mesh.cycle.MeshCycle` runs for every side at once.
+
+Definitions: :mod:`gearopt.mesh`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import ClearanceField, ContactError, FieldSample
+from gearopt.mesh.frame import ARCSEC, ToothFrame, gear_path_angle
+from gearopt.mesh.handover import FIT_TAGS, ITERATION_TAGS, HandOver, Request, lag_crossing
+from gearopt.mesh.pattern import centroids, minor_axis, separation_mm
+
+__all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
+
+#: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
+FLAT_ARCSEC = 0.1
+BISECTIONS = 3  # contact-interval ends to an eighth of a position step
+
+
+class SideCycle:
+    """The state machine of one side's mesh cycle.
+
+    Every evaluation it needs is asked for as a :class:`~gearopt.mesh.handover.Request`
+    (``requests``) or as extra positions (:meth:`extra_rows`); the driver evaluates every
+    side's at once, files the answers (``answers``, by tag) and the extra positions
+    (:meth:`take_extras`), and steps the sides (:meth:`interval_finish`,
+    :meth:`handover_step`) until none asks for more; then :meth:`assemble` builds the result.
+
+    Parameters
+    ----------
+    index
+        The side's index in the joint field.
+    field
+        Its clearance field.
+    sample
+        The window's sample: each distinct relative rotation of ``u`` once.
+    interval_sample
+        ``sample`` followed by the rows beyond both ends of the window (the contact interval's
+        search).
+    u
+        ``(n, pairs)`` each pair's relative rotation (direction of motion, the base pair's) at
+        each position.
+    ids
+        ``(n, pairs)`` the pairs' ids: ``u = t + ids * pitch``.
+    inv
+        ``(n * pairs,)`` the row of ``sample`` of each entry of ``u``.
+    t
+        ``(n,)`` the positions (relative rotations from the mean position).
+    pitch
+        The pinion's angular pitch.
+    step
+        The position step.
+
+    Attributes
+    ----------
+    index, field, sample, interval_sample, u, ids, inv, t, pitch, step
+        As given.
+    g
+        ``(n, pairs)`` the pairs' lags (least clearance; +inf without contact on the flanks).
+    edge_all
+        ``(n, pairs)`` True where a pair touches at an edge of a flank.
+    carrying
+        ``(n,)`` column of the carrying pair (the least lag).
+    lag
+        ``(n,)`` the carrying pair's lag.
+    pair_id
+        ``(n,)`` the carrying pair's id.
+    cs, ch
+        ``(n, pairs)`` the pairs' contact points (pinion grid face and profile coordinates).
+    requests
+        The refinements to evaluate at the next joint evaluation.
+    answers
+        The answers ``(minimum_rad, face, profile, edge)`` of evaluated requests, by tag, until
+        taken.
+    interval
+        ``(start, end)``: the contact interval's ends (relative rotations), once bracketed.
+    interval_done
+        True once ``interval`` is final.
+    interval_flat
+        True where the pair's lag is flat over its interior samples (:data:`FLAT_ARCSEC`).
+    end_inside, end_outside
+        ``(2,)`` the ends' brackets (start, end): the last point in interior contact and the
+        first beyond; None without interior contact.
+    end_open
+        ``(2,)`` True where an end's bracket is open (a sample beyond the interior run).
+    end_face, end_profile
+        ``(2,)`` the contact points (pinion grid) at ``end_inside``.
+    contact_path
+        ``(v, face, profile)`` of the samples in contact, sorted by v (:meth:`contact_at`);
+        None until first needed.
+    ho
+        The hand-over's search (:class:`~gearopt.mesh.handover.HandOver`), None without a
+        bracket (a flat TE).
+    v_star
+        The hand-over (relative rotation of the leaving pair; without a hand-over the contact
+        interval's middle plus half a pitch), None until known.
+    g_hand
+        The lag at the hand-over where interpolated (else taken from ``ex``), None until known.
+    near_extras
+        Whether the extra positions are refined from nearby contact points (a hand-over being
+        checked at a guess) rather than sampled.
+    ex_phi
+        ``(6,)`` the extra positions' pinion angles.
+    ex
+        The extra positions' sample, None until evaluated: both pairs at the hand-over, the TE
+        peak, M and its neighbours a quarter step either side.
+    """
+
+    def __init__(
+        self,
+        index: int,
+        field: ClearanceField,
+        sample: FieldSample,
+        interval_sample: FieldSample,
+        u: NDArray,
+        ids: NDArray,
+        inv: NDArray,
+        t: NDArray,
+        pitch: float,
+        step: float,
+    ):
+        self.index, self.field = index, field
+        self.sample, self.interval_sample = sample, interval_sample
+        self.u, self.ids, self.inv = u, ids, inv
+        self.t, self.pitch, self.step = t, pitch, step
+        shape = u.shape
+        self.g = sample.minimum_rad[inv].reshape(shape)
+        self.edge_all = sample.edge[inv].reshape(shape)
+        if not np.isfinite(self.g).any(axis=1).all():
+            raise ContactError(
+                "tca", rule="at some positions no tooth pair touches inside the flanks"
+            )
+        rows = np.arange(shape[0])
+        self.carrying = np.argmin(self.g, axis=1)
+        self.lag = self.g[rows, self.carrying]
+        self.pair_id = ids[rows, self.carrying]
+        self.cs = sample.contact_face_mm[inv].reshape(shape)
+        self.ch = sample.contact_profile_mm[inv].reshape(shape)
+        self.requests: list[Request] = []
+        self.answers: dict = {}
+        self.interval: tuple[float, float] | None = None
+        self.interval_done = False
+        self.interval_flat = False
+        self.end_inside: NDArray | None = None
+        self.end_outside: NDArray | None = None
+        self.end_open: NDArray | None = None
+        self.end_face: NDArray | None = None
+        self.end_profile: NDArray | None = None
+        self.contact_path: tuple[NDArray, NDArray, NDArray] | None = None
+        self.ho: HandOver | None = None
+        self.v_star: float | None = None
+        self.g_hand: float | None = None
+        self.near_extras = False
+        self.ex_phi: NDArray | None = None
+        self.ex: FieldSample | None = None
+        self.start_interval()
+        self.start_handover()
+
+    # -- the contact interval ---------------------------------------------------------------
+
+    def start_interval(self) -> None:
+        """Bracket the relative rotations between which a pair's contact stays inside the
+        flanks (not at an edge) from the samples, and ask for the points a bisection of each
+        open bracket can visit (warm-started Newton), all at once."""
+        sample = self.interval_sample
+        v = sample.phi_rad * self.field.sense
+        inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
+        order = np.argsort(v)
+        v, inner = v[order], inner[order]
+        self.interval_done = False
+        if not inner.any():  # edge contact only: no interval, centred on the least lag
+            gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
+            best = float(v[np.argmin(gs)])
+            self.interval, self.interval_done = (best, best), True
+            return
+        # the unbroken run of interior samples around the least lag (the mesh centre), or the
+        # longest run when the least lag is itself at an edge
+        gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
+        runs = np.split(np.arange(len(v)), np.flatnonzero(np.diff(inner.astype(int))) + 1)
+        runs = [r for r in runs if inner[r[0]]]
+        centre = int(np.argmin(gs))
+        around = [r for r in runs if r[0] <= centre <= r[-1]]
+        run = around[0] if around else max(runs, key=len)
+        lo_k, hi_k = run[0], run[-1]
+        self.interval_flat = bool(np.ptp(gs[lo_k : hi_k + 1]) < FLAT_ARCSEC / ARCSEC)
+        self.end_inside = np.array([v[lo_k], v[hi_k]])
+        self.end_outside = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])
+        self.end_open = np.array([lo_k > 0, hi_k < len(v) - 1])
+        cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
+        self.end_face, self.end_profile = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
+        self.interval = (float(self.end_inside[0]), float(self.end_inside[1]))
+        parts = 2**BISECTIONS
+        for e in np.flatnonzero(self.end_open):
+            a, b = self.end_inside[e], self.end_outside[e]
+            s, h = self.end_face[e], self.end_profile[e]
+            for j in range(1, parts):
+                self.requests.append(Request(a + (b - a) * j / parts, s, h, ("ci", e, j)))
+
+    def interval_finish(self) -> None:
+        """Bisect each open bracket on the answers of its candidate points, then move it to the
+        tangency point's exit (:meth:`tangency_end`): the end is the middle of the last
+        bracket, the contact point the last inside one's."""
+        if self.interval_done:
+            return
+        self.interval_done = True
+        parts = 2**BISECTIONS
+        for e in np.flatnonzero(self.end_open):
+            a, b = self.end_inside[e], self.end_outside[e]
+            ja, jb = 0, parts
+            for _ in range(BISECTIONS):
+                m = (ja + jb) // 2
+                value, s1, h1, edge = self.answers[("ci", e, m)]
+                if np.isfinite(value) and not edge:
+                    ja = m
+                    self.end_face[e], self.end_profile[e] = s1, h1
+                else:
+                    jb = m
+            self.end_inside[e] = a + (b - a) * ja / parts
+            self.end_outside[e] = a + (b - a) * jb / parts
+            self.tangency_end(e)
+        ends = np.where(self.end_open, 0.5 * (self.end_inside + self.end_outside), self.end_inside)
+        self.interval = (float(ends[0]), float(ends[1]))
+
+    def tangency_end(self, e: int) -> None:
+        """Move end ``e``, bisected on the engine's edge flag, to where the tangency point
+        leaves the flanks (:meth:`gearopt.contact.ClearanceField.interval_end`).
+
+        The edge flag lags that point where the minimum slides along a boundary before the
+        clearance beyond it falls by the edge tolerance (a path meeting the boundary at a
+        grazing angle to the contact ellipse), and leads it where the tangency point lies in
+        the pinion's lowest generated cells, which the engine's refinement does not enter. Kept
+        as it is where Newton's method fails, and where the pair's lag is flat over its
+        interior contacts (:data:`FLAT_ARCSEC`: a line contact, where the tangency point is not
+        unique, or nearly one).
+        """
+        if self.interval_flat:
+            return
+        a, b = float(self.end_inside[e]), float(self.end_outside[e])
+        start = (float(self.end_face[e]), float(self.end_profile[e]))
+        found = self.field.interval_end(a, start, b - a)
+        if found is not None:
+            (
+                self.end_inside[e],
+                self.end_outside[e],
+                self.end_face[e],
+                self.end_profile[e],
+            ) = found
+
+    # -- the hand-over ----------------------------------------------------------------------
+
+    def start_handover(self) -> None:
+        """Find a forward switch of the carrying pair (the next pair, one id lower, takes over)
+        whose two pairs' lag difference changes sign: it brackets the hand-over
+        (:class:`~gearopt.mesh.handover.HandOver`); its first guess is the crossing of the two
+        pairs' interpolated lags (:meth:`crossing`) where there is one, else the iteration
+        starts. Without a bracket the TE is flat (line contact) and the cycle is centred on the
+        contact interval."""
+        g, ids, pair_id, t, pitch = self.g, self.ids, self.pair_id, self.t, self.pitch
+        n = len(t)
+        for k in np.flatnonzero(np.diff(pair_id) == -1):
+            leave = pair_id[k]
+            col_l = [np.flatnonzero(ids[k + d] == leave) for d in (0, 1)]
+            col_i = [np.flatnonzero(ids[k + d] == leave - 1) for d in (0, 1)]
+            if any(c.size == 0 for c in col_l + col_i) or k + 1 >= n:
+                continue
+            with np.errstate(invalid="ignore"):  # inf - inf where a pair is off the flanks
+                d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
+                d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
+            finite = np.isfinite(d_lo) and np.isfinite(d_hi)
+            if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
+                lo, hi = t[k] + leave * pitch, t[k + 1] + leave * pitch
+                cs, ch = self.cs, self.ch
+                ends = [
+                    ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
+                    for c in (col_l, col_i)
+                ]
+                self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step)
+                guess = self.crossing(lo, hi)
+                if guess is None:
+                    self.ask_iteration(self.ho.x0)
+                else:
+                    self.ask_fit(guess)
+                return
+
+    def crossing(self, lo, hi) -> float | None:
+        """The crossing of the two pairs' lags interpolated through the interval samples
+        (:func:`~gearopt.mesh.handover.lag_crossing`), or None."""
+        sample = self.interval_sample
+        v = sample.phi_rad * self.field.sense
+        return lag_crossing(v, sample.minimum_rad, sample.edge, lo, hi, self.pitch, self.step)
+
+    def ask_fit(self, x) -> None:
+        """Check a hand-over guess ``x``: both pairs at ``x`` (the extra positions) and a delta
+        to either side."""
+        self.v_star, self.ex = float(x), None
+        self.requests += self.ho.fit_requests(x, self.pitch)
+
+    def ask_iteration(self, x) -> None:
+        """Evaluate both pairs at ``x`` for the iteration on the bracket."""
+        self.v_star = float(x)
+        self.requests += self.ho.iteration_requests(x, self.pitch)
+
+    def handover_step(self) -> None:
+        """Take in the hand-over's evaluations, if they are in: ask for the next ones, or
+        settle ``v_star`` (and ``g_hand`` when the lag there is interpolated)."""
+        ho = self.ho
+        if ho is None or ho.done:
+            return
+        if ho.mode == "fit":
+            if self.ex is None or not all(tag in self.answers for tag in FIT_TAGS):
+                return
+            action, x = ho.take_fit([self.answers.pop(tag) for tag in FIT_TAGS], self.ex)
+            if action == "settled":
+                self.v_star, self.g_hand = x, ho.lag
+            elif action == "fit":
+                self.ask_fit(x)
+            else:
+                self.ex = None
+                self.ask_iteration(x)
+            return
+        if not all(tag in self.answers for tag in ITERATION_TAGS):
+            return
+        leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
+        x = ho.take_iteration(float(leaving - incoming))
+        if x is None:
+            self.v_star = ho.x
+        else:
+            self.ask_iteration(x)
+
+    # -- the extra positions ----------------------------------------------------------------
+
+    def extras_due(self) -> bool:
+        """Whether the extra positions can be evaluated: the hand-over is settled or guessed
+        from smooth lags, or (no hand-over) the contact interval is known."""
+        if self.ho is None:
+            return self.interval_done
+        return self.ho.done or self.ho.mode == "fit"
+
+    def fit_mode(self) -> bool:
+        """Whether the hand-over is being checked at a guess from smooth lags."""
+        return self.ho is not None and not self.ho.done and self.ho.mode == "fit"
+
+    def extra_rows(self) -> tuple[list[float], list[bool]]:
+        """Ask for the extra positions (:meth:`extra_angles`): the relative rotations to sample
+        with this side's rows of the joint evaluation and whether each is refined. Where the
+        hand-over is checked at a guess, all six minima are requests started from the contact
+        points interpolated along the samples and only M's rows are sampled (for their node
+        fields, unrefined); otherwise all six are sampled and refined."""
+        angles = self.extra_angles()
+        self.near_extras = self.fit_mode()
+        if self.near_extras:
+            for j, v in enumerate(angles):
+                self.requests.append(Request(v, *self.contact_at(v), ("ex", j)))
+            rows = angles[3:], [False] * 3
+        else:
+            rows = angles, [True] * 6
+        self.ex_phi = self.field.sense * np.array(angles)
+        return rows
+
+    def take_extras(self, sample: FieldSample) -> None:
+        """File the extra positions' rows of a joint evaluation (:meth:`extra_rows`)."""
+        self.ex = self.near_extras_sample(sample) if self.near_extras else sample
+
+    def take_requests(self) -> list[Request]:
+        """The pending requests, handed over to the driver."""
+        requests, self.requests = self.requests, []
+        return requests
+
+    def extra_angles(self) -> list[float]:
+        """The extra positions: the hand-over (both pairs), the TE peak, the mean point M and
+        its neighbours for the path direction; a flat TE (line contact, no hand-over) is
+        centred on the contact interval."""
+        if self.v_star is None:
+            start, end = self.interval
+            self.v_star = 0.5 * (start + end) + 0.5 * self.pitch
+            self.g_hand = float(np.max(self.g.min(axis=1)))
+        v_star, pitch = self.v_star, self.pitch
+        v_mid = v_star - 0.5 * pitch
+        dv = 0.25 * self.step
+        return [v_star, v_star - pitch, self.peak_guess(), v_mid, v_mid - dv, v_mid + dv]
+
+    def peak_guess(self) -> float:
+        """The TE maximum's relative rotation: the parabola through the least sample of the
+        carrying pair and its neighbours on the same pair."""
+        lag, pair_id, t, step = self.lag, self.pair_id, self.t, self.step
+        act = np.flatnonzero(pair_id == pair_id[np.argmin(lag)])
+        kk = act[np.argmin(lag[act])]
+        v_peak = t[kk] + pair_id[kk] * self.pitch
+        if 0 < kk < len(t) - 1 and pair_id[kk - 1] == pair_id[kk] == pair_id[kk + 1]:
+            gm, g0, gp = lag[kk - 1], lag[kk], lag[kk + 1]
+            curv = gm - 2.0 * g0 + gp
+            if curv > 0.0:
+                v_peak += float(np.clip(0.5 * (gm - gp) / curv, -1.0, 1.0)) * step
+        return float(v_peak)
+
+    def contact_at(self, v: float) -> tuple[float, float]:
+        """A start for a refinement at relative rotation ``v``: the contact point interpolated
+        (linearly in v) between the nearest samples in contact on either side."""
+        if self.contact_path is None:
+            sample = self.interval_sample
+            ok = np.isfinite(sample.minimum_rad)
+            vs = sample.phi_rad[ok] * self.field.sense
+            order = np.argsort(vs)
+            self.contact_path = (
+                vs[order],
+                sample.contact_face_mm[ok][order],
+                sample.contact_profile_mm[ok][order],
+            )
+        vs, cs, ch = self.contact_path
+        return float(np.interp(v, vs, cs)), float(np.interp(v, vs, ch))
+
+    def near_extras_sample(self, mean: FieldSample) -> FieldSample:
+        """The extra positions' sample from their refined minima (answers ``("ex", j)``) and
+        the node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
+        got = [self.answers.pop(("ex", j)) for j in range(6)]
+        blank = np.full((3,) + mean.clearance_rad.shape[1:], np.inf)
+        ones = np.ones_like(blank)
+        return FieldSample(
+            phi_rad=self.ex_phi,
+            clearance_rad=np.concatenate([blank, mean.clearance_rad]),
+            normal_factor_mm=np.concatenate([ones, mean.normal_factor_mm]),
+            radius_mm=np.concatenate([ones, mean.radius_mm]),
+            minimum_rad=np.array([a[0] for a in got], float),
+            contact_face_mm=np.array([a[1] for a in got], float),
+            contact_profile_mm=np.array([a[2] for a in got], float),
+            edge=np.array([a[3] for a in got], bool),
+        )
+
+    # -- the result -------------------------------------------------------------------------
+
+    def assemble(self, name: str, frame: ToothFrame, compound_um: float, separation: str):
+        """The side's :class:`~gearopt.mesh.cycle.ToothContact` but for its two widths.
+
+        Returns
+        -------
+        tuple
+            ``(lines, fields)``: ``lines`` = ``(pattern, zone at M, M, path direction, minor
+            axis)`` for the widths (:meth:`gearopt.mesh.cycle.MeshCycle.contacts` measures
+            every side's at once), ``fields`` the ToothContact's other fields.
+        """
+        field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
+        positions, pairs = self.u.shape
+        rows = np.arange(positions)
+        g, lag, carrying = self.g, self.lag, self.carrying
+        g_hand = self.g_hand
+        if g_hand is None:
+            g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
+        g_min = float(min(ex.minimum_rad[2], lag.min()))
+        te = (g_min - lag) * ARCSEC
+        pair_te = ((g_min - g) * ARCSEC).T
+        peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
+
+        # separations at the contact gear angle of each position (same lag for every pair)
+        compound_mm = compound_um * 1e-3
+        sep = separation_mm(self.sample, np.repeat(lag, pairs), separation, self.inv)
+        sep = sep.reshape((positions, pairs) + field.pinion.shape)
+        pattern = sep.min(axis=(0, 1)) * 1e3
+        face = field.pinion.face_mm - frame.toe_mm
+        profile = field.pinion.profile_mm - frame.root_mm
+        path_s, path_h = centroids(sep[rows, carrying], compound_mm, face, profile)
+
+        # the mean point M, the path's direction there, and the path's ends (bias)
+        ex_sep = separation_mm(ex, ex.minimum_rad, separation)
+        cs, ch = centroids(ex_sep, compound_mm, face, profile)
+        mean_point = (float(cs[3]), float(ch[3]))
+        direction = np.array([cs[5] - cs[4], ch[5] - ch[4]])
+        norm = float(np.hypot(*direction))
+        direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
+        # the pattern's width: the extent of the whole pattern across the path at M
+        # and the contact ellipse's major axis: measured with every side's
+        minor = minor_axis(ex_sep[3], compound_mm, face, profile)
+        lines = (pattern * 1e-3, ex_sep[3], mean_point, direction, minor)
+        # bias: the contact line's extension along the face from the pair's entry into contact
+        # to its exit (seed 003 section 6): the contact points at the ends of its contact
+        # interval
+        ends = self.end_face
+        bias = float(ends[1] - ends[0]) if ends is not None else float(cs[0] - cs[1])
+        start, end = self.interval
+        centre = frame.centre_mm
+        handovers = self.v_star + p1 * np.arange(-12, 13)
+        handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
+        return lines, dict(
+            side=name,
+            phi1_deg=np.degrees(t),
+            te_arcsec=te,
+            pair_te_arcsec=pair_te,
+            carrying=carrying,
+            handover_phi1_deg=np.degrees(handovers),
+            te_peak_to_peak_arcsec=float(peak_to_peak),
+            path_face_mm=path_s,
+            path_profile_mm=path_h,
+            contact_face_mm=self.cs[rows, carrying] - frame.toe_mm,
+            contact_profile_mm=self.ch[rows, carrying] - frame.root_mm,
+            edge=self.edge_all[rows, carrying],
+            separation_um=sep * 1e3,
+            pattern_um=pattern,
+            face_mm=face,
+            profile_mm=profile,
+            path_angle_deg=gear_path_angle(field, ex, frame),
+            bias_mm=bias,
+            center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),
+            mean_point_mm=mean_point,
+            contact_ratio=float((end - start) / p1),
+            compound_um=float(compound_um),
+            separation=separation,
+        )
