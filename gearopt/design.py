@@ -61,6 +61,7 @@ SECTIONS = (
     "misalignment",
     "compensation",
     "analysis",
+    "load",
     "synthesis",
     "te_target",
 )
@@ -360,6 +361,7 @@ class Design:
     compensation: Misalignment = field(default_factory=Misalignment)
     meta: Meta = field(default_factory=Meta)
     analysis: Mapping[str, Any] = field(default_factory=dict)
+    load: Mapping[str, Any] = field(default_factory=dict)
     te_target: Any = None
     source: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
     path: str | None = field(default=None, compare=False)

@@ -18,6 +18,7 @@ from gearopt.analysis_options import AnalysisOptions
 from gearopt.assembly import Misalignment
 from gearopt.design import SECTIONS, Design, Meta, PairData, pair_from_table
 from gearopt.errors import DesignError, GearoptError
+from gearopt.load_options import LoadOptions
 from gearopt.plugins import get_machine_model
 from gearopt.te_target import TETarget
 from gearopt.validate import check_keys, read_table
@@ -40,6 +41,18 @@ def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
             exc.parameter if exc.parameter.startswith("analysis") else f"analysis.{exc.parameter}"
         )
         raise DesignError(name, exc.value, exc.rule) from None
+    return dict(table)
+
+
+def _load_table(table: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``[load]`` table: loaded contact's torques, materials and resolution
+    (:class:`gearopt.load_options.LoadOptions`), checked now."""
+    try:
+        LoadOptions.from_table(table, where="load")
+    except DesignError:
+        raise
+    except GearoptError as exc:
+        raise DesignError(exc.parameter, exc.value, exc.rule) from None
     return dict(table)
 
 
@@ -90,6 +103,7 @@ def parse_design(
         compensation=Misalignment.from_table(tables["compensation"], "compensation"),
         meta=Meta(**meta_table),
         analysis=_analysis_table(tables["analysis"]),
+        load=_load_table(tables["load"]),
         te_target=_te_target(tables["te_target"], pair) if "te_target" in data else None,
         source=copy.deepcopy(dict(data)),
         path=path,

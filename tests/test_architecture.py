@@ -57,7 +57,7 @@ LAYERS = (
             "gearopt.chains",
         ),
     ),
-    ("design", ("gearopt.design", "gearopt.analysis_options")),
+    ("design", ("gearopt.design", "gearopt.analysis_options", "gearopt.load_options")),
     (
         "plugin API",
         (
