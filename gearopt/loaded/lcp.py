@@ -61,6 +61,9 @@ __all__ = ["ComplementarityResiduals", "LoadDistribution", "solve_load_distribut
 
 #: relative tolerance of the symmetry and semidefiniteness checks of the compliance
 COMPLIANCE_RTOL = 1e-8
+#: a compliance block whose Cholesky pivots fall below this fraction of its largest diagonal
+#: entry, or whose reduced eigenvalues below this fraction of the largest, counts as singular
+SINGULAR_RTOL = 1e-10
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -181,23 +184,50 @@ def _check_inputs(separation_mm, area_mm2, compliance_mm_per_n, lever_arm_mm, to
     return s, area, c, r, t
 
 
-def _solve_on_support(c_pp, s_p, r_p, t):
-    """``F_P, theta`` with ``C_PP F_P - r_P theta = -s_P``, ``r_P^T F_P = T``."""
+def _solve_on_support(c, s, r, t, support):
+    """The equality-constrained subproblem on the support ``P``.
+
+    Returns ``(z, theta, direction)`` with ``z`` of length ``n`` (0 off ``P``). Bounded case
+    (``direction`` None): ``C_PP z_P - r_P theta = -s_P``, ``r_P^T z_P = T``, by Cholesky of
+    ``C_PP`` and the Schur complement ``theta = (T + r^T C^-1 s) / (r^T C^-1 r)``. When
+    ``C_PP`` is singular (a pivot below :data:`SINGULAR_RTOL` of the largest), by the null-space
+    method: ``z = r T / |r|^2 + Q y`` with ``Q`` an orthonormal basis of ``r^T d = 0``, ``y`` the
+    least-norm minimiser of the reduced quadratic (its eigen-decomposition). Unbounded case
+    (the reduced quadratic has a null direction with a slope): ``z`` and ``theta`` are None and
+    ``direction`` (``C d = 0``, ``r^T d = 0``, ``s^T d < 0``) the steepest such direction.
+    """
+    n, k = s.size, support.size
+    c_pp, s_p, r_p = c[np.ix_(support, support)], s[support], r[support]
+    z = np.zeros(n)
     try:
-        factor = scipy.linalg.cho_factor(c_pp, lower=True, check_finite=False)
-        cinv_r = scipy.linalg.cho_solve(factor, r_p, check_finite=False)
-        cinv_s = scipy.linalg.cho_solve(factor, s_p, check_finite=False)
-        theta = (t + r_p @ cinv_s) / (r_p @ cinv_r)
-        return theta * cinv_r - cinv_s, float(theta)
-    except np.linalg.LinAlgError:  # C_PP only semidefinite: the saddle system, least squares
-        k = r_p.size
-        kkt = np.zeros((k + 1, k + 1))
-        kkt[:k, :k] = c_pp
-        kkt[:k, k] = -r_p
-        kkt[k, :k] = -r_p
-        rhs = np.concatenate([-s_p, [-t]])
-        sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
-        return sol[:k], float(sol[k])
+        low, _ = scipy.linalg.cho_factor(c_pp, lower=True, check_finite=False)
+        pivots = np.diag(low) ** 2
+        if pivots.min() > SINGULAR_RTOL * np.max(np.diag(c_pp)):
+            cinv_r = scipy.linalg.cho_solve((low, True), r_p, check_finite=False)
+            cinv_s = scipy.linalg.cho_solve((low, True), s_p, check_finite=False)
+            theta = (t + r_p @ cinv_s) / (r_p @ cinv_r)
+            z[support] = theta * cinv_r - cinv_s
+            return z, float(theta), None
+    except np.linalg.LinAlgError:
+        pass
+    # the null-space method on r^T z = T
+    z0 = r_p * (t / (r_p @ r_p))
+    q = np.linalg.qr(r_p[:, None], mode="complete")[0][:, 1:]
+    gradient = q.T @ (c_pp @ z0 + s_p)
+    values, vectors = np.linalg.eigh(q.T @ c_pp @ q)
+    top = float(np.max(values)) if k > 1 else 0.0
+    null = values <= SINGULAR_RTOL * top
+    slope = vectors[:, null] @ (vectors[:, null].T @ gradient)
+    scale = np.linalg.norm(q.T @ s_p) + np.linalg.norm(q.T @ (c_pp @ z0))
+    if np.linalg.norm(slope) > 1e-8 * scale:
+        direction = np.zeros(n)
+        direction[support] = -(q @ slope)
+        return None, None, direction
+    keep = ~null
+    y = -vectors[:, keep] @ ((vectors[:, keep].T @ gradient) / values[keep])
+    z[support] = z0 + q @ y
+    theta = r_p @ (c_pp @ z[support] + s_p) / (r_p @ r_p)
+    return z, float(theta), None
 
 
 def solve_load_distribution(
@@ -279,46 +309,48 @@ def solve_load_distribution(
             )
         iterations += 1
         new = np.flatnonzero(candidates)
+        single = np.array([new[int(np.argmin(gaps[new]))]])  # Lawson-Hanson's choice
         # block addition: take out again the new patches that would carry tension
         while True:
-            trial = in_p.copy()
-            trial[new] = True
-            t_idx = np.flatnonzero(trial)
-            z, z_theta = _solve_on_support(c[np.ix_(t_idx, t_idx)], s[t_idx], r[t_idx], t)
-            z_full = np.zeros(n)
-            z_full[t_idx] = z
-            keep = z_full[new] > 0.0
-            if keep.all():
-                break
-            if not keep.any():
+            z, z_theta, direction = _solve_on_support(c, s, r, t, np.union1d(p_idx, new))
+            if direction is not None:  # unbounded: only Lawson-Hanson's single patch
                 if new.size == 1:
                     break
-                new = np.array([new[int(np.argmin(gaps[new]))]])  # Lawson-Hanson's single add
-            else:
-                new = new[keep]
-        if new.size == 1 and z_full[new[0]] <= 0.0:
+                new = single
+                continue
+            keep = z[new] > 0.0
+            if keep.all() or (new.size == 1 and not keep.any()):
+                break
+            new = new[keep] if keep.any() else single
+        if direction is None and z[new[0]] <= 0.0:  # single patch, unloaded: round-off
             stuck[new[0]] = True
             continue
         in_p[new] = True
-        # Lawson-Hanson inner loop: step back to keep all forces >= 0, drop the ones reaching 0
+        # Lawson-Hanson inner loop: step towards the subproblem's solution (or along its
+        # descent direction when unbounded) as far as all forces stay >= 0, drop the ones
+        # reaching 0, solve again
         while True:
             p_idx = np.flatnonzero(in_p)
-            neg = p_idx[z_full[p_idx] <= 0.0]
-            if neg.size == 0:
-                forces, theta = z_full, z_theta
-                break
-            ratio = forces[neg] / (forces[neg] - z_full[neg])
+            if direction is None:
+                neg = p_idx[z[p_idx] <= 0.0]
+                if neg.size == 0:
+                    forces, theta = z, z_theta
+                    break
+                step = z - forces
+            else:
+                step = direction
+                neg = p_idx[direction[p_idx] < 0.0]
+                if neg.size == 0:  # cannot happen for r > 0 (r^T d = 0): guard only
+                    raise GearoptError(
+                        "compliance_mm_per_n", "semidefinite", "unbounded load distribution"
+                    )
+            ratio = forces[neg] / -step[neg]
             alpha = float(np.min(ratio))
-            forces = forces + alpha * (z_full - forces)
-            drop = neg[ratio <= alpha]
-            forces[drop] = 0.0
-            in_p[drop] = False
+            forces = forces + alpha * step
+            forces[neg[ratio <= alpha]] = 0.0
             in_p &= forces > 0.0
             forces[~in_p] = 0.0
-            p_idx = np.flatnonzero(in_p)
-            z, z_theta = _solve_on_support(c[np.ix_(p_idx, p_idx)], s[p_idx], r[p_idx], t)
-            z_full = np.zeros(n)
-            z_full[p_idx] = z
+            z, z_theta, direction = _solve_on_support(c, s, r, t, np.flatnonzero(in_p))
     support = np.flatnonzero(in_p)
     gaps = s + c[:, support] @ forces[support] - r * theta
     return _result(s, area, c, r, t, forces, theta, gaps, support, iterations)
