@@ -26,6 +26,8 @@ from gearopt.loaded import (
 R1_MM, R2_MM = 20.0, 200.0
 E_MPA, NU = 206000.0, 0.3
 COMPOSITE = composite_compliance_mm2_per_n(E_MPA, NU, E_MPA, NU)
+#: Hertz's contact modulus E* of two like bodies (Johnson 1985 eq. 4.22), written out here
+E_STAR_MPA = E_MPA / (2.0 * (1.0 - NU**2))
 P_LOW_N, P_HIGH_N = 1000.0, 3375.0  # 3375 = 1.5^3: p_max and the semi-axes grow by 1.5
 
 
@@ -33,7 +35,7 @@ def hertz_elliptic(load_n: float) -> dict[str, float]:
     """Hertz theory of the elliptic contact (Johnson, Contact Mechanics, 1985, section 4.2):
     ``a`` the semi-axis along y (the flatter direction, R2), ``b`` along x (R1)."""
     a_coef, b_coef = 1.0 / (2.0 * R2_MM), 1.0 / (2.0 * R1_MM)  # A < B
-    e_star = 1.0 / COMPOSITE
+    e_star = E_STAR_MPA
 
     def ratio(m):  # B / A as a function of e^2 = 1 - b^2 / a^2
         k, e = ellipk(m), ellipe(m)
@@ -77,22 +79,34 @@ def hertz_solutions(hertz_grid):
 # --- the half-space influence numbers ------------------------------------------------------
 
 
+def _quadrature(x, y, x_edges, y_edges):
+    """Integral of 1 / distance from (x, y) over the rectangle, by scipy's adaptive
+    quadrature, the rectangle cut at x and y so that the singularity sits at corners."""
+    xs = sorted({*x_edges, *(v for v in [x] if x_edges[0] < v < x_edges[1])})
+    ys = sorted({*y_edges, *(v for v in [y] if y_edges[0] < v < y_edges[1])})
+    total = 0.0
+    for x0, x1 in zip(xs[:-1], xs[1:], strict=True):
+        for y0, y1 in zip(ys[:-1], ys[1:], strict=True):
+            total += integrate.dblquad(
+                lambda eta, xi: 1.0 / np.hypot(x - xi, y - eta), x0, x1, y0, y1, epsabs=1e-10
+            )[0]
+    return total
+
+
 def test_love_rectangle_matches_quadrature():
     # D = composite / pi * integral of 1 / distance over the rectangle: at the centre, inside,
     # on an edge and far outside, against scipy's adaptive quadrature
     xc, yc, a, b = 0.3, -0.2, 1.0, 0.25
     for x, y in [(xc, yc), (xc + 0.7, yc + 0.1), (xc + a, yc), (3.0, 2.0)]:
         d = rectangle_influence_mm_per_mpa([x, xc], [y, yc], a, b, np.pi)[0, 1]
-        quad = integrate.dblquad(
-            lambda eta, xi, x=x, y=y: 1.0 / np.hypot(x - xi, y - eta),
-            xc - a,
-            xc + a,
-            yc - b,
-            yc + b,
-            epsabs=1e-11,
-            epsrel=1e-11,
-        )[0]
-        assert d == pytest.approx(quad, rel=1e-6)
+        quad = _quadrature(x, y, (xc - a, xc + a), (yc - b, yc + b))
+        assert d == pytest.approx(quad, rel=1e-7)
+
+
+def test_composite_compliance():
+    assert COMPOSITE == pytest.approx(1.0 / E_STAR_MPA, rel=1e-15)
+    steel_on_bronze = composite_compliance_mm2_per_n(206000.0, 0.3, 110000.0, 0.34)
+    assert steel_on_bronze == pytest.approx(0.91 / 206000.0 + (1.0 - 0.34**2) / 110000.0)
 
 
 def test_square_centre_displacement_is_johnsons():
@@ -117,6 +131,14 @@ def test_halfspace_compliance_is_symmetric_positive_definite():
         grid.x_mm, grid.y_mm, grid.half_a_mm, grid.half_b_mm, COMPOSITE
     )
     assert np.allclose(0.5 * (d / grid.area_mm2 + (d / grid.area_mm2).T), c, rtol=1e-14)
+    # an even grid: the Toeplitz shortcut gives the same numbers as the pairwise formula
+    even = patch_grid(np.linspace(-0.4, 0.4, 9), np.linspace(-2.0, 2.0, 6))
+    fast = even.compliance_mm_per_n(COMPOSITE)
+    assert np.array_equal(fast, fast.T)
+    slow = halfspace_compliance_mm_per_n(
+        even.x_mm, even.y_mm, even.half_a_mm, even.half_b_mm, COMPOSITE
+    )
+    assert np.allclose(fast, slow, rtol=1e-12, atol=0.0)
 
 
 # --- Hertz ------------------------------------------------------------------------------------
@@ -207,6 +229,28 @@ def test_rigid_bodies_semidefinite_compliance():
     assert sol.forces_n.tolist() == [0.0, 20.0, 0.0]
     assert sol.theta_rad == pytest.approx(0.01 / 40.0, rel=1e-15)
     _assert_lcp(sol, s, np.zeros((3, 3)), r, 800.0)
+
+
+def test_random_semidefinite_compliances_meet_the_conditions():
+    # low-rank (singular) and full-rank compliances, random separations, lever arms, torques:
+    # the conditions recomputed from the inputs
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        n = int(rng.integers(2, 60))
+        rank = n if trial % 2 else max(1, n // 5)
+        basis = rng.normal(size=(n, rank))
+        compliance = basis @ basis.T * (1e-6 / rank)
+        separation = rng.uniform(0.0, 0.01, n)
+        lever_arm = rng.uniform(30.0, 70.0, n)
+        torque = float(rng.choice([10.0, 1e3, 1e5, 1e6]))
+        sol = solve_load_distribution(
+            separation_mm=separation,
+            area_mm2=np.ones(n),
+            compliance_mm_per_n=compliance,
+            lever_arm_mm=lever_arm,
+            torque_n_mm=torque,
+        )
+        _assert_lcp(sol, separation, compliance, lever_arm, torque)
 
 
 # --- two tooth pairs --------------------------------------------------------------------------

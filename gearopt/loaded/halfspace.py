@@ -111,13 +111,19 @@ def rectangle_influence_mm_per_mpa(
     if not (np.isfinite(composite_mm2_per_n) and composite_mm2_per_n > 0.0):
         raise GearoptError("composite_mm2_per_n", composite_mm2_per_n, "must be positive, finite")
     x, y, a, b = _as_patches(x_mm, y_mm, half_a_mm, half_b_mm)
-    dx = x[None, :] - x[:, None]  # source j minus field point i
-    dy = y[None, :] - y[:, None]
-    u1, u2 = dx - a[None, :], dx + a[None, :]
-    v1, v2 = dy - b[None, :], dy + b[None, :]
+    # source j minus field point i
+    integral_mm = _love_integral_mm(x[None, :] - x[:, None], y[None, :] - y[:, None], a, b)
+    return composite_mm2_per_n / np.pi * integral_mm
+
+
+def _love_integral_mm(dx, dy, a, b):
+    """The integral ``I`` of 1 / distance over a rectangle of half-widths ``a, b`` whose centre
+    lies at ``(dx, dy)`` from the field point (module docstring)."""
+    u1, u2 = dx - a, dx + a
+    v1, v2 = dy - b, dy + b
     integral_mm = _primitive(u2, v2) - _primitive(u1, v2) - _primitive(u2, v1)
     integral_mm += _primitive(u1, v1)
-    return composite_mm2_per_n / np.pi * integral_mm
+    return integral_mm
 
 
 def halfspace_compliance_mm_per_n(
@@ -164,10 +170,28 @@ class PatchGrid:
         return 4.0 * self.half_a_mm * self.half_b_mm
 
     def compliance_mm_per_n(self, composite_mm2_per_n: float) -> np.ndarray:
-        """:func:`halfspace_compliance_mm_per_n` of the grid's patches."""
-        return halfspace_compliance_mm_per_n(
-            self.x_mm, self.y_mm, self.half_a_mm, self.half_b_mm, composite_mm2_per_n
-        )
+        """:func:`halfspace_compliance_mm_per_n` of the grid's patches.
+
+        On an evenly spaced grid ``C_ij`` depends on the index offsets only (a block Toeplitz
+        matrix): the ``(2 ny - 1) (2 nx - 1)`` distinct values are computed once and gathered,
+        the same numbers to round-off, about 10 times faster.
+        """
+        a, b = self.half_a_mm, self.half_b_mm
+        even = np.allclose(a, a[0], rtol=1e-12, atol=0.0)
+        even = even and np.allclose(b, b[0], rtol=1e-12, atol=0.0)
+        if not even:
+            return halfspace_compliance_mm_per_n(self.x_mm, self.y_mm, a, b, composite_mm2_per_n)
+        if not (np.isfinite(composite_mm2_per_n) and composite_mm2_per_n > 0.0):
+            raise GearoptError(
+                "composite_mm2_per_n", composite_mm2_per_n, "must be positive, finite"
+            )
+        ny, nx = self.shape
+        ha, hb = float(np.mean(a)), float(np.mean(b))
+        ox, oy = np.meshgrid(np.arange(1 - nx, nx) * 2.0 * ha, np.arange(1 - ny, ny) * 2.0 * hb)
+        kernel = _love_integral_mm(ox, oy, ha, hb) * (composite_mm2_per_n / np.pi / (4 * ha * hb))
+        kernel = 0.5 * (kernel + kernel[::-1, ::-1])  # exactly symmetric
+        ix, iy = np.tile(np.arange(nx), ny), np.repeat(np.arange(ny), nx)
+        return kernel[iy[None, :] - iy[:, None] + ny - 1, ix[None, :] - ix[:, None] + nx - 1]
 
 
 def patch_grid(x_edges_mm, y_edges_mm) -> PatchGrid:
