@@ -26,13 +26,13 @@ from gearopt.loaded import (
 R1_MM, R2_MM = 20.0, 200.0
 E_MPA, NU = 206000.0, 0.3
 COMPOSITE = composite_compliance_mm2_per_n(E_MPA, NU, E_MPA, NU)
-#: Hertz's contact modulus E* of two like bodies (Johnson 1985 eq. 4.22), written out here
+#: Hertz's contact modulus E* of two like bodies (Johnson, Contact Mechanics, ch. 4)
 E_STAR_MPA = E_MPA / (2.0 * (1.0 - NU**2))
 P_LOW_N, P_HIGH_N = 1000.0, 3375.0  # 3375 = 1.5^3: p_max and the semi-axes grow by 1.5
 
 
 def hertz_elliptic(load_n: float) -> dict[str, float]:
-    """Hertz theory of the elliptic contact (Johnson, Contact Mechanics, 1985, section 4.2):
+    """Hertz theory of the elliptic contact (Johnson, Contact Mechanics, 1985, ch. 4):
     ``a`` the semi-axis along y (the flatter direction, R2), ``b`` along x (R1)."""
     a_coef, b_coef = 1.0 / (2.0 * R2_MM), 1.0 / (2.0 * R1_MM)  # A < B
     e_star = E_STAR_MPA

@@ -2,7 +2,8 @@
 
 Each body near the contact is an elastic half-space (Boussinesq). A uniform pressure ``p`` on the
 rectangle ``|xi - xj| <= aj, |eta - yj| <= bj`` of the surface displaces the surface point
-``(x, y)`` normally by (Love 1929; Johnson, *Contact Mechanics*, 1985, section 3.6, eq. 3.25)
+``(x, y)`` normally by (Love 1929; Johnson, *Contact Mechanics*, 1985, ch. 3, a uniform pressure
+on a rectangle)
 
 .. math::
 
@@ -26,6 +27,12 @@ The influence coefficient ``D_ij`` (mm/MPa) is the displacement at the centre of
 unit pressure on patch ``j``; the compliance ``C_ij = D_ij / A_j`` (mm/N) is the displacement per
 unit force (the force spread uniformly over the patch). Coordinates are the patches' centres in
 the common tangent plane of the contact (a half-space knows no curvature), in mm.
+
+References
+----------
+Love, A. E. H. (1929). The stress produced in a semi-infinite solid by pressure on part of the
+boundary. *Phil. Trans. R. Soc. A* 228, 377-420.
+Johnson, K. L. (1985). *Contact Mechanics*. Cambridge University Press.
 """
 
 from __future__ import annotations
@@ -105,7 +112,7 @@ def rectangle_influence_mm_per_mpa(
     numpy.ndarray
         ``D`` of shape ``(n, n)``: ``D[i, j]`` is the normal approach of the two surfaces at the
         centre of patch ``i`` for a uniform unit pressure (1 MPa) on patch ``j`` (Love's
-        rectangle, Johnson 1985 eq. 3.25, module docstring), ``composite / pi * I_ij``.
+        rectangle, Johnson 1985 ch. 3, module docstring), ``composite / pi * I_ij``.
         Symmetric when all patches have the same size.
     """
     if not (np.isfinite(composite_mm2_per_n) and composite_mm2_per_n > 0.0):

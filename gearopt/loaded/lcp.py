@@ -31,9 +31,13 @@ force is provably positive). Patches of ``P`` that would go tensile are dropped 
 Lawson-Hanson step back along the segment to the new solution, which keeps every force
 non-negative and the moment equation exact. The objective strictly decreases from one support
 to the next, so no support repeats and the method ends in finitely many steps with the exact
-solution (up to round-off) when ``C`` is positive definite; for a semidefinite ``C`` the
-equations on ``P`` are solved in the least-squares sense. This is the exact, no-penalty
-solution that Conry & Seireg obtained with a modified simplex method.
+solution (up to round-off) when ``C`` is positive definite. A singular block ``C_PP`` (a
+semidefinite ``C``, e.g. bending alone) is solved by the null-space method; when the
+subproblem is then unbounded (a direction of zero compliance along which the objective falls)
+the step follows that direction until a force reaches 0, as the step back does. The result is
+the exact, penalty-free solution that Conry & Seireg obtained with a modified simplex method.
+A patch that, added alone, takes no load although its gap is below ``-tolerance_mm`` (round-off
+only) is left out; the residuals report what remains.
 
 ``T = 0`` gives the unloaded contact: no force, ``theta = min_i s_i / r_i`` (the least gap 0).
 
