@@ -92,8 +92,13 @@ class PairPatches:
     valid
         ``(along, across)`` True where the patch lies on both flanks.
     boundary
-        ``(along, across)`` True on a valid patch whose outward neighbour along the strip is
-        not valid or lies beyond the grid: the flanks' boundary (edge loading where loaded).
+        ``(along, across)`` True on a valid patch next to a point off the flanks (along or
+        across the contact line, one patch further, also beyond the patch grid): the flanks'
+        boundary (edge loading where loaded).
+    open_end
+        ``(along, across)`` True on a valid patch at the patch grid's end whose neighbour beyond
+        the grid is on the flanks: the potential contact zone is cut short there (loaded, it
+        asks for a longer reach).
     contact_rad
         The pair's refined unloaded clearance minimum (+inf where it does not touch).
     """
@@ -113,6 +118,7 @@ class PairPatches:
     y_mm: NDArray
     valid: NDArray
     boundary: NDArray
+    open_end: NDArray
     contact_rad: float
 
 
@@ -217,10 +223,26 @@ def contact_patches(
         centre = (grid.along // 2, grid.across // 2)
         x_mm = np.broadcast_to(t[:, None] * scale_a[centre], s.shape)
         y_mm = (shift[:, None] + w[None, :]) * scale_w[centre]
-        outward = np.zeros_like(valid)
-        outward[0, :] = outward[-1, :] = True
-        outward[1:-1, :] = ~valid[:-2, :] | ~valid[2:, :]
-        boundary = valid & outward
+        # one patch further on every side, beyond the grid too: on the flanks?
+        ext_t = np.concatenate([[t[0] - dt], t, [t[-1] + dt]])
+        ext_shift = np.concatenate([[shift[0]], shift, [shift[-1]]])
+        ext_w = np.concatenate([[w[0] - dw], w, [w[-1] + dw]])
+        es = s0 + ext_t[:, None] * major[0] + (ext_shift[:, None] + ext_w[None, :]) * minor[0]
+        eh = h0 + ext_t[:, None] * major[1] + (ext_shift[:, None] + ext_w[None, :]) * minor[1]
+        ep, en, _, _ = flank_points(pinion, es, eh)
+        ext = field.clearance_of_points(ep, None, phi)
+        ext_valid = ext.valid & pinion.inside(es, eh)
+        ext_valid[1:-1, 1:-1] = valid
+        off = (
+            ~ext_valid[:-2, 1:-1]
+            | ~ext_valid[2:, 1:-1]
+            | ~ext_valid[1:-1, :-2]
+            | ~ext_valid[1:-1, 2:]
+        )
+        boundary = valid & off
+        at_end = np.zeros_like(valid)
+        at_end[0, :] = at_end[-1, :] = at_end[:, 0] = at_end[:, -1] = True
+        open_end = valid & at_end & ~off
         out.append(
             PairPatches(
                 pair=int(pairs[k]),
@@ -238,6 +260,7 @@ def contact_patches(
                 y_mm=y_mm,
                 valid=valid,
                 boundary=boundary,
+                open_end=open_end,
                 contact_rad=m0,
             )
         )
