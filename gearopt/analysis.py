@@ -13,6 +13,9 @@ from typing import Any
 
 from gearopt.analysis_options import TCA_GRID, AnalysisOptions
 from gearopt.design import MEMBERS, Design
+from gearopt.load_options import LoadOptions
+from gearopt.loaded.ltca import LoadedContact
+from gearopt.loaded.pair import loaded_sides
 from gearopt.mesh import (
     Backlash,
     EaseOff,
@@ -33,6 +36,7 @@ __all__ = [
     "meshed_pair",
     "pair_backlash",
     "pair_ease_off",
+    "pair_loaded_contact",
 ]
 
 #: the last few designs' flanks and meshed pairs, so that the evaluators of one design
@@ -109,3 +113,11 @@ def pair_ease_off(pair: MeshedPair) -> dict[str, EaseOff]:
         "drive": ease_off(pair.drive, frame=pair.frame, side="drive"),
         "coast": ease_off(pair.coast, frame=pair.frame, side="coast"),
     }
+
+
+def pair_loaded_contact(
+    design: Design, pair: MeshedPair, sides: dict[str, ToothContact], load: LoadOptions
+) -> dict[str, list[LoadedContact]]:
+    """Loaded TCA of both sides at the load's torques (:mod:`gearopt.loaded`), on the
+    positions of the unloaded TCA ``sides`` (:func:`contact_sides`)."""
+    return loaded_sides(pair, sides, design.blank, load)

@@ -365,6 +365,14 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         evaluation = registry[name].evaluate(design, conditions)
         results[name] = evaluation
         out.update(evaluation.report)
+    torques = _torques(args.torque_nm)
+    if torques is not None or design.load.get("torque_nm") is not None:
+        load_conditions = dict(conditions)
+        if torques is not None:
+            load_conditions["torque_nm"] = torques
+        evaluation = registry["ltca"].evaluate(design, load_conditions)
+        results["ltca"] = evaluation
+        out.update(evaluation.report)
     if args.plot:
         out["plots"] = [str(p) for p in plot_analysis(design, results, args.plot)]
     if args.json:
@@ -412,9 +420,46 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         f"ease-off (pinion, from the surface conjugate to the gear): drive max "
         f"{e['drive']['max_um']:.2f} um, coast max {e['coast']['max_um']:.2f} um"
     )
+    if "ltca" in out:
+        rows = [
+            (
+                side["side"] if "side" in side else name,
+                f"{side['torque_nm']:g}",
+                f"{side['lte_peak_to_peak_arcsec']:.3f}",
+                f"{side['max_contact_pressure_mpa']:.0f}",
+                f"{side['max_line_load_n_per_mm']:.1f}",
+                f"{side['mesh_stiffness_n_per_mm_um']:.2f}",
+                "yes" if side["edge_loading"] else "no",
+            )
+            for name, key in (("drive", "ltca"), ("coast", "ltca_coast"))
+            for side in out[key]
+        ]
+        header = (
+            "side",
+            "torque (N m)",
+            "LTE p-p (arcsec)",
+            "p max (MPa)",
+            "line load (N/mm)",
+            "mesh stiffness (N/(mm um))",
+            "edge loading",
+        )
+        print()
+        print(_table(rows, header))
     for path in out.get("plots", []):
         print(f"wrote {path}")
     return 0
+
+
+def _torques(text: str | None) -> list[float] | None:
+    """The ``--torque-nm`` list, or None."""
+    if text is None:
+        return None
+    try:
+        return [float(part) for part in text.split(",")]
+    except ValueError:
+        raise DesignError(
+            "--torque-nm", text, "must be numbers of N m separated by commas"
+        ) from None
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -477,6 +522,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compound-um", type=float, help="marking-compound thickness (um; 6.5)")
     p.add_argument("--positions", type=int, help="contact positions over two cycles (21)")
     p.add_argument("--grid", help="FlankMap grid n_face,n_profile (25,21)")
+    p.add_argument(
+        "--torque-nm",
+        help="loaded TCA at these output torques (N m on the gear, comma-separated); "
+        "default: the design's [load] torque_nm, if any",
+    )
     # defaults: the design's [analysis] table, else gearopt.analysis.AnalysisOptions
     p.set_defaults(func=_cmd_analyze)
 

@@ -126,6 +126,7 @@ class LoadedContact:
     def as_dict(self) -> dict:
         """JSON-ready form (the ``ltca`` entries of ``gearopt analyze --json``)."""
         return {
+            "side": self.side,
             "torque_nm": self.torque_nm,
             "lte_arcsec": [float(v) for v in self.lte_arcsec],
             "lte_peak_to_peak_arcsec": self.lte_peak_to_peak_arcsec,

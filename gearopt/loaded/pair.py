@@ -1,0 +1,96 @@
+"""Loaded contact of a meshed pair: both sides, at the options' torques.
+
+The compliance between two patches of one tooth pair is the sum of the pinion tooth's and the
+gear tooth's finite-element influence numbers (:func:`gearopt.loaded.compliance.member_compliance`,
+each at the patch's own grid coordinates on that member's flank) and the two half-spaces' local
+contact compliance (:mod:`gearopt.loaded.halfspace`, Love's rectangles at the patches'
+coordinates along and across the contact line). The tooth models are built once per member,
+material and mesh and kept for the next analyses of the same flanks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from gearopt.load_options import LoadOptions
+from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
+from gearopt.loaded.halfspace import composite_compliance_mm2_per_n, halfspace_compliance_mm_per_n
+from gearopt.loaded.ltca import LoadedContact, loaded_contact
+from gearopt.loaded.separations import PairPatches, PatchOptions
+
+__all__ = ["loaded_sides", "member_flanks"]
+
+#: the last few members' tooth models: ``((flank ids, material, mesh), compliance by flank)``
+_MODELS: list[tuple[tuple, dict]] = []
+
+
+def member_flanks(pair) -> dict[str, dict]:
+    """``{"pinion": {"convex", "concave"}, "gear": {...}}``: the FlankMaps of a meshed pair."""
+    return {
+        "pinion": {"convex": pair.drive.pinion, "concave": pair.coast.pinion},
+        "gear": {"concave": pair.drive.gear, "convex": pair.coast.gear},
+    }
+
+
+def _compliance_of(flanks: Mapping, blank, material: Material, mesh) -> dict:
+    key = (tuple(id(f) for f in flanks.values()), material, mesh)
+    for known, value in _MODELS:
+        if known == key:
+            return value
+    value = member_compliance(dict(flanks), blank, material=material, mesh=mesh)
+    _MODELS.insert(0, (key, value))
+    del _MODELS[4:]
+    return value
+
+
+def loaded_sides(pair, sides: Mapping, blank, load: LoadOptions) -> dict[str, list[LoadedContact]]:
+    """Loaded TCA of both sides of a meshed pair (:class:`gearopt.mesh.MeshedPair`) at the
+    options' torques: ``{"drive": [one per torque], "coast": [...]}``, on the positions of the
+    unloaded TCA ``sides`` (:func:`gearopt.analysis.contact_sides`)."""
+    flanks = member_flanks(pair)
+    mesh = load.fe_mesh or DEFAULT_MESH
+    materials = [
+        Material(youngs_modulus_mpa=e, poisson_ratio=nu)
+        for e, nu in zip(load.youngs_modulus_mpa, load.poisson_ratio, strict=True)
+    ]
+    models = {
+        member: _compliance_of(flanks[member], blank, material, mesh)
+        for member, material in zip(("pinion", "gear"), materials, strict=True)
+    }
+    composite = composite_compliance_mm2_per_n(
+        load.youngs_modulus_mpa[0],
+        load.poisson_ratio[0],
+        load.youngs_modulus_mpa[1],
+        load.poisson_ratio[1],
+    )
+    grid = PatchOptions(along=load.patches[0], across=load.patches[1], reach_um=load.reach_um)
+    out = {}
+    for side, field in (("drive", pair.drive), ("coast", pair.coast)):
+        pinion = models["pinion"][field.pinion.flank]
+        gear = models["gear"][field.gear.flank]
+
+        def compliance(p: PairPatches, keep, pinion=pinion, gear=gear) -> np.ndarray:
+            s1, t1 = p.face_mm.ravel()[keep], p.profile_mm.ravel()[keep]
+            s2, t2 = p.gear_face_mm.ravel()[keep], p.gear_profile_mm.ravel()[keep]
+            local = halfspace_compliance_mm_per_n(
+                p.x_mm.ravel()[keep],
+                p.y_mm.ravel()[keep],
+                0.5 * p.length_mm.ravel()[keep],
+                0.5 * p.width_mm.ravel()[keep],
+                composite,
+            )
+            bending = pinion.compliance_mm_per_n(s1, t1) + gear.compliance_mm_per_n(s2, t2)
+            return local + 0.5 * (bending + bending.T)
+
+        out[side] = loaded_contact(
+            field,
+            sides[side],
+            load.torque_nm,
+            compliance=compliance,
+            frame=pair.frame,
+            grid=grid,
+            side=side,
+        )
+    return out
