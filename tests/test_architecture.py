@@ -69,7 +69,7 @@ LAYERS = (
             "gearopt.testing",
         ),
     ),
-    ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca")),
+    ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
     ("analysis", ("gearopt.analysis", "gearopt.plots")),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
     ("study", ("gearopt.results", "gearopt.study", "gearopt.export")),
