@@ -1,12 +1,29 @@
 """Loaded tooth contact analysis (LTCA).
 
+- :mod:`gearopt.loaded.compliance`: the bending and shear compliance of a member's tooth,
+  finite-element influence numbers of a model built from its two FlankMaps;
 - :mod:`gearopt.loaded.halfspace`: the local contact compliance of two elastic bodies, Love's
   uniformly loaded rectangle on Boussinesq half-spaces (influence coefficients of a patch grid);
 - :mod:`gearopt.loaded.lcp`: the load distribution at one mesh position, the linear
   complementarity problem of the patch forces and the rotation lag solved exactly by an
-  active-set method.
+  active-set method;
+- :mod:`gearopt.loaded.separations`: the initial separations, patches around each tooth pair's
+  unloaded contact on the flanks' interpolants;
+- :mod:`gearopt.loaded.ltca`: one side's loaded TCA over the mesh cycle (LTE, load sharing,
+  pressure, mesh stiffness, edge loading); :mod:`gearopt.loaded.pair`: both sides of a pair.
 """
 
+from gearopt.loaded.compliance import (
+    DEFAULT_MESH,
+    Factorised,
+    Material,
+    SolidModel,
+    ToothCompliance,
+    factorise,
+    member_compliance,
+    solid_model,
+    tooth_compliance,
+)
 from gearopt.loaded.halfspace import (
     PatchGrid,
     composite_compliance_mm2_per_n,
@@ -15,14 +32,33 @@ from gearopt.loaded.halfspace import (
     rectangle_influence_mm_per_mpa,
 )
 from gearopt.loaded.lcp import ComplementarityResiduals, LoadDistribution, solve_load_distribution
+from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
+from gearopt.loaded.pair import loaded_sides
+from gearopt.loaded.separations import PairPatches, PatchOptions, contact_patches
 
 __all__ = [
+    "DEFAULT_MESH",
     "ComplementarityResiduals",
+    "Factorised",
     "LoadDistribution",
+    "LoadedContact",
+    "Material",
+    "PairPatches",
     "PatchGrid",
+    "PatchOptions",
+    "PositionLoad",
+    "SolidModel",
+    "ToothCompliance",
     "composite_compliance_mm2_per_n",
+    "contact_patches",
+    "factorise",
     "halfspace_compliance_mm_per_n",
+    "loaded_contact",
+    "loaded_sides",
+    "member_compliance",
     "patch_grid",
     "rectangle_influence_mm_per_mpa",
+    "solid_model",
     "solve_load_distribution",
+    "tooth_compliance",
 ]
