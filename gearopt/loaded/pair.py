@@ -81,7 +81,8 @@ def loaded_sides(pair, sides: Mapping, blank, load: LoadOptions) -> dict[str, li
                 0.5 * p.width_mm.ravel()[keep],
                 composite,
             )
-            bending = pinion.compliance_mm_per_n(s1, t1) + gear.compliance_mm_per_n(s2, t2)
+            bending = pinion.influence_mm_per_n(s1, t1, s1, t1)
+            bending += gear.influence_mm_per_n(s2, t2, s2, t2)
             return local + 0.5 * (bending + bending.T)
 
         out[side] = loaded_contact(
