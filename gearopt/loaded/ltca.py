@@ -69,12 +69,15 @@ class PositionLoad:
         The pairs' offsets (pitches from the base pair), in the order of ``forces_n``.
     forces_n, pressure_mpa
         One ``(along, across)`` array per pair.
+    patches
+        The pairs' patches (:class:`gearopt.loaded.separations.PairPatches`).
     """
 
     theta_rad: float
     pairs: tuple[int, ...]
     forces_n: tuple[NDArray, ...]
     pressure_mpa: tuple[NDArray, ...]
+    patches: tuple[PairPatches, ...] = field(repr=False)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -393,6 +396,7 @@ def _at_torque(torque_nm, prepared, tca, g_min, frame, side) -> LoadedContact:
                 pairs=tuple(p.pair for p in pos.patches),
                 forces_n=tuple(per_pair),
                 pressure_mpa=tuple(pressures),
+                patches=pos.patches,
             )
         )
         if total > 0.0:

@@ -1,0 +1,237 @@
+"""Loaded tooth contact analysis on the generated flanks (``gearopt.loaded``): physics checks
+measured on the output (docs/architecture.md; the solver's own tests are
+``tests/test_loaded_contact.py``, the tooth models' ``tests/test_loaded_compliance.py``).
+
+The seed 001 section 5.3 pair (16 x 41, a crowned pinion: localized contact), steel on steel.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from scipy.special import ellipe, ellipk
+
+import gearopt
+from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_loaded_contact
+from gearopt.assembly import Misalignment
+from gearopt.errors import DesignError, GearoptError
+from gearopt.flank_jet import FlankJet, cross
+from gearopt.load_options import LoadOptions
+from gearopt.loaded.separations import flank_points
+
+from .conftest import STUDIES
+
+ARCSEC = 180.0 * 3600.0 / math.pi
+E_MPA, NU = 206000.0, 0.3
+E_STAR = 1.0 / (2.0 * (1.0 - NU * NU) / E_MPA)
+TORQUES = (0.0, 5.0, 50.0, 400.0)
+
+
+@pytest.fixture(scope="module")
+def section53():
+    design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
+    options = AnalysisOptions()
+    pair = meshed_pair(design, options)
+    return design, pair, contact_sides(pair, options)
+
+
+@pytest.fixture(scope="module")
+def loaded53(section53):
+    design, pair, sides = section53
+    return pair_loaded_contact(design, pair, sides, LoadOptions(torque_nm=TORQUES))
+
+
+def test_zero_torque_gives_the_unloaded_te(section53, loaded53):
+    _, _, sides = section53
+    for side in ("drive", "coast"):
+        zero = loaded53[side][0]
+        assert zero.torque_nm == 0.0
+        np.testing.assert_allclose(zero.lte_arcsec, sides[side].te_arcsec, rtol=0, atol=0.01)
+        assert zero.lte_peak_to_peak_arcsec == pytest.approx(
+            sides[side].te_peak_to_peak_arcsec, abs=0.01
+        )
+
+
+def _moment_nmm(field, load) -> float:
+    """The contact forces' moment about the gear axis, from the patches' points and normals
+    (the pinion's interpolant, turned and placed in the gear frame): not the solver's lever
+    arms."""
+    total = 0.0
+    for patches, forces in zip(load.patches, load.forces_n, strict=True):
+        p, n, _, _ = flank_points(field.pinion, patches.face_mm, patches.profile_mm)
+        c, s = math.cos(patches.phi_rad), math.sin(patches.phi_rad)
+        turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        q = p @ (field.b @ turn).T + field.c
+        m = n @ (field.b @ turn).T
+        total += float(np.sum(np.cross(q, m)[..., 2] * forces))
+    return abs(total)
+
+
+def test_the_forces_balance_the_torque(section53, loaded53):
+    _, pair, _ = section53
+    for side, field in (("drive", pair.drive), ("coast", pair.coast)):
+        for result in loaded53[side][1:]:
+            for load in result.positions:
+                moment = _moment_nmm(field, load)
+                assert moment == pytest.approx(result.torque_nm * 1e3, rel=1e-3)
+
+
+def test_mesh_stiffness_is_a_steel_pairs(loaded53):
+    # ISO 6336 / ISO 10300: single stiffness of the order of 14, mesh stiffness of the order of
+    # 20 N/(mm um) for steel pairs; the range 5..30 holds every steel pair
+    for side in ("drive", "coast"):
+        for result in loaded53[side]:
+            if result.torque_nm in (50.0, 400.0):
+                assert 5.0 <= result.mesh_stiffness_n_per_mm_um <= 30.0
+
+
+def test_the_approach_grows_with_torque(loaded53):
+    for side in ("drive", "coast"):
+        lte = np.array([r.lte_arcsec for r in loaded53[side]])
+        assert np.all(np.diff(lte, axis=0) < 0.0)  # the gear lags more at every position
+
+
+def test_light_load_one_pair_heavy_load_shared(loaded53):
+    drive = {r.torque_nm: r for r in loaded53["drive"]}
+    middle = len(drive[5.0].lte_arcsec) // 2
+    light = drive[5.0].load_share
+    assert light[middle].max() > 0.99
+    heavy = drive[400.0].load_share
+    assert heavy.max(axis=1).min() < 0.8  # somewhere two pairs or more share the load
+    assert np.all(np.abs(heavy.sum(axis=1) - 1.0) < 1e-9)
+
+
+def _pair_force_n(load) -> float:
+    return float(sum(f.sum() for f in load.forces_n))
+
+
+def test_pressure_grows_as_a_hertzian_contact(section53):
+    # one pair carrying inside the flanks at the middle position: p_max ~ P^(1/3)
+    design, pair, sides = section53
+    loads = pair_loaded_contact(
+        design, pair, sides, LoadOptions(torque_nm=(2.0, 16.0), patches=(41, 31), reach_um=8.0)
+    )["drive"]
+    middle = len(loads[0].lte_arcsec) // 2
+    p = []
+    for result in loads:
+        load = result.positions[middle]
+        carrying = [f for f in load.forces_n if f.sum() > 0.0]
+        assert len(carrying) == 1
+        p.append((float(max(q.max() for q in load.pressure_mpa)), _pair_force_n(load)))
+    (p1, f1), (p2, f2) = p
+    assert p2 / p1 == pytest.approx((f2 / f1) ** (1.0 / 3.0), rel=0.05)
+
+
+def _hertz(curvature_a, curvature_b, force_n):
+    """Hertz's elliptic contact (Johnson, Contact Mechanics, ch. 4) for the gap
+    A x^2 + B y^2 (A <= B): ``(p_max, a, b)``, a along x."""
+    a_, b_ = sorted((curvature_a, curvature_b))
+
+    def ratio(e2):
+        k, e = ellipk(e2), ellipe(e2)
+        return (e / (1.0 - e2) - k) / (k - e) - b_ / a_
+
+    e2 = brentq(ratio, 1e-12, 1.0 - 1e-12) if b_ / a_ > 1.0 + 1e-9 else 1e-12
+    k, e = ellipk(e2), ellipe(e2)
+    a = (3.0 * force_n * (k - e) / (2.0 * math.pi * E_STAR * e2 * a_)) ** (1.0 / 3.0)
+    b = a * math.sqrt(1.0 - e2)
+    return 3.0 * force_n / (2.0 * math.pi * a * b), a, b
+
+
+def _relative_curvature(field, s1, h1, phi):
+    """The relative curvature tensor of the pinion and the gear flank at the pinion point
+    (s1, h1) at pinion angle phi, from each flank's own second derivatives (FlankJet), in an
+    orthonormal tangent basis: ``(K, basis)`` with the gap 1/2 d.K.d."""
+    b = field.b
+    c, s = math.cos(phi), math.sin(phi)
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    m = b @ turn
+    p, ps, ph, pss, psh, phh, *_ = FlankJet(field.pinion).surface(s1, h1, 0.0)
+    q = m @ p + field.c
+    ps, ph, pss, psh, phh = (m @ v for v in (ps, ph, pss, psh, phh))
+    n = cross(ps, ph)
+    n /= np.linalg.norm(n)
+    gear = FlankJet(field.gear)
+    s2, h2 = (float(v) for v in field.gear.to_grid(q[2], math.hypot(q[0], q[1])))
+    theta = gear.polar(s2, h2)[0]
+    g, gs, gh, gss, gsh, ghh, *_ = gear.surface(s2, h2, math.atan2(q[1], q[0]) - theta)
+    e1 = ps / np.linalg.norm(ps)
+    e2 = np.cross(n, e1)
+    basis = np.stack([e1, e2])
+
+    def tensor(ts, th, tss, tsh, thh):
+        jac = np.array([[ts @ e1, th @ e1], [ts @ e2, th @ e2]])
+        second = np.array([[tss @ n, tsh @ n], [tsh @ n, thh @ n]])
+        inv = np.linalg.inv(jac)
+        return inv.T @ second @ inv
+
+    k_rel = tensor(gs, gh, gss, gsh, ghh) - tensor(ps, ph, pss, psh, phh)
+    return np.sign(np.trace(k_rel)) * k_rel, basis
+
+
+def test_a_light_contact_at_the_mean_point_is_hertzian(section53):
+    design, pair, sides = section53
+    loads = pair_loaded_contact(
+        design, pair, sides, LoadOptions(torque_nm=(3.0,), patches=(41, 41), reach_um=4.0)
+    )["drive"]
+    middle = len(loads[0].lte_arcsec) // 2
+    load = loads[0].positions[middle]
+    [(patches, forces, pressure)] = [
+        (p, f, q)
+        for p, f, q in zip(load.patches, load.forces_n, load.pressure_mpa, strict=True)
+        if f.sum() > 0.0
+    ]
+    assert not (patches.boundary & (forces > 0.0)).any()  # inside the flanks
+    centre = tuple(np.array(patches.face_mm.shape) // 2)
+    k_rel, _ = _relative_curvature(
+        pair.drive,
+        float(patches.face_mm[centre]),
+        float(patches.profile_mm[centre]),
+        patches.phi_rad,
+    )
+    lam = np.linalg.eigvalsh(k_rel)
+    assert lam.min() > 0.0  # a localized (crowned) contact
+    force = float(forces.sum())
+    p_max, a, b = _hertz(0.5 * lam[0], 0.5 * lam[1], force)
+    # the ellipse's semi-axes from the pressure distribution (Hertz's semi-ellipsoid): across,
+    # the central strip's load per unit length is pi/2 p0 b; along, P = 2/3 pi a b p0
+    p0 = float(pressure.max())
+    strip = int(np.unravel_index(np.argmax(pressure), pressure.shape)[0])
+    line = float(forces[strip].sum() / np.median(patches.length_mm[strip]))
+    half_y = 2.0 * line / (math.pi * p0)
+    half_x = 3.0 * force / (2.0 * math.pi * half_y * p0)
+    print(f"Hertz: p_max {p_max:.1f} MPa, a {a:.3f} mm, b {b:.3f} mm (P = {force:.1f} N)")
+    print(f"LTCA:  p_max {pressure.max():.1f} MPa, a {half_x:.3f} mm, b {half_y:.3f} mm")
+    assert pressure.max() == pytest.approx(p_max, rel=0.05)
+    assert half_x == pytest.approx(a, rel=0.10)
+    assert half_y == pytest.approx(b, rel=0.10)
+
+
+def test_a_large_shaft_angle_error_gives_edge_loading(section53):
+    design, _, _ = section53
+    options = AnalysisOptions(misalignment=Misalignment(shaft_angle_deg=-0.5))
+    pair = meshed_pair(design, options)
+    sides = contact_sides(pair, options)
+    out = pair_loaded_contact(design, pair, sides, LoadOptions(torque_nm=(200.0,)))
+    assert out["drive"][0].edge_loading or out["coast"][0].edge_loading
+
+
+def test_bad_load_input_is_refused():
+    with pytest.raises(GearoptError, match="load.torque_nm"):
+        LoadOptions.from_table({"torque_nm": [-5.0]})
+    with pytest.raises(GearoptError, match="load.torque_nm"):
+        LoadOptions.from_table({"torque_nm": [float("nan")]})
+    with pytest.raises(GearoptError, match="load.youngs_modulus_mpa"):
+        LoadOptions.from_table({"youngs_modulus_mpa": 0.0})
+    with pytest.raises(GearoptError, match="load.poisson_ratio"):
+        LoadOptions.from_table({"poisson_ratio": [0.3, 0.5]})
+    with pytest.raises(GearoptError, match="load.fe_mesh"):
+        LoadOptions.from_table({"fe_mesh": [4, 4, 1]})
+    with pytest.raises(GearoptError, match="load.colour"):
+        LoadOptions.from_table({"colour": 1})
+    text = (STUDIES / "seed001_section5_3.toml").read_text()
+    with pytest.raises(DesignError, match="load.torque_nm"):
+        gearopt.loads_design(text + "\n[load]\ntorque_nm = -1.0\n")
