@@ -12,42 +12,49 @@ One tooth with its fillets and a rim section, meshed by structured hexahedra wit
 triquadratic (Lagrange) elements: scikit-fem's :class:`skfem.MeshHex` from our own corner nodes
 and connectivity (trilinear geometry) and :class:`skfem.ElementHex2` shape functions on 3 x 3 x 3
 Gauss points; the stiffness is assembled here, vectorised over the elements (scikit-fem's generic
-bilinear-form assembly costs about 8 ms per 81-dof element). Linear elements lock in bending:
-on a 40 x 10 x 10 mm cantilever Hex1 is 6 % too stiff with 4 x 4 elements over the section where
-Hex2 is within 2 % with 2 x 2 (measured, see the tests).
+bilinear-form assembly costs about 8 ms per 81-dof element), and factorised by a block Cholesky
+of the banded matrix (:func:`factorise`; scipy's SuperLU needed 26 ms per right-hand side).
+Linear elements lock in bending: on a 40 x 10 x 10 mm cantilever under an end load Hex1 with
+16 x 4 x 4 elements is 5.7 % stiffer than Timoshenko's beam, Hex2 with 8 x 2 x 2 2.2 % and with
+16 x 4 x 4 1.75 % (the clamped end's restraint of the Poisson contraction; measured).
 
 Nodes are placed by the coordinates (face s, profile t, thickness fraction w): the axial-plane
 point of (s, t) (:func:`gearopt.flank.axial_plane`, the taper of a tapered-depth member applied)
 turned to the polar angle interpolated linearly in w between the two sides of the tooth, each
 side's Theta from its flank's local interpolant (:meth:`FlankMap.polar_angle_local`), so the FE
-mesh density does not depend on the FlankMap grid. From the top (the face cone) down:
+mesh density does not depend on the FlankMap grid. The face runs from the blank's inner to its
+outer cone distance, the tooth from the root cone (-b_m) to the face cone (a_m). From the top
+down:
 
 - flank rows, from the top to ``t_low(s)``, a line in s at or above the lowest generated cells of
   the flank (each side its own line);
-- fillet rows, from ``t_low(s)`` to the root cone: each side continues the flank tangentially
-  (linear extrapolation of Theta) plus a parabolic widening, zero with zero slope at
-  ``t_low``, that reaches the middle of the tooth space (the tooth's centre angle +- half a pitch)
-  at the root: a full-round root whose shape is an approximation (the tool's edge radius is not
-  modelled);
-- rim rows, from the root cone down by ``rim_depth`` (default one mean normal module) and one
+- fillet rows (at least two), from ``t_low(s)`` to the root cone: each side continues the flank
+  tangentially (linear extrapolation of Theta) plus a parabolic widening, zero with zero slope at
+  ``t_low``, that reaches the middle of the tooth space (the tooth's centre angle +- half a
+  pitch) at the root: a full-round root whose shape is an approximation (the tool's edge radius
+  and the true trochoidal fillet are not modelled);
+- rim rows, from the root cone down by ``rim_depth_mm`` (default one mean normal module) and one
   angular pitch wide, the sector between the middles of the neighbouring tooth spaces.
 
 Boundary conditions: the rim's bottom face and its two side faces (the cuts through the
 neighbouring spaces' middles, from the root down) are fixed; the rest is free (top land, toe,
 heel, both flanks and fillets). The neighbouring teeth are left out: their rim is replaced by the
-fixed cuts, which makes the rim a little stiffer than in a whole gear.
+fixed cuts, which makes the foundation stiffer than in a whole gear.
 
 Local contact deformation
 -------------------------
 The contact solver adds the half-space (Boussinesq) compliance of the contact itself, so the
 singular local response near the load must not be counted here. We follow Conry and Seireg: the
 unit load is a point force on the flank's surface node, along the inward normal, and the
-displacement is read at the tooth's mid-surface (w = 1/2) node of the same face and profile
-indices, projected on the flank normal there. The local field of a point force decays like 1/r,
-so half a tooth thickness away the reading is mesh-converged (tested) and carries the bending,
-shear, fillet and rim deflection of the tooth. What is left out is the compression of the half
-tooth thickness between flank and mid-surface outside the half-space's own share; the matrix is
-symmetric only approximately (load and reading points differ; a few % measured).
+displacement is read on the tooth's mid-surface (w = 1/2), where the flank normal through the
+loaded point pierces it (biquadratic interpolation of the mid-surface nodes), projected on that
+normal. The local field of a point force decays like 1/r, so half a tooth thickness away the
+reading carries the bending, shear, fillet and rim deflection of the tooth and is mesh-converged
+(tested); what is left out besides the singular part is the compression of the half thickness
+between flank and mid-surface. Load and reading points differ, so the FE readings are symmetric
+only within a few % (:attr:`ToothCompliance.asymmetry`); the table handed over is their
+symmetric part. It is not positive definite by itself (its smallest eigenvalues are about -0.2 %
+of the largest, measured): the half-space part the contact solver adds makes the sum so.
 """
 
 from __future__ import annotations
