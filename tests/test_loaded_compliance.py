@@ -78,7 +78,7 @@ def test_the_tooth_compliance_is_mesh_converged(section_5_3):
         pinion["concave"],
         design.blank,
         material=STEEL,
-        mesh=(14, 9, 4),
+        mesh=(16, 8, 4),
     )
     c0 = float(coarse.compliance_mm_per_n(mean, 0.0))
     c1 = float(fine.compliance_mm_per_n(mean, 0.0))
@@ -95,8 +95,10 @@ def test_the_influence_numbers_are_physical(section_5_3):
             table = compliance.table_mm_per_n
             diagonal = np.diag(table)
             assert (diagonal > 0.0).all()
-            # Maxwell-Betti: symmetric within a few %
-            assert np.abs(table - table.T).max() < 0.05 * diagonal.max()
+            # Maxwell-Betti: the FE readings (mid-surface) are symmetric within a few %, the
+            # table handed over is their symmetric part
+            assert compliance.asymmetry < 0.1
+            np.testing.assert_array_equal(table, table.T)
             # a load at the tip bends the tooth more than one at the root
             face, profile = compliance.table_points_mm()
             column = compliance.compliance_mm_per_n(

@@ -12,42 +12,49 @@ One tooth with its fillets and a rim section, meshed by structured hexahedra wit
 triquadratic (Lagrange) elements: scikit-fem's :class:`skfem.MeshHex` from our own corner nodes
 and connectivity (trilinear geometry) and :class:`skfem.ElementHex2` shape functions on 3 x 3 x 3
 Gauss points; the stiffness is assembled here, vectorised over the elements (scikit-fem's generic
-bilinear-form assembly costs about 8 ms per 81-dof element). Linear elements lock in bending:
-on a 40 x 10 x 10 mm cantilever Hex1 is 6 % too stiff with 4 x 4 elements over the section where
-Hex2 is within 2 % with 2 x 2 (measured, see the tests).
+bilinear-form assembly costs about 8 ms per 81-dof element), and factorised by a block Cholesky
+of the banded matrix (:func:`factorise`; scipy's SuperLU needed 26 ms per right-hand side).
+Linear elements lock in bending: on a 40 x 10 x 10 mm cantilever under an end load Hex1 with
+16 x 4 x 4 elements is 5.7 % stiffer than Timoshenko's beam, Hex2 with 8 x 2 x 2 2.2 % and with
+16 x 4 x 4 1.75 % (the clamped end's restraint of the Poisson contraction; measured).
 
 Nodes are placed by the coordinates (face s, profile t, thickness fraction w): the axial-plane
 point of (s, t) (:func:`gearopt.flank.axial_plane`, the taper of a tapered-depth member applied)
 turned to the polar angle interpolated linearly in w between the two sides of the tooth, each
 side's Theta from its flank's local interpolant (:meth:`FlankMap.polar_angle_local`), so the FE
-mesh density does not depend on the FlankMap grid. From the top (the face cone) down:
+mesh density does not depend on the FlankMap grid. The face runs from the blank's inner to its
+outer cone distance, the tooth from the root cone (-b_m) to the face cone (a_m). From the top
+down:
 
 - flank rows, from the top to ``t_low(s)``, a line in s at or above the lowest generated cells of
   the flank (each side its own line);
-- fillet rows, from ``t_low(s)`` to the root cone: each side continues the flank tangentially
-  (linear extrapolation of Theta) plus a parabolic widening, zero with zero slope at
-  ``t_low``, that reaches the middle of the tooth space (the tooth's centre angle +- half a pitch)
-  at the root: a full-round root whose shape is an approximation (the tool's edge radius is not
-  modelled);
-- rim rows, from the root cone down by ``rim_depth`` (default one mean normal module) and one
+- fillet rows (at least two), from ``t_low(s)`` to the root cone: each side continues the flank
+  tangentially (linear extrapolation of Theta) plus a parabolic widening, zero with zero slope at
+  ``t_low``, that reaches the middle of the tooth space (the tooth's centre angle +- half a
+  pitch) at the root: a full-round root whose shape is an approximation (the tool's edge radius
+  and the true trochoidal fillet are not modelled);
+- rim rows, from the root cone down by ``rim_depth_mm`` (default one mean normal module) and one
   angular pitch wide, the sector between the middles of the neighbouring tooth spaces.
 
 Boundary conditions: the rim's bottom face and its two side faces (the cuts through the
 neighbouring spaces' middles, from the root down) are fixed; the rest is free (top land, toe,
 heel, both flanks and fillets). The neighbouring teeth are left out: their rim is replaced by the
-fixed cuts, which makes the rim a little stiffer than in a whole gear.
+fixed cuts, which makes the foundation stiffer than in a whole gear.
 
 Local contact deformation
 -------------------------
 The contact solver adds the half-space (Boussinesq) compliance of the contact itself, so the
 singular local response near the load must not be counted here. We follow Conry and Seireg: the
 unit load is a point force on the flank's surface node, along the inward normal, and the
-displacement is read at the tooth's mid-surface (w = 1/2) node of the same face and profile
-indices, projected on the flank normal there. The local field of a point force decays like 1/r,
-so half a tooth thickness away the reading is mesh-converged (tested) and carries the bending,
-shear, fillet and rim deflection of the tooth. What is left out is the compression of the half
-tooth thickness between flank and mid-surface outside the half-space's own share; the matrix is
-symmetric only approximately (load and reading points differ; a few % measured).
+displacement is read on the tooth's mid-surface (w = 1/2), where the flank normal through the
+loaded point pierces it (biquadratic interpolation of the mid-surface nodes), projected on that
+normal. The local field of a point force decays like 1/r, so half a tooth thickness away the
+reading carries the bending, shear, fillet and rim deflection of the tooth and is mesh-converged
+(tested); what is left out besides the singular part is the compression of the half thickness
+between flank and mid-surface. Load and reading points differ, so the FE readings are symmetric
+only within a few % (:attr:`ToothCompliance.asymmetry`); the table handed over is their
+symmetric part. It is not positive definite by itself (its smallest eigenvalues are about -0.2 %
+of the largest, measured): the half-space part the contact solver adds makes the sum so.
 """
 
 from __future__ import annotations
@@ -61,6 +68,7 @@ from numpy.typing import NDArray
 from scipy.linalg import LinAlgError, cholesky, solve_triangular
 from scipy.sparse import coo_matrix, csc_matrix
 from skfem import Basis, ElementHex2, MeshHex
+from threadpoolctl import threadpool_limits
 
 from gearopt.blank import Blank
 from gearopt.errors import GearoptError
@@ -79,12 +87,16 @@ __all__ = [
 ]
 
 #: default tooth mesh: elements (along the face, over the tooth height, through the thickness)
-DEFAULT_MESH = (10, 6, 3)
+DEFAULT_MESH = (12, 6, 3)
 
 #: element corners in scikit-fem's MeshHex order (reference coordinates)
 _CORNERS = np.array(
     [[0, 0, 0], [0, 0, 1], [0, 1, 0], [1, 0, 0], [0, 1, 1], [1, 0, 1], [1, 1, 0], [1, 1, 1]]
 )
+#: BLAS threads in the factorisation and the solves: the blocks (a few hundred rows) are too
+#: small for threads to pay; on a shared 2-core machine multi-threaded OpenBLAS made the set-up
+#: of both members of seed 001 section 5.3 about 12 s instead of 2 s (measured)
+ONE_BLAS_THREAD = 1
 #: Gauss order: 3 points per direction (the triquadratic stiffness exactly on parallelepipeds)
 _INTORDER = 4
 
@@ -265,23 +277,28 @@ class Factorised:
         """``L^-1 f`` of ``(3 N, k)`` nodal vectors: blocks ``(n_blocks, nb, k)``. The
         compliance between load cases F and readings R is ``forward(R^T)^T forward(F)``."""
         y = self._blocks(np.asarray(loads_n, float).reshape(self.n_dofs, -1))
+        with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+            self._forward(y)
+        return y
+
+    def _forward(self, y: NDArray) -> None:
         for i in range(y.shape[0]):
             if i:
                 y[i] -= self.below[i - 1] @ y[i - 1]
             y[i] = solve_triangular(self.diagonal[i], y[i], lower=True, check_finite=False)
-        return y
 
     def displacements_mm(self, loads_n: NDArray) -> NDArray:
         """``(3 N, k)`` displacements (mm) under ``(3 N, k)`` nodal forces (N), one column per
         load case (the fixed degrees of freedom stay zero, their loads are ignored)."""
         loads = np.asarray(loads_n, float)
         y = self.forward(loads)
-        for i in range(y.shape[0] - 1, -1, -1):
-            if i < y.shape[0] - 1:
-                y[i] -= self.below[i].T @ y[i + 1]
-            y[i] = solve_triangular(
-                self.diagonal[i], y[i], lower=True, trans="T", check_finite=False
-            )
+        with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+            for i in range(y.shape[0] - 1, -1, -1):
+                if i < y.shape[0] - 1:
+                    y[i] -= self.below[i].T @ y[i + 1]
+                y[i] = solve_triangular(
+                    self.diagonal[i], y[i], lower=True, trans="T", check_finite=False
+                )
         out = np.zeros((self.n_dofs, y.shape[2]))
         out[self.order] = y.reshape(-1, y.shape[2])[: len(self.order)]
         return out[:, 0] if loads.ndim == 1 else out
@@ -290,7 +307,12 @@ class Factorised:
 def factorise(model: SolidModel, fixed_nodes: NDArray) -> Factorised:
     """Fix the nodes where ``fixed_nodes`` (``model.node_dof.shape``, bool) is True (all three
     displacement components zero) and factorise the remaining stiffness (block Cholesky of the
-    banded matrix, :class:`Factorised`)."""
+    banded matrix, :class:`Factorised`; BLAS on one thread, see :data:`ONE_BLAS_THREAD`)."""
+    with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+        return _factorise(model, fixed_nodes)
+
+
+def _factorise(model: SolidModel, fixed_nodes: NDArray) -> Factorised:
     fixed_nodes = np.asarray(fixed_nodes, bool)
     if fixed_nodes.shape != model.node_dof.shape or not fixed_nodes.any():
         raise GearoptError("fixed_nodes", rule="must mark at least one node of the model")
@@ -327,7 +349,7 @@ def factorise(model: SolidModel, fixed_nodes: NDArray) -> Factorised:
 
 def _check_mesh(mesh) -> tuple[int, int, int]:
     names = ("mesh.n_face", "mesh.n_profile", "mesh.n_thickness")
-    lows, high = (2, 3, 2), 40
+    lows, high = (2, 4, 2), 40
     if not isinstance(mesh, tuple | list) or len(mesh) != 3:
         raise GearoptError("mesh", mesh, "must be (n_face, n_profile, n_thickness)")
     for name, value, low in zip(names, mesh, lows, strict=True):
@@ -466,7 +488,10 @@ class ToothCompliance:
     table_mm_per_n
         ``(n_f n_p, n_f n_p)`` influence numbers at the table's points, point ``k = a n_p + b``
         at face ``face_mm[a]`` and profile ``t_low + b / (n_p - 1) (top_mm - t_low)``: row i the
-        reading, column j the unit load.
+        reading, column j the unit load: the symmetric part of the FE readings (Maxwell-Betti;
+        the mid-surface readings are not exactly the load points' conjugates).
+    asymmetry
+        ``max |a_ij - a_ji| / max a_ii`` of the FE readings before symmetrising (a few %).
     """
 
     member: str
@@ -479,6 +504,7 @@ class ToothCompliance:
     low_slope: float
     top_mm: float
     table_mm_per_n: NDArray = field(repr=False)
+    asymmetry: float
 
     @property
     def table_shape(self) -> tuple[int, int]:
@@ -532,6 +558,47 @@ def _surface_normals(points: NDArray, inward: NDArray) -> NDArray:
     return n * -np.sign(np.sum(n * inward, axis=-1, keepdims=True))
 
 
+def _lagrange(x: NDArray) -> tuple[NDArray, NDArray]:
+    """Quadratic Lagrange functions on nodes 0, 1, 2 and their derivatives, ``(..., 3)``."""
+    x = x[..., None]
+    values = np.concatenate([(x - 1) * (x - 2) / 2, -x * (x - 2), x * (x - 1) / 2], axis=-1)
+    slopes = np.concatenate([x - 1.5, 2 - 2 * x, x - 0.5], axis=-1)
+    return values, slopes
+
+
+def _normal_foot(surface: NDArray, points: NDArray, normals: NDArray):
+    """Where the inward normals of ``points`` pierce a node surface of the mesh (the
+    biquadratic surface through ``surface``, ``(2 n1 + 1, 2 n2 + 1, 3)`` nodes): per point
+    the 9 nodes ``(m, 9, 2)`` of its element and their weights ``(m, 9)`` (Newton on the node
+    coordinates, clamped to the surface)."""
+    top = np.array(surface.shape[:2]) - 1.0
+    flat = surface.reshape(-1, 3)
+    guess = np.linalg.norm(surface[..., None, :] - points, axis=-1).reshape(-1, len(points))
+    k = np.argmin(guess, axis=0)
+    x = np.stack([k // surface.shape[1], k % surface.shape[1]], axis=-1).astype(float)
+    depth = np.linalg.norm(points - flat[k], axis=-1)
+    for _ in range(8):
+        e = np.clip(np.floor(x / 2.0), 0, top / 2 - 1).astype(np.intp)
+        (fa, da), (fb, db) = _lagrange(x[:, 0] - 2 * e[:, 0]), _lagrange(x[:, 1] - 2 * e[:, 1])
+        ia = 2 * e[:, :1] + np.arange(3)
+        ib = 2 * e[:, 1:] + np.arange(3)
+        patch = surface[ia[:, :, None], ib[:, None, :]]  # (m, 3, 3, 3)
+        at = np.einsum("mi,mj,mijk->mk", fa, fb, patch)
+        jac = np.stack(
+            [
+                np.einsum("mi,mj,mijk->mk", da, fb, patch),
+                np.einsum("mi,mj,mijk->mk", fa, db, patch),
+                normals,
+            ],
+            axis=-1,
+        )
+        step = np.linalg.solve(jac, (points - depth[:, None] * normals - at)[..., None])[..., 0]
+        x = np.clip(x + step[:, :2], 0.0, top)
+        depth = depth - step[:, 2]
+    nodes = np.stack(np.broadcast_arrays(ia[:, :, None], ib[:, None, :]), axis=-1)
+    return nodes.reshape(-1, 9, 2), (fa[:, :, None] * fb[:, None, :]).reshape(-1, 9)
+
+
 @lru_cache(maxsize=8)
 def _member_tables(
     lower: FlankMap,
@@ -552,7 +619,7 @@ def _member_tables(
     fillet = np.mean([t_lo - t_root for t_lo, _ in lows]) + np.mean([sl for _, sl in lows]) * (
         blank.mean_cone_distance_mm
     )
-    n_fil = int(np.clip(round(n_profile * fillet / depth), 1, n_profile - 2))
+    n_fil = int(np.clip(round(n_profile * fillet / depth), 2, n_profile - 2))
     rows = (max(1, round(n_profile * rim / depth)), n_fil, n_profile - n_fil)
     t_low = [np.clip(lo + sl * face, t_root, t_top) for lo, sl in lows]
     centre = 0.5 * (
@@ -586,17 +653,24 @@ def _member_tables(
         p = model.nodes_mm[a][:, b, c]
         normal = _surface_normals(p, mid - p).reshape(-1, 3)
         normals.append(normal)
-        for where, out in ((c, loads), (n_thickness, reads)):
-            vec = np.zeros((model.n_dofs, len(normal)))
-            dofs = 3 * model.node_dof[a][:, b, where].reshape(-1)[:, None] + np.arange(3)
-            vec[dofs, np.arange(len(normal))[:, None]] = -normal
-            out.append(vec)
+        columns = np.arange(len(normal))
+        vec = np.zeros((model.n_dofs, len(normal)))
+        dofs = 3 * model.node_dof[a][:, b, c].reshape(-1)[:, None] + np.arange(3)
+        vec[dofs, columns[:, None]] = -normal
+        loads.append(vec)
+        nodes, weights = _normal_foot(model.nodes_mm[:, :, n_thickness], p.reshape(-1, 3), normal)
+        vec = np.zeros((model.n_dofs, len(normal)))
+        dofs = 3 * model.node_dof[:, :, n_thickness][nodes[..., 0], nodes[..., 1]]
+        for k in range(3):  # nodes on the same point add up
+            np.add.at(vec, (dofs + k, columns[:, None]), -normal[:, None, k] * weights)
+        reads.append(vec)
     y_load = factors.forward(np.hstack(loads)).reshape(-1, 2 * len(normals[0]))
     y_read = factors.forward(np.hstack(reads)).reshape(-1, 2 * len(normals[0]))
     table = y_read.T @ y_load
     n = len(normals[0])
     out = {}
     for k, (side, low) in enumerate(zip((lower, upper), lows, strict=True)):
+        raw = table[k * n : (k + 1) * n, k * n : (k + 1) * n]
         out[side.flank] = ToothCompliance(
             member=side.member,
             flank=side.flank,
@@ -607,7 +681,8 @@ def _member_tables(
             low_mm=low[0],
             low_slope=low[1],
             top_mm=t_top,
-            table_mm_per_n=np.ascontiguousarray(table[k * n : (k + 1) * n, k * n : (k + 1) * n]),
+            table_mm_per_n=0.5 * (raw + raw.T),
+            asymmetry=float(np.abs(raw - raw.T).max() / np.diag(raw).max()),
         )
     return out
 
@@ -641,7 +716,8 @@ def member_compliance(
     if rim_depth_mm is not None and not (math.isfinite(rim_depth_mm) and rim_depth_mm > 0):
         raise GearoptError("rim_depth_mm", rim_depth_mm, "must be positive")
     lower, upper = _same_tooth(flanks["convex"], flanks["concave"])
-    tables = _member_tables(lower, upper, blank, material, mesh, rim_depth_mm)
+    with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+        tables = _member_tables(lower, upper, blank, material, mesh, rim_depth_mm)
     return {name: tables[name] for name in FLANKS}
 
 
