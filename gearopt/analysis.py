@@ -116,8 +116,13 @@ def pair_ease_off(pair: MeshedPair) -> dict[str, EaseOff]:
 
 
 def pair_loaded_contact(
-    design: Design, pair: MeshedPair, sides: dict[str, ToothContact], load: LoadOptions
+    design: Design,
+    pair: MeshedPair,
+    sides: dict[str, ToothContact],
+    load: LoadOptions,
+    *,
+    which=("drive", "coast"),
 ) -> dict[str, list[LoadedContact]]:
-    """Loaded TCA of both sides at the load's torques (:mod:`gearopt.loaded`), on the
-    positions of the unloaded TCA ``sides`` (:func:`contact_sides`)."""
-    return loaded_sides(pair, sides, design.blank, load)
+    """Loaded TCA of both sides (or ``which``) at the load's torques (:mod:`gearopt.loaded`),
+    on the positions of the unloaded TCA ``sides`` (:func:`contact_sides`)."""
+    return loaded_sides(pair, sides, design.blank, load, which=which)

@@ -112,7 +112,11 @@ def test_pressure_grows_as_a_hertzian_contact(section53):
     # one pair carrying inside the flanks at the middle position: p_max ~ P^(1/3)
     design, pair, sides = section53
     loads = pair_loaded_contact(
-        design, pair, sides, LoadOptions(torque_nm=(2.0, 16.0), patches=(41, 31), reach_um=8.0)
+        design,
+        pair,
+        sides,
+        LoadOptions(torque_nm=(2.0, 16.0), patches=(41, 31), reach_um=8.0),
+        which=("drive",),
     )["drive"]
     middle = len(loads[0].lte_arcsec) // 2
     p = []
@@ -175,7 +179,11 @@ def _relative_curvature(field, s1, h1, phi):
 def test_a_light_contact_at_the_mean_point_is_hertzian(section53):
     design, pair, sides = section53
     loads = pair_loaded_contact(
-        design, pair, sides, LoadOptions(torque_nm=(3.0,), patches=(41, 41), reach_um=4.0)
+        design,
+        pair,
+        sides,
+        LoadOptions(torque_nm=(3.0,), patches=(41, 41), reach_um=4.0),
+        which=("drive",),
     )["drive"]
     middle = len(loads[0].lte_arcsec) // 2
     load = loads[0].positions[middle]

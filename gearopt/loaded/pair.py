@@ -45,10 +45,12 @@ def _compliance_of(flanks: Mapping, blank, material: Material, mesh) -> dict:
     return value
 
 
-def loaded_sides(pair, sides: Mapping, blank, load: LoadOptions) -> dict[str, list[LoadedContact]]:
+def loaded_sides(
+    pair, sides: Mapping, blank, load: LoadOptions, *, which=("drive", "coast")
+) -> dict[str, list[LoadedContact]]:
     """Loaded TCA of both sides of a meshed pair (:class:`gearopt.mesh.MeshedPair`) at the
     options' torques: ``{"drive": [one per torque], "coast": [...]}``, on the positions of the
-    unloaded TCA ``sides`` (:func:`gearopt.analysis.contact_sides`)."""
+    unloaded TCA ``sides`` (:func:`gearopt.analysis.contact_sides`); ``which`` sides."""
     flanks = member_flanks(pair)
     mesh = load.fe_mesh or DEFAULT_MESH
     materials = [
@@ -68,6 +70,8 @@ def loaded_sides(pair, sides: Mapping, blank, load: LoadOptions) -> dict[str, li
     grid = PatchOptions(along=load.patches[0], across=load.patches[1], reach_um=load.reach_um)
     out = {}
     for side, field in (("drive", pair.drive), ("coast", pair.coast)):
+        if side not in which:
+            continue
         pinion = models["pinion"][field.pinion.flank]
         gear = models["gear"][field.gear.flank]
 
