@@ -21,11 +21,20 @@ from pathlib import Path
 
 import numpy as np
 
-from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair, pair_backlash
+from gearopt.analysis import (
+    AnalysisOptions,
+    contact_sides,
+    meshed_pair,
+    pair_backlash,
+    pair_loaded_contact,
+)
 from gearopt.contact import kernels as contact_kernels
 from gearopt.design_files import loads_design, with_overrides
 from gearopt.errors import GearoptError, NotAvailableError
 from gearopt.flank import FlankGrid
+from gearopt.load_options import LoadOptions
+from gearopt.loaded.compliance import DEFAULT_MESH, member_compliance
+from gearopt.loaded.pair import member_flanks
 from gearopt.newton_tca import newton_tca
 from gearopt.plugins import get_machine_model
 from gearopt.studyfile import load_study_spec
@@ -43,6 +52,8 @@ BENCHMARKS: dict[str, str] = {
     "backlash_ms": "gearopt.bench:bench_backlash",
     "tca_newton_ms": "gearopt.bench:bench_tca_newton",
     "study_trial_ms": "gearopt.bench:bench_study_trial",
+    "ltca_setup_ms": "gearopt.bench:bench_ltca_setup",
+    "ltca_ms": "gearopt.bench:bench_ltca",
 }
 
 ONE_THREAD = {
@@ -178,6 +189,41 @@ def bench_tca_newton() -> tuple[float, dict]:
     info = _tca_info(options)
     info["tca_newton_positions"] = 2 * (len(u) + 1)
     return time_call_ms(run, number=3), info
+
+
+def bench_ltca_setup() -> tuple[float, dict]:
+    """The finite-element influence numbers of both members of the section 5.3 pair (tooth
+    models, factorisation, both flanks' tables) at the default FE mesh: the loaded TCA's
+    set-up, once per design."""
+
+    pair, _ = _meshed_section53()
+    flanks = member_flanks(pair)
+    blank = loads_design(_study_text("seed001_section5_3.toml")).blank
+
+    def run():
+        for member in ("pinion", "gear"):
+            member_compliance(dict(flanks[member]), blank, mesh=DEFAULT_MESH)
+
+    return time_call_ms(run, number=1), {"ltca_fe_mesh": list(DEFAULT_MESH)}
+
+
+def bench_ltca() -> tuple[float, dict]:
+    """Loaded TCA of the drive side of the section 5.3 pair at one torque (50 N m) over the
+    21 positions, after the set-up (tooth models built, unloaded TCA done)."""
+
+    design = loads_design(_study_text("seed001_section5_3.toml"))
+    pair, options = _meshed_section53()
+    sides = contact_sides(pair, options)
+    load = LoadOptions(torque_nm=(50.0,))
+
+    def run():
+        pair_loaded_contact(design, pair, sides, load, which=("drive",))
+
+    run()
+    return time_call_ms(run, number=3), {
+        "ltca_case": "seed001_section5_3 drive, 50 N m, 21 positions",
+        "ltca_patches": list(load.patches),
+    }
 
 
 def bench_study_trial() -> tuple[float, dict]:
