@@ -243,3 +243,25 @@ def test_bad_load_input_is_refused():
     text = (STUDIES / "seed001_section5_3.toml").read_text()
     with pytest.raises(DesignError, match="load.torque_nm"):
         gearopt.loads_design(text + "\n[load]\ntorque_nm = -1.0\n")
+
+
+def test_seed002_table3_trends():
+    # seed 002 Table 3 (its values withheld): at light load case 1 has the smallest LTE
+    # fluctuation and case 5 the largest; the order changes with torque; at 1000 N m case 5 is
+    # the smallest; case 5's minimum lies at a higher torque than case 1's
+    torques = (5.0, 100.0, 400.0, 1000.0)
+    pp = {}
+    for case in ("case1", "case3", "case5"):
+        design = gearopt.load_design(STUDIES / "fourth_order_te" / f"{case}.toml")
+        options = AnalysisOptions.from_conditions(None, design=design)
+        pair = meshed_pair(design, options)
+        sides = contact_sides(pair, options)
+        loads = pair_loaded_contact(
+            design, pair, sides, LoadOptions(torque_nm=torques), which=("drive",)
+        )["drive"]
+        pp[case] = np.array([r.lte_peak_to_peak_arcsec for r in loads])
+        print(case, np.round(pp[case], 2))
+    light, heavy = 0, len(torques) - 1
+    assert pp["case1"][light] < pp["case3"][light] < pp["case5"][light]
+    assert pp["case5"][heavy] < min(pp["case1"][heavy], pp["case3"][heavy])
+    assert torques[int(np.argmin(pp["case5"]))] > torques[int(np.argmin(pp["case1"]))]
