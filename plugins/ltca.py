@@ -14,12 +14,26 @@ Metrics (the worst over the torques; ``coast_`` for the coast side):
 ``mesh_stiffness_n_per_mm_um`` (the mean over the torques), ``edge_loading`` (0/1).
 Arrays: ``torque_nm``, ``lte_peak_to_peak_arcsec`` (one per torque), ``lte_arcsec``
 (torques x positions), ``phi1_deg``. Report: ``ltca`` and ``ltca_coast``, one entry per torque.
+
+Objectives and constraints on it (options from the study file's entries):
+
+``lte_fluctuation``
+    The LTE peak-to-peak (arcsec) over a duty cycle: with ``weights`` (one per torque of the
+    evaluation, in its order) their weighted mean, else the worst over the torques. ``on``
+    (label, default ``"ltca"``), ``side`` (``"drive"``, ``"coast"`` or ``"both"``, the larger).
+``max_contact_pressure`` (constraint)
+    The largest contact pressure over the torques less ``limit_mpa`` (required): feasible when
+    the pressure stays at or below the limit. ``on``, ``side``.
+``edge_loading`` (constraint)
+    +0.5 when a loaded patch lies on a flank's boundary at any torque, else -0.5. ``on``,
+    ``side``.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -30,8 +44,8 @@ from gearopt.analysis import (
     meshed_pair,
     pair_loaded_contact,
 )
-from gearopt.errors import GearoptError
-from gearopt.evaluation import BaseEvaluator, Evaluation
+from gearopt.errors import GearoptError, StudyError
+from gearopt.evaluation import BaseEvaluator, BaseObjective, Evaluation
 from gearopt.load_options import LOAD_KEYS, LoadOptions
 
 
@@ -89,7 +103,111 @@ class LtcaEvaluator(BaseEvaluator):
         )
 
 
+_PREFIXES = {"drive": ("",), "coast": ("coast_",), "both": ("", "coast_")}
+
+
+class _LoadedObjective(BaseObjective):
+    requires = ("ltca",)
+    options: ClassVar[tuple[str, ...]] = ("on", "side")
+
+    def reads(self, **options: Any) -> dict[str, str]:
+        unknown = sorted(set(options) - set(self.options))
+        if unknown:
+            raise StudyError(
+                f"{self.kind} {self.name}", unknown, f"unknown options; known: {self.options}"
+            )
+        if options.get("side", "drive") not in _PREFIXES:
+            raise StudyError(
+                f"{self.kind} {self.name}.side",
+                options["side"],
+                f"must be one of {list(_PREFIXES)}",
+            )
+        label = options.get("on", "ltca")
+        if not isinstance(label, str):
+            raise StudyError(f"{self.kind} {self.name}.on", label, "must be a label")
+        return {label: "ltca"}
+
+    @staticmethod
+    def _prefixes(options) -> tuple[str, ...]:
+        return _PREFIXES[options.get("side", "drive")]
+
+
+class LteFluctuation(_LoadedObjective):
+    name = "lte_fluctuation"
+    description = "LTE peak-to-peak over a duty cycle (weighted mean over the torques, or worst)"
+    options: ClassVar[tuple[str, ...]] = ("on", "side", "weights")
+
+    def reads(self, **options: Any) -> dict[str, str]:
+        weights = options.get("weights")
+        if weights is not None:
+            ok = isinstance(weights, list | tuple) and weights
+            ok = ok and all(
+                isinstance(w, int | float) and not isinstance(w, bool) and w >= 0 for w in weights
+            )
+            if not ok or not math.fsum(weights) > 0.0:
+                raise StudyError(
+                    f"objective {self.name}.weights", weights, "must be non-negative numbers"
+                )
+        return super().reads(**options)
+
+    def value(self, evaluations, **options):
+        evaluation = evaluations[options.get("on", "ltca")]
+        weights = options.get("weights")
+        worst = 0.0
+        for prefix in self._prefixes(options):
+            pp = np.asarray(evaluation.arrays[f"{prefix}lte_peak_to_peak_arcsec"], float)
+            if weights is None:
+                worst = max(worst, float(pp.max()))
+                continue
+            if len(weights) != len(pp):
+                raise StudyError(
+                    f"objective {self.name}.weights",
+                    list(weights),
+                    f"must give one weight per torque ({len(pp)})",
+                )
+            w = np.asarray(weights, float)
+            worst = max(worst, float(w @ pp / w.sum()))
+        return worst
+
+
+class MaxContactPressure(_LoadedObjective):
+    name = "max_contact_pressure"
+    description = "largest contact pressure less limit_mpa (constraint)"
+    kind = "constraint"
+    options: ClassVar[tuple[str, ...]] = ("on", "side", "limit_mpa")
+
+    def reads(self, **options: Any) -> dict[str, str]:
+        limit = options.get("limit_mpa")
+        if not (isinstance(limit, int | float) and not isinstance(limit, bool) and limit > 0):
+            raise StudyError(f"constraint {self.name}.limit_mpa", limit, "is required (MPa > 0)")
+        return super().reads(**options)
+
+    def value(self, evaluations, **options):
+        evaluation = evaluations[options.get("on", "ltca")]
+        pressure = max(
+            evaluation.metrics[f"{p}max_contact_pressure_mpa"] for p in self._prefixes(options)
+        )
+        return float(pressure - options["limit_mpa"])
+
+
+class EdgeLoading(_LoadedObjective):
+    name = "edge_loading"
+    description = "no load on a flank's boundary at any torque (constraint: +0.5 with it)"
+    kind = "constraint"
+
+    def value(self, evaluations, **options):
+        evaluation = evaluations[options.get("on", "ltca")]
+        edge = max(evaluation.metrics[f"{p}edge_loading"] for p in self._prefixes(options))
+        return float(edge) - 0.5
+
+
 @hookimpl
 def gearopt_evaluators() -> list[BaseEvaluator]:
     """The loaded TCA evaluator."""
     return [LtcaEvaluator()]
+
+
+@hookimpl
+def gearopt_objectives() -> list[BaseObjective]:
+    """The loaded contact's objectives and constraints."""
+    return [LteFluctuation(), MaxContactPressure(), EdgeLoading()]

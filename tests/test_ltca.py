@@ -265,3 +265,64 @@ def test_seed002_table3_trends():
     assert pp["case1"][light] < pp["case3"][light] < pp["case5"][light]
     assert pp["case5"][heavy] < min(pp["case1"][heavy], pp["case3"][heavy])
     assert torques[int(np.argmin(pp["case5"]))] > torques[int(np.argmin(pp["case1"]))]
+
+
+def test_analyze_json_and_the_objectives(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gearopt.cli",
+            "analyze",
+            str(STUDIES / "seed001_section5_3.toml"),
+            "--torque-nm",
+            "0,50",
+            "--json",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    report = json.loads(out.stdout)
+    keys = {
+        "torque_nm",
+        "lte_arcsec",
+        "lte_peak_to_peak_arcsec",
+        "load_share",
+        "max_contact_pressure_mpa",
+        "max_line_load_n_per_mm",
+        "mesh_stiffness_n_per_mm_um",
+        "edge_loading",
+        "pattern_outline_mm",
+    }
+    for side in ("ltca", "ltca_coast"):
+        assert [entry["torque_nm"] for entry in report[side]] == [0.0, 50.0]
+        for entry in report[side]:
+            assert keys <= set(entry)
+            assert len(entry["lte_arcsec"]) == len(report["tca"]["phi1_deg"])
+        # zero torque: the unloaded TE at the TCA's positions
+        te = report["tca" if side == "ltca" else "tca_coast"]["te_arcsec"]
+        np.testing.assert_allclose(report[side][0]["lte_arcsec"], te, atol=0.01)
+
+    design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
+    evaluation = gearopt.evaluators()["ltca"].evaluate(design, {"torque_nm": [5.0, 50.0]})
+    objectives = gearopt.objectives()
+    pp = evaluation.arrays["lte_peak_to_peak_arcsec"]
+    fluctuation = objectives["lte_fluctuation"]
+    assert fluctuation.reads(weights=[1, 3]) == {"ltca": "ltca"}
+    assert fluctuation.value({"ltca": evaluation}, weights=[1, 3]) == pytest.approx(
+        (pp[0] + 3 * pp[1]) / 4
+    )
+    assert fluctuation.value({"ltca": evaluation}) == pytest.approx(pp.max())
+    pressure = objectives["max_contact_pressure"]
+    p_max = evaluation.metrics["max_contact_pressure_mpa"]
+    assert pressure.value({"ltca": evaluation}, limit_mpa=1500.0) == pytest.approx(p_max - 1500)
+    with pytest.raises(GearoptError, match="limit_mpa"):
+        pressure.reads()
+    assert objectives["edge_loading"].value({"ltca": evaluation}) == pytest.approx(
+        evaluation.metrics["edge_loading"] - 0.5
+    )
