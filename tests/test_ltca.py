@@ -7,7 +7,10 @@ The seed 001 section 5.3 pair (16 x 41, a crowned pinion: localized contact), st
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -21,6 +24,8 @@ from gearopt.errors import DesignError, GearoptError
 from gearopt.flank_jet import FlankJet, cross
 from gearopt.load_options import LoadOptions
 from gearopt.loaded.separations import flank_points
+from gearopt.studyfile import load_study_spec
+from gearopt.trial import evaluate_trial
 
 from .conftest import STUDIES
 
@@ -268,10 +273,6 @@ def test_seed002_table3_trends():
 
 
 def test_analyze_json_and_the_objectives(tmp_path):
-    import json
-    import subprocess
-    import sys
-
     out = subprocess.run(
         [
             sys.executable,
@@ -326,3 +327,21 @@ def test_analyze_json_and_the_objectives(tmp_path):
     assert objectives["edge_loading"].value({"ltca": evaluation}) == pytest.approx(
         evaluation.metrics["edge_loading"] - 0.5
     )
+
+
+def test_the_lte_study_evaluates_a_trial():
+    # studies/fourth_order_te/lte_study.toml: seed 002's roll terms for the smallest LTE
+    # fluctuation over a duty cycle; one trial at case 3's roll terms, as a worker runs it
+    spec = load_study_spec(STUDIES / "fourth_order_te" / "lte_study.toml")
+    base = gearopt.load_design(STUDIES / "fourth_order_te" / "case3.toml")
+    params = {
+        f"machine.pinion.convex.roll_{c}": base.source["machine"]["pinion"]["convex"][f"roll_{c}"]
+        for c in ("c2", "c3", "c4")
+    }
+    outcome = evaluate_trial(spec, 0, params)
+    assert outcome.error is None
+    (value,) = outcome.values
+    assert 0.0 < value < 30.0
+    assert set(outcome.constraints) == {"max_contact_pressure_mpa", "edge_loading"}
+    metrics = {(label, name) for label, name, _ in outcome.metrics}
+    assert ("ltca", "lte_peak_to_peak_arcsec") in metrics
