@@ -345,3 +345,28 @@ def test_the_lte_study_evaluates_a_trial():
     assert set(outcome.constraints) == {"max_contact_pressure_mpa", "edge_loading"}
     metrics = {(label, name) for label, name, _ in outcome.metrics}
     assert ("ltca", "lte_peak_to_peak_arcsec") in metrics
+
+
+def test_the_section_5_4_misalignment_moves_the_loaded_pattern_and_raises_the_pressure(
+    section53,
+):
+    design, pair, sides = section53
+    load = LoadOptions(torque_nm=(50.0,))
+    aligned = pair_loaded_contact(design, pair, sides, load)
+    options = AnalysisOptions(
+        misalignment=Misalignment(
+            offset_mm=0.221, pinion_axial_mm=-0.005, gear_axial_mm=0.188, shaft_angle_deg=-0.062
+        )
+    )
+    moved_pair = meshed_pair(design, options)
+    moved_sides = contact_sides(moved_pair, options)
+    moved = pair_loaded_contact(design, moved_pair, moved_sides, load)
+    for side in ("drive", "coast"):
+        unloaded_shift = moved_sides[side].mean_point_mm[0] - sides[side].mean_point_mm[0]
+        before, after = aligned[side][0], moved[side][0]
+        loaded_shift = float(np.mean(after.pattern_face_mm) - np.mean(before.pattern_face_mm))
+        print(side, f"M moves {unloaded_shift:.2f} mm, the loaded pattern {loaded_shift:.2f} mm")
+        assert abs(unloaded_shift) > 5.0  # seed 001 section 5.4: about 11 mm
+        assert np.sign(loaded_shift) == np.sign(unloaded_shift)
+        assert abs(loaded_shift) > 0.5 * abs(unloaded_shift)
+        assert after.max_contact_pressure_mpa > before.max_contact_pressure_mpa
