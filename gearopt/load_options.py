@@ -76,7 +76,7 @@ class LoadOptions:
     youngs_modulus_mpa: tuple[float, float] = (206000.0, 206000.0)
     poisson_ratio: tuple[float, float] = (0.3, 0.3)
     fe_mesh: tuple[int, int, int] | None = None
-    patches: tuple[int, int] = (41, 9)
+    patches: tuple[int, int] = (41, 15)
     reach_um: float = 40.0
 
     def __post_init__(self) -> None:

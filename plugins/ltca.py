@@ -91,6 +91,10 @@ class LtcaEvaluator(BaseEvaluator):
             arrays[f"{prefix}lte_peak_to_peak_arcsec"] = np.array(
                 [r.lte_peak_to_peak_arcsec for r in results]
             )
+            top = max(results, key=lambda r: r.torque_nm)  # the pressure map at the largest
+            arrays[f"{prefix}pressure_face_mm"] = top.pattern_face_mm
+            arrays[f"{prefix}pressure_profile_mm"] = top.pattern_profile_mm
+            arrays[f"{prefix}pressure_mpa"] = top.pattern_pressure_mpa
         return Evaluation(
             evaluator=self.name,
             metrics={**load_metrics(drive), **load_metrics(coast, "coast_")},

@@ -104,9 +104,9 @@ class LoadedContact:
         the positions.
     edge_loading
         True where a loaded patch lies on a flank's boundary at any position.
-    pattern_face_mm, pattern_profile_mm
-        The centres of the loaded patches over the cycle (pattern coordinates): the loaded
-        pattern, whose outline ``outline_mm`` is their convex hull.
+    pattern_face_mm, pattern_profile_mm, pattern_pressure_mpa
+        The centres of the loaded patches over the cycle (pattern coordinates) and their
+        pressures: the loaded pattern, whose outline ``outline_mm`` is their convex hull.
     positions
         The load distribution of every position (:class:`PositionLoad`).
     """
@@ -123,6 +123,7 @@ class LoadedContact:
     edge_loading: bool
     pattern_face_mm: NDArray
     pattern_profile_mm: NDArray
+    pattern_pressure_mpa: NDArray
     outline_mm: NDArray
     positions: tuple[PositionLoad, ...] = field(repr=False)
 
@@ -325,12 +326,48 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refin
             )
             high = _peak(result.lte_arcsec, 1.0)
             result = replace(
-                result, lte_peak_to_peak_arcsec=high - min(low, float(result.lte_arcsec.min()))
+                result,
+                lte_peak_to_peak_arcsec=high - min(low, float(result.lte_arcsec.min())),
+                max_contact_pressure_mpa=_resolved_pressure(field, u, result, t, grid, compliance),
             )
         else:
             result = replace(result, lte_peak_to_peak_arcsec=float(tca.te_peak_to_peak_arcsec))
         out.append(result)
     return out
+
+
+def _resolved_pressure(field, u, result: LoadedContact, torque_nm, grid, compliance) -> float:
+    """The largest contact pressure at ``torque_nm``, resolved across the contact: the
+    position of the largest pressure on the cycle's patch grid (whose patches across the
+    contact line are sized for the whole potential contact zone) evaluated again with patches
+    fitted to the loaded width there (21 across twice its half-width, doubled while the load
+    reaches the grid's side), so that the peak of the semi-elliptic pressure across is
+    sampled, not averaged over a patch."""
+    j = int(np.argmax([max(float(q.max()) for q in pos.pressure_mpa) for pos in result.positions]))
+    load = result.positions[j]
+    half = 0.0
+    for patches, forces in zip(load.patches, load.forces_n, strict=True):
+        loaded = forces > 0.0
+        if loaded.any():
+            half = max(half, float(np.max(np.abs(patches.y_mm[loaded]) + patches.width_mm[loaded])))
+    best = max(float(q.max()) for q in load.pressure_mpa)
+    if half <= 0.0:
+        return best
+    fine = replace(grid, across=21, max_half_width_mm=1.5 * half)
+    for _ in range(3):
+        pos = _prepare(field, float(u[j]), fine, compliance)
+        per_pair, _ = _solve(pos, torque_nm)
+        sides = [
+            bool(((f > 0.0) & (p.open_end | p.boundary))[:, [0, -1]].any())
+            for p, f in zip(pos.patches, per_pair, strict=True)
+        ]
+        best = max(
+            float(np.max(f / p.area_mm2)) for p, f in zip(pos.patches, per_pair, strict=True)
+        )
+        if not any(sides):
+            break
+        fine = replace(fine, max_half_width_mm=2.0 * fine.max_half_width_mm)
+    return best
 
 
 def _refined_minimum(field, u, lte, torque_nm, g_min, grid, compliance, steps) -> float:
@@ -369,7 +406,7 @@ def _at_torque(torque_nm, prepared, tca, g_min, frame, side) -> LoadedContact:
     p_max = line_max = 0.0
     stiffness = []
     edge = False
-    face, profile = [], []
+    face, profile, pressed = [], [], []
     for j, pos in enumerate(prepared):
         per_pair, th = _solve(pos, torque_nm)
         theta[j] = th
@@ -388,6 +425,7 @@ def _at_torque(torque_nm, prepared, tca, g_min, frame, side) -> LoadedContact:
                 edge = edge or bool((loaded & p.boundary).any())
                 face.append(p.face_mm[loaded] - frame.toe_mm)
                 profile.append(p.profile_mm[loaded] - frame.root_mm)
+                pressed.append(pressure[loaded])
         order = np.argsort([-p.pair for p in pos.patches])  # the earliest in its cycle first
         shares.append([share[k] for k in order])
         loads.append(
@@ -428,6 +466,7 @@ def _at_torque(torque_nm, prepared, tca, g_min, frame, side) -> LoadedContact:
         edge_loading=edge,
         pattern_face_mm=face_all,
         pattern_profile_mm=profile_all,
+        pattern_pressure_mpa=np.concatenate(pressed) if pressed else np.zeros(0),
         outline_mm=outline,
         positions=tuple(loads),
     )

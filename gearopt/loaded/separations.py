@@ -129,7 +129,7 @@ class PatchOptions:
     (the approach the largest load may bring), and at most ``max_half_width_mm`` across."""
 
     along: int = 41
-    across: int = 9
+    across: int = 15
     reach_um: float = 40.0
     max_half_width_mm: float = 4.0
 
