@@ -283,12 +283,17 @@ def test_analyze_json_and_the_objectives(tmp_path):
             "--torque-nm",
             "0,50",
             "--json",
+            "--plot",
+            str(tmp_path),
         ],
         check=True,
         capture_output=True,
         text=True,
     )
     report = json.loads(out.stdout)
+    figure = tmp_path / "ltca.png"
+    assert str(figure) in report["plots"]
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and figure.stat().st_size > 20000
     keys = {
         "torque_nm",
         "lte_arcsec",
