@@ -18,8 +18,10 @@ import argparse
 import copy
 import dataclasses
 import json
+import os
 import sys
 from collections.abc import Sequence
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -482,12 +484,21 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _version() -> str:
+    """The installed distribution's version (``unknown`` when run from a bare source tree)."""
+    try:
+        return metadata.version("gearopt")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``gearopt`` command."""
     parser = argparse.ArgumentParser(
         prog="gearopt",
         description="Spiral bevel gear design: machine settings, TCA, Optuna studies.",
     )
+    parser.add_argument("--version", action="version", version=f"gearopt {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("plugins", help="list machine models, evaluators and objectives")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -572,6 +583,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except GearoptError as exc:
         print(f"gearopt: error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # the reader went away (``gearopt settings X | head``): no traceback, and none when
+        # Python flushes standard output on exit either
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
 
 
 if __name__ == "__main__":

@@ -179,3 +179,27 @@ def test_analysis_table_of_the_design_gives_defaults_the_options_override(capsys
     assert main(["analyze", str(design)]) == 2
     err = capsys.readouterr().err
     assert "analysis.positions = 2" in err
+
+
+def test_version():
+    out = subprocess.run(
+        [sys.executable, "-m", "gearopt.cli", "--version"], capture_output=True, text=True
+    )
+    assert out.returncode == 0
+    assert out.stdout.strip().startswith("gearopt ")
+    assert out.stdout.strip() != "gearopt unknown"  # the installed distribution's version
+
+
+def test_a_reader_that_goes_away_gets_no_traceback():
+    # ``gearopt settings X --json | head -0``: the pipe's reader closes before gearopt writes
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gearopt.cli", "settings", str(STUDIES / "seed001_table3.toml")]
+        + ["--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    proc.stderr.close()
+    assert proc.wait() == 1
+    assert "Traceback" not in err and "BrokenPipeError" not in err
