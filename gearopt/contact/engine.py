@@ -194,15 +194,8 @@ class ContactEngine:
         """
         first = fields[0]
         b, c = first.b, first.c
-        gc = first.gear.cells
-        s0, ia, imax, h0, ib = (
-            gc.face0_mm,
-            gc.face_scale,
-            gc.last_row,
-            gc.profile0_mm,
-            gc.profile_scale,
-        )
-        jmax, n_cols = gc.last_column, gc.columns
+        gc, pc = first.gear.cells, first.pinion.cells
+        s0, h0, ia, ib = gc.face0_mm, gc.profile0_mm, gc.face_scale, gc.profile_scale
         g = math.radians(first.gear.pitch_angle_deg)
         cg, sg = math.cos(g), math.sin(g)
         lin = np.array([b[0], b[1], ia * cg * b[2], -ib * sg * b[2]])
@@ -211,7 +204,7 @@ class ContactEngine:
             [np.stack([lin[:, 0], lin[:, 1]], 1), np.stack([lin[:, 1], -lin[:, 0]], 1)]
         )
         self.rho_coef = np.array([ia * sg, ib * cg])
-        self.gear_table = (np.array([imax, jmax]), n_cols)
+        self.gear_table = (np.array([gc.last_row, gc.last_column]), gc.columns)
         self.lin_z, self.const = lin[:, 2], const
         # the node tables: x, y and the z terms (with the constants) of every side's nodes;
         # the normals' x, y and z terms of qx, qy (no constants)
@@ -221,18 +214,12 @@ class ContactEngine:
         self.node_nz = lin[:2, 2, None, None] * self.normals[2]
         # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
         # z terms (z = L1 = s cos g1 - h sin g1)
-        pc = first.pinion.cells
-        p0, pia, pimax, ph0, pib = (
-            pc.face0_mm,
-            pc.face_scale,
-            pc.last_row,
-            pc.profile0_mm,
-            pc.profile_scale,
-        )
-        pjmax, p_cols = pc.last_column, pc.columns
         cg1, sg1 = self.cos_sin_pitch
-        self.pinion_unit = (np.array([[p0], [ph0]]), np.array([[pia], [pib]]))
-        self.pinion_table = (np.array([pimax, pjmax]), p_cols)
+        self.pinion_unit = (
+            np.array([[pc.face0_mm], [pc.profile0_mm]]),
+            np.array([[pc.face_scale], [pc.profile_scale]]),
+        )
+        self.pinion_table = (np.array([pc.last_row, pc.last_column]), pc.columns)
         self.pinion_map = np.concatenate(
             [np.array([[sg1, cg1]]), np.stack([lin[:, 2] * cg1, -lin[:, 2] * sg1], 1)]
         )
