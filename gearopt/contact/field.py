@@ -153,6 +153,17 @@ class ClearanceField:
         """Sense of the gear's polar angle while the pinion turns with ``sense``."""
         return -self.sense
 
+    def gear_frame_points(self, points_mm, phi_rad) -> NDArray:
+        """Pinion points (member frame, unturned; ``(..., 3)``) turned by the pinion angles
+        ``phi_rad`` (broadcast over the points' leading axes) and placed in the gear frame
+        before the gear's own turn: ``q = B Rz(phi) p + c``."""
+        p = np.asarray(points_mm, float)
+        cp, sp = np.cos(phi_rad), np.sin(phi_rad)
+        turned = np.stack(
+            [cp * p[..., 0] - sp * p[..., 1], sp * p[..., 0] + cp * p[..., 1], p[..., 2]], -1
+        )
+        return turned @ self.b.T + self.c
+
     def clearance_of_points(
         self, points_mm, normals=None, phi_rad=0.0, gear_angle_rad=0.0
     ) -> PointClearance:

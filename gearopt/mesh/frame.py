@@ -131,9 +131,7 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     """
     phi = ex.phi_rad[4:6]
     p = field.pinion.point_at(ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6])
-    cp, sp = np.cos(phi), np.sin(phi)
-    p = np.stack([cp * p[:, 0] - sp * p[:, 1], sp * p[:, 0] + cp * p[:, 1], p[:, 2]], -1)
-    q = p @ field.b.T + field.c
+    q = field.gear_frame_points(p, phi)
     turn = -field.ratio * phi + field.gear_offset_rad - field.gear_sense * ex.minimum_rad[4:6]
     ct, st = np.cos(turn), np.sin(turn)
     points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
