@@ -14,14 +14,14 @@ Keys (every one optional but ``torque_nm`` for an analysis under load):
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from gearopt.errors import GearoptError
+from gearopt.errors import DesignError
+from gearopt.validate import check_integer, check_keys, check_number, read_member_pair
 
-__all__ = ["LOAD_KEYS", "LoadOptions"]
+__all__ = ["LOAD_KEYS", "LoadOptions", "PatchOptions", "check_torques"]
 
 LOAD_KEYS = (
     "torque_nm",
@@ -33,24 +33,41 @@ LOAD_KEYS = (
 )
 
 
-def _number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def _pair_of(name: str, value: Any) -> tuple[float, float]:
-    if _number(value):
-        return float(value), float(value)
-    if isinstance(value, list | tuple) and len(value) == 2 and all(_number(v) for v in value):
-        return float(value[0]), float(value[1])
-    raise GearoptError(name, value, "must be a number or [pinion, gear]")
+def check_torques(torque_nm, name: str = "load.torque_nm") -> tuple[float, ...]:
+    """Output torques (N m on the gear): a number or a non-empty list, each finite and >= 0."""
+    values = list(torque_nm) if isinstance(torque_nm, list | tuple) else [torque_nm]
+    if not values:
+        raise DesignError(name, torque_nm, "must name at least one torque (N m)")
+    return tuple(check_number(name, t, ge=0.0, unit="N m") for t in values)
 
 
 def _integers(name: str, value: Any, count: int, least: int) -> tuple[int, ...]:
-    ok = isinstance(value, list | tuple) and len(value) == count
-    ok = ok and all(isinstance(v, int) and not isinstance(v, bool) and v >= least for v in value)
-    if not ok:
-        raise GearoptError(name, value, f"must be {count} integers of at least {least}")
-    return tuple(int(v) for v in value)
+    if not (isinstance(value, list | tuple) and len(value) == count):
+        raise DesignError(name, value, f"must be a list of {count} integers")
+    return tuple(check_integer(f"{name}[{k}]", v, ge=least) for k, v in enumerate(value))
+
+
+@dataclass(frozen=True, kw_only=True)
+class PatchOptions:
+    """The patch grid of a pair's potential contact zone (:mod:`gearopt.loaded.separations`):
+    ``along`` the contact line (strips) and ``across`` it, both odd (a patch on the contact
+    point), and how far it reaches: up to a separation of ``reach_um`` above the contact (the
+    approach the largest load may bring), and at most ``max_half_width_mm`` across."""
+
+    along: int = 41
+    across: int = 15
+    reach_um: float = 40.0
+    max_half_width_mm: float = 4.0
+
+    def __post_init__(self) -> None:
+        along = check_integer("load.patches[along]", self.along, ge=5)
+        across = check_integer("load.patches[across]", self.across, ge=3)
+        if along % 2 == 0 or across % 2 == 0:
+            raise DesignError(
+                "load.patches", [along, across], "must be odd (a patch on the contact point)"
+            )
+        check_number("load.reach_um", self.reach_um, ge=1.0, le=1000.0, unit="um")
+        check_number("max_half_width_mm", self.max_half_width_mm, gt=0.0, unit="mm")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -80,64 +97,41 @@ class LoadOptions:
     reach_um: float = 40.0
 
     def __post_init__(self) -> None:
-        for t in self.torque_nm:
-            if not (_number(t) and math.isfinite(t)):
-                raise GearoptError("load.torque_nm", t, "must be a finite number of N m")
-            if t < 0.0:
-                raise GearoptError("load.torque_nm", t, "must not be negative (N m)")
+        if self.torque_nm:
+            object.__setattr__(self, "torque_nm", check_torques(self.torque_nm))
         for e in self.youngs_modulus_mpa:
-            if not (math.isfinite(e) and e > 0.0):
-                raise GearoptError("load.youngs_modulus_mpa", e, "must be positive (MPa)")
+            check_number("load.youngs_modulus_mpa", e, gt=0.0, unit="MPa")
         for nu in self.poisson_ratio:
-            if not (math.isfinite(nu) and 0.0 < nu < 0.5):
-                raise GearoptError("load.poisson_ratio", nu, "must lie in (0, 0.5)")
+            check_number("load.poisson_ratio", nu, gt=0.0, lt=0.5)
+        _integers("load.patches", self.patches, 2, 3)
+        self.patch_options()
+
+    def patch_options(self) -> PatchOptions:
+        """The patch grid these options ask for (checked)."""
         along, across = self.patches
-        if along % 2 == 0 or across % 2 == 0 or along < 5 or across < 3:
-            raise GearoptError("load.patches", list(self.patches), "must be odd, at least [5, 3]")
-        if not (_number(self.reach_um) and 1.0 <= self.reach_um <= 1000.0):
-            raise GearoptError("load.reach_um", self.reach_um, "must be in [1, 1000] um")
+        return PatchOptions(along=along, across=across, reach_um=self.reach_um)
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any] | None, where: str = "load") -> LoadOptions:
         """Options from a ``[load]`` table (unknown keys refused)."""
         table = dict(table or {})
-        unknown = sorted(set(table) - set(LOAD_KEYS))
-        if unknown:
-            raise GearoptError(f"{where}.{unknown[0]}", rule=f"unknown; known: {list(LOAD_KEYS)}")
+        check_keys(table, LOAD_KEYS, where)
         out: dict[str, Any] = {}
         if "torque_nm" in table:
-            value = table["torque_nm"]
-            values = value if isinstance(value, list | tuple) else [value]
-            if not values:
-                raise GearoptError(f"{where}.torque_nm", value, "must name at least one torque")
-            out["torque_nm"] = tuple(values)
-        for key in ("youngs_modulus_mpa", "poisson_ratio"):
+            out["torque_nm"] = check_torques(table["torque_nm"], f"{where}.torque_nm")
+        for key, bounds in (
+            ("youngs_modulus_mpa", {"gt": 0.0}),
+            ("poisson_ratio", {"gt": 0.0, "lt": 0.5}),
+        ):
             if key in table:
-                out[key] = _pair_of(f"{where}.{key}", table[key])
+                out[key] = read_member_pair(table, key, where, **bounds)
         if "fe_mesh" in table:
             out["fe_mesh"] = _integers(f"{where}.fe_mesh", table["fe_mesh"], 3, 2)
         if "patches" in table:
             out["patches"] = _integers(f"{where}.patches", table["patches"], 2, 3)
         if "reach_um" in table:
             out["reach_um"] = table["reach_um"]
-        try:
-            return cls(**out)
-        except GearoptError as exc:
-            if exc.parameter.startswith(where):
-                raise
-            raise GearoptError(f"{where}.{exc.parameter}", exc.value, exc.rule) from None
-
-    def with_torques(self, torque_nm) -> LoadOptions:
-        """The same options at other torques."""
-        values = torque_nm if isinstance(torque_nm, list | tuple) else [torque_nm]
-        return LoadOptions(
-            torque_nm=tuple(values),
-            youngs_modulus_mpa=self.youngs_modulus_mpa,
-            poisson_ratio=self.poisson_ratio,
-            fe_mesh=self.fe_mesh,
-            patches=self.patches,
-            reach_um=self.reach_um,
-        )
+        return cls(**out)
 
     def as_dict(self) -> dict:
         """JSON-ready form."""

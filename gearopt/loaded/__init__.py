@@ -13,6 +13,7 @@
   pressure, mesh stiffness, edge loading); :mod:`gearopt.loaded.pair`: both sides of a pair.
 """
 
+from gearopt.load_options import PatchOptions
 from gearopt.loaded.compliance import (
     DEFAULT_MESH,
     Factorised,
@@ -34,7 +35,7 @@ from gearopt.loaded.halfspace import (
 from gearopt.loaded.lcp import ComplementarityResiduals, LoadDistribution, solve_load_distribution
 from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
 from gearopt.loaded.pair import loaded_sides
-from gearopt.loaded.separations import PairPatches, PatchOptions, contact_patches
+from gearopt.loaded.separations import PairPatches, contact_patches
 
 __all__ = [
     "DEFAULT_MESH",

@@ -29,32 +29,19 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import block_diag
+from scipy.spatial import ConvexHull, QhullError
 from threadpoolctl import threadpool_limits
 
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
+from gearopt.load_options import PatchOptions, check_torques
 from gearopt.loaded.lcp import solve_load_distribution
-from gearopt.loaded.separations import PairPatches, PatchOptions, contact_patches
+from gearopt.loaded.separations import PairPatches, contact_patches
 
-__all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact", "check_torques"]
+__all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]
 
 ARCSEC = 180.0 * 3600.0 / math.pi
-
-
-def check_torques(torque_nm) -> tuple[float, ...]:
-    """The output torques (N m) as a tuple of finite non-negative numbers, or a GearoptError
-    naming ``load.torque_nm``."""
-    values = torque_nm if isinstance(torque_nm, list | tuple) else [torque_nm]
-    if not values:
-        raise GearoptError("load.torque_nm", torque_nm, "must name at least one torque")
-    out = []
-    for v in values:
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-            raise GearoptError("load.torque_nm", v, "must be a finite number of N m")
-        if v < 0.0:
-            raise GearoptError("load.torque_nm", v, "must not be negative (output torque, N m)")
-        out.append(float(v))
-    return tuple(out)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,24 +144,15 @@ def _peak(values: NDArray, sign: float) -> float:
 
 
 def _hull(points: NDArray) -> NDArray:
-    """Convex hull (Andrew's monotone chain) of ``(n, 2)`` points, counter-clockwise."""
+    """Convex hull of ``(n, 2)`` points, counter-clockwise (scipy's Qhull); the two extreme
+    points where they lie on a line."""
     pts = np.unique(np.round(points, 9), axis=0)
     if len(pts) < 3:
         return pts
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lower, upper = [], []
-    for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    for p in pts[::-1]:
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
-    return np.array(lower[:-1] + upper[:-1])
+    try:
+        return pts[ConvexHull(pts).vertices]
+    except QhullError:  # collinear: the segment's ends
+        return pts[[0, -1]]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -214,12 +192,6 @@ def _prepare(field: ClearanceField, u_rad: float, grid: PatchOptions, compliance
         levers.append(p.factor_mm.ravel()[keep])
         areas.append(p.area_mm2.ravel()[keep])
         blocks.append(compliance(p, keep))
-    size = sum(b.shape[0] for b in blocks)
-    c = np.zeros((size, size))
-    start = 0
-    for b in blocks:
-        c[start : start + b.shape[0], start : start + b.shape[0]] = b
-        start += b.shape[0]
     best = min(kept, key=lambda p: p.contact_rad)
     centre = tuple(np.array(best.factor_mm.shape) // 2)
     return _Position(
@@ -228,7 +200,7 @@ def _prepare(field: ClearanceField, u_rad: float, grid: PatchOptions, compliance
         separation_mm=np.concatenate(seps),
         lever_mm=np.concatenate(levers),
         area_mm2=np.concatenate(areas),
-        compliance_mm_per_n=c,
+        compliance_mm_per_n=block_diag(*blocks),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
     )
@@ -299,13 +271,16 @@ def loaded_contact(
 
 
 def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refine_steps):
-    torques = check_torques(list(torques_nm))
+    torques = check_torques(torques_nm)
     grid = grid or PatchOptions()
     u = np.radians(np.asarray(tca.phi1_deg, float))
     top = max(torques)
     for _ in range(3):
         prepared = [_prepare(field, float(uj), grid, compliance) for uj in u]
-        if top == 0.0 or not any(_truncated(pos, _solve(pos, top)[0]) for pos in prepared):
+        at_top = [_solve(pos, top) for pos in prepared]  # (reused for the largest torque)
+        if top == 0.0 or not any(
+            _truncated(pos, per_pair) for pos, (per_pair, _) in zip(prepared, at_top, strict=True)
+        ):
             break
         grid = replace(grid, reach_um=min(2.0 * grid.reach_um, 1000.0))
     lags = np.array([p.lag_rad for p in prepared])
@@ -319,7 +294,8 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refin
         )
     out = []
     for t in torques:
-        result = _at_torque(t, prepared, tca, g_min, frame, side)
+        solved = at_top if t == top else [_solve(pos, t) for pos in prepared]
+        result = _at_torque(t, prepared, solved, tca, g_min, frame, side)
         if t > 0.0:
             low = _refined_minimum(
                 field, u, result.lte_arcsec, t, g_min, grid, compliance, refine_steps
@@ -399,7 +375,8 @@ def _refined_minimum(field, u, lte, torque_nm, g_min, grid, compliance, steps) -
     return best
 
 
-def _at_torque(torque_nm, prepared, tca, g_min, frame, side) -> LoadedContact:
+def _at_torque(torque_nm, prepared, solved, tca, g_min, frame, side) -> LoadedContact:
+    """One torque's result from its solves at the prepared positions."""
     n = len(prepared)
     theta = np.empty(n)
     shares, loads = [], []
@@ -407,8 +384,7 @@ def _at_torque(torque_nm, prepared, tca, g_min, frame, side) -> LoadedContact:
     stiffness = []
     edge = False
     face, profile, pressed = [], [], []
-    for j, pos in enumerate(prepared):
-        per_pair, th = _solve(pos, torque_nm)
+    for j, (pos, (per_pair, th)) in enumerate(zip(prepared, solved, strict=True)):
         theta[j] = th
         pressures = []
         total = float(sum(f.sum() for f in per_pair))

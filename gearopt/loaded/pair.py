@@ -18,7 +18,7 @@ from gearopt.load_options import LoadOptions
 from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
 from gearopt.loaded.halfspace import composite_compliance_mm2_per_n, halfspace_compliance_mm_per_n
 from gearopt.loaded.ltca import LoadedContact, loaded_contact
-from gearopt.loaded.separations import PairPatches, PatchOptions
+from gearopt.loaded.separations import PairPatches
 
 __all__ = ["loaded_sides", "member_flanks"]
 
@@ -67,7 +67,7 @@ def loaded_sides(
         load.youngs_modulus_mpa[1],
         load.poisson_ratio[1],
     )
-    grid = PatchOptions(along=load.patches[0], across=load.patches[1], reach_um=load.reach_um)
+    grid = load.patch_options()
     out = {}
     for side, field in (("drive", pair.drive), ("coast", pair.coast)):
         if side not in which:

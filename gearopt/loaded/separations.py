@@ -27,32 +27,35 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import ClearanceField
-from gearopt.errors import GearoptError
 from gearopt.flank import FlankMap, axial_plane
+from gearopt.load_options import PatchOptions
 
-__all__ = ["PatchOptions", "PairPatches", "contact_patches", "flank_points"]
+__all__ = ["PatchOptions", "PairPatches", "contact_patches", "flank_point", "flank_points"]
 
 #: finite-difference step of the separation's curvature and of the surface's tangents (mm)
 _STEP_MM = 0.05
 
 
+def flank_point(flank: FlankMap, face_mm, profile_mm) -> NDArray:
+    """``(..., 3)`` points of a flank's local interpolant (the clearance field's) at grid
+    coordinates ``(s, t)``, member frame, unturned."""
+    s = np.asarray(face_mm, float)
+    t = np.asarray(profile_mm, float)
+    big_l, big_r = axial_plane(s, flank.height_at(s, t), math.radians(flank.pitch_angle_deg))
+    theta = flank.polar_angle_local(s, t)
+    return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
+
+
 def flank_points(flank: FlankMap, face_mm: NDArray, profile_mm: NDArray):
     """Points, unit normals (out of the tooth) and tangents of a flank's local interpolant at
     grid coordinates ``(s, t)`` (member frame, unturned): ``(p, n, p_s, p_t)``, each
-    ``(..., 3)``."""
+    ``(..., 3)``; the tangents by central differences of :func:`flank_point`."""
     s = np.asarray(face_mm, float)
     t = np.asarray(profile_mm, float)
-    g = math.radians(flank.pitch_angle_deg)
-
-    def point(ss, tt):
-        big_l, big_r = axial_plane(ss, flank.height_at(ss, tt), g)
-        theta = flank.polar_angle_local(ss, tt)
-        return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
-
     e = 1e-3
-    p = point(s, t)
-    p_s = (point(s + e, t) - point(s - e, t)) / (2.0 * e)
-    p_t = (point(s, t + e) - point(s, t - e)) / (2.0 * e)
+    p = flank_point(flank, s, t)
+    p_s = (flank_point(flank, s + e, t) - flank_point(flank, s - e, t)) / (2.0 * e)
+    p_t = (flank_point(flank, s, t + e) - flank_point(flank, s, t - e)) / (2.0 * e)
     cross = np.cross(p_s, p_t)
     n = cross / np.linalg.norm(cross, axis=-1)[..., None]
     # out of the tooth: as the FlankMap's own normals
@@ -122,30 +125,6 @@ class PairPatches:
     contact_rad: float
 
 
-@dataclass(frozen=True, kw_only=True)
-class PatchOptions:
-    """The patch counts of the potential contact zone: ``along`` the contact line (strips) and
-    ``across`` it, and how far it reaches: up to a separation of ``reach_um`` above the contact
-    (the approach the largest load may bring), and at most ``max_half_width_mm`` across."""
-
-    along: int = 41
-    across: int = 15
-    reach_um: float = 40.0
-    max_half_width_mm: float = 4.0
-
-    def __post_init__(self) -> None:
-        if isinstance(self.along, bool) or not isinstance(self.along, int) or self.along < 5:
-            raise GearoptError("patches.along", self.along, "must be an integer of at least 5")
-        if isinstance(self.across, bool) or not isinstance(self.across, int) or self.across < 3:
-            raise GearoptError("patches.across", self.across, "must be an integer of at least 3")
-        if self.across % 2 == 0 or self.along % 2 == 0:
-            raise GearoptError(
-                "patches", (self.along, self.across), "must be odd (a patch on the contact point)"
-            )
-        if not (math.isfinite(self.reach_um) and 1.0 <= self.reach_um <= 1000.0):
-            raise GearoptError("patches.reach_um", self.reach_um, "must be in [1, 1000] um")
-
-
 def _curvature(field: ClearanceField, phi: float, s0: float, h0: float, factor: float):
     """The separation's second derivatives (mm per mm^2) at ``(s0, h0)`` by differences."""
     e = _STEP_MM
@@ -209,11 +188,7 @@ def contact_patches(
         on_pinion = pinion.inside(s, h)
         valid = at.valid & on_pinion & np.isfinite(at.clearance_rad)
         # the gear's grid coordinates of the points (for the gear's compliance)
-        cp, sp = math.cos(phi), math.sin(phi)
-        turned = np.stack(
-            [cp * p[..., 0] - sp * p[..., 1], sp * p[..., 0] + cp * p[..., 1], p[..., 2]], -1
-        )
-        q = turned @ field.b.T + field.c
+        q = field.gear_frame_points(p, phi)
         gs, gh = gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
         dt = t[1] - t[0]
         dw = w[1] - w[0]
@@ -229,8 +204,7 @@ def contact_patches(
         ext_w = np.concatenate([[w[0] - dw], w, [w[-1] + dw]])
         es = s0 + ext_t[:, None] * major[0] + (ext_shift[:, None] + ext_w[None, :]) * minor[0]
         eh = h0 + ext_t[:, None] * major[1] + (ext_shift[:, None] + ext_w[None, :]) * minor[1]
-        ep, en, _, _ = flank_points(pinion, es, eh)
-        ext = field.clearance_of_points(ep, None, phi)
+        ext = field.clearance_of_points(flank_point(pinion, es, eh), None, phi)
         ext_valid = ext.valid & pinion.inside(es, eh)
         ext_valid[1:-1, 1:-1] = valid
         off = (
