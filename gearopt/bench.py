@@ -54,6 +54,7 @@ BENCHMARKS: dict[str, str] = {
     "study_trial_ms": "gearopt.bench:bench_study_trial",
     "ltca_setup_ms": "gearopt.bench:bench_ltca_setup",
     "ltca_ms": "gearopt.bench:bench_ltca",
+    "ltca_sweep_ms": "gearopt.bench:bench_ltca_sweep",
 }
 
 ONE_THREAD = {
@@ -210,18 +211,30 @@ def bench_ltca_setup() -> tuple[float, dict]:
 def bench_ltca() -> tuple[float, dict]:
     """Loaded TCA of the drive side of the section 5.3 pair at one torque (50 N m) over the
     21 positions, after the set-up (tooth models built, unloaded TCA done)."""
+    return _bench_loaded((50.0,))
 
+
+#: the torques of ``ltca_sweep_ms`` (N m): seed 002's range
+SWEEP_NM = (5.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 800.0, 1000.0)
+
+
+def bench_ltca_sweep() -> tuple[float, dict]:
+    """As ``ltca_ms`` at the 10 torques of :data:`SWEEP_NM` in one call."""
+    return _bench_loaded(SWEEP_NM)
+
+
+def _bench_loaded(torques_nm) -> tuple[float, dict]:
     design = loads_design(_study_text("seed001_section5_3.toml"))
     pair, options = _meshed_section53()
     sides = contact_sides(pair, options)
-    load = LoadOptions(torque_nm=(50.0,))
+    load = LoadOptions(torque_nm=tuple(torques_nm))
 
     def run():
         pair_loaded_contact(design, pair, sides, load, which=("drive",))
 
     run()
     return time_call_ms(run, number=3), {
-        "ltca_case": "seed001_section5_3 drive, 50 N m, 21 positions",
+        "ltca_case": f"seed001_section5_3 drive, {list(torques_nm)} N m, 21 positions",
         "ltca_patches": list(load.patches),
     }
 

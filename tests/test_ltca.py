@@ -23,7 +23,7 @@ from gearopt.assembly import Misalignment
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank_jet import FlankJet, cross
 from gearopt.load_options import LoadOptions
-from gearopt.loaded.separations import flank_points
+from gearopt.loaded.separations import contact_patches, flank_points, position_patches
 from gearopt.studyfile import load_study_spec
 from gearopt.trial import evaluate_trial
 
@@ -406,3 +406,40 @@ def test_the_figures_converge_with_the_patch_grid(section53, loaded53):
         assert ref.mesh_stiffness_n_per_mm_um == pytest.approx(
             result.mesh_stiffness_n_per_mm_um, rel=0.05
         )
+
+
+def test_a_sweep_gives_each_torques_own_figures(section53, loaded53):
+    # the torques of a sweep share their positions' patches and compliance columns, each solve
+    # started from the next larger torque's forces; the same figures as each torque alone
+    design, pair, sides = section53
+    for t in (5.0, 50.0):
+        (alone,) = pair_loaded_contact(
+            design, pair, sides, LoadOptions(torque_nm=(t,)), which=("drive",)
+        )["drive"]
+        (swept,) = [r for r in loaded53["drive"] if r.torque_nm == t]
+        np.testing.assert_allclose(swept.lte_arcsec, alone.lte_arcsec, rtol=0, atol=1e-6)
+        for key in (
+            "lte_peak_to_peak_arcsec",
+            "max_contact_pressure_mpa",
+            "max_line_load_n_per_mm",
+            "mesh_stiffness_n_per_mm_um",
+        ):
+            assert getattr(swept, key) == pytest.approx(getattr(alone, key), rel=1e-7), key
+
+
+def test_the_patches_of_a_batch_are_each_positions_own(section53):
+    _, pair, sides = section53
+    field = pair.drive
+    u = np.radians(np.asarray(sides["drive"].phi1_deg))[[0, 7, 13]]
+    base = np.round(-u / field.pinion.pitch_rad).astype(int)
+    offsets = base[:, None] + np.arange(-2, 3)
+    batch = position_patches(field, u, offsets, LoadOptions().patch_options())
+    for uj, row, patches in zip(u, offsets, batch, strict=True):
+        alone = contact_patches(field, float(uj), list(row), LoadOptions().patch_options())
+        assert [p.pair for p in patches] == [p.pair for p in alone]
+        assert len(patches) >= 1
+        for p, q in zip(patches, alone, strict=True):
+            for key in ("clearance_rad", "factor_mm", "area_mm2", "gear_face_mm", "y_mm"):
+                np.testing.assert_allclose(getattr(p, key), getattr(q, key), rtol=1e-12)
+            np.testing.assert_array_equal(p.valid, q.valid)
+            np.testing.assert_array_equal(p.boundary, q.boundary)

@@ -29,19 +29,20 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import block_diag
 from scipy.spatial import ConvexHull, QhullError
 from threadpoolctl import threadpool_limits
 
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
 from gearopt.load_options import PatchOptions, check_torques
-from gearopt.loaded.lcp import solve_load_distribution
-from gearopt.loaded.separations import PairPatches, contact_patches
+from gearopt.loaded.lcp import solve_load_columns
+from gearopt.loaded.separations import PairPatches, position_patches
 
 __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]
 
 ARCSEC = 180.0 * 3600.0 / math.pi
+#: extra positions per round of the LTE minimum's refinement
+REFINE_POINTS = 6
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -155,6 +156,34 @@ def _hull(points: NDArray) -> NDArray:
         return pts[[0, -1]]
 
 
+class _Columns:
+    """The compliance columns of one position's candidate patches, computed on demand and
+    kept: block-diagonal over the pairs (teeth of different pairs are separate bodies), each
+    pair's block from its ``columns(local) -> (m, len(local))``."""
+
+    def __init__(self, blocks, sizes) -> None:
+        self._blocks = list(blocks)
+        self._starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
+        # column-major and left empty: only the columns asked for are ever written
+        self._kept = [np.empty((m, m), order="F") for m in sizes]
+        self._done = [np.zeros(m, dtype=bool) for m in sizes]
+        self.size = int(self._starts[-1])
+
+    def __call__(self, idx) -> NDArray:
+        idx = np.asarray(idx, dtype=np.intp)
+        out = np.zeros((self.size, idx.size))
+        which = np.searchsorted(self._starts, idx, side="right") - 1
+        for b in np.unique(which):
+            cols = np.flatnonzero(which == b)
+            local = idx[cols] - self._starts[b]
+            missing = np.unique(local[~self._done[b][local]])
+            if missing.size:
+                self._kept[b][:, missing] = self._blocks[b](missing)
+                self._done[b][missing] = True
+            out[self._starts[b] : self._starts[b + 1], cols] = self._kept[b][:, local]
+        return out
+
+
 @dataclass(frozen=True, kw_only=True)
 class _Position:
     """One position's candidate patches and their compliance (the same for every torque)."""
@@ -164,16 +193,24 @@ class _Position:
     separation_mm: NDArray
     lever_mm: NDArray
     area_mm2: NDArray
-    compliance_mm_per_n: NDArray
+    columns: _Columns
     lag_rad: float  # the unloaded lag (least clearance over the pairs)
     contact_factor_mm: float  # the normal factor at the unloaded contact
 
 
-def _prepare(field: ClearanceField, u_rad: float, grid: PatchOptions, compliance) -> _Position:
-    """The candidate patches of the pairs near the mesh at ``u_rad`` and their compliance."""
-    pitch = field.pinion.pitch_rad
-    base = round(-u_rad / pitch)
-    patches = contact_patches(field, float(u_rad), [base + k for k in (-2, -1, 0, 1, 2)], grid)
+def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> list[_Position]:
+    """The candidate patches of the pairs near the mesh at the positions ``u_rad`` and their
+    compliance (all positions in one batch)."""
+    u = np.atleast_1d(np.asarray(u_rad, float))
+    base = np.round(-u / field.pinion.pitch_rad).astype(np.intp)
+    batch = position_patches(field, u, base[:, None] + np.arange(-2, 3), grid)
+    return [
+        _position(patches, float(uj), grid, compliance)
+        for uj, patches in zip(u, batch, strict=True)
+    ]
+
+
+def _position(patches, u_rad: float, grid: PatchOptions, compliance) -> _Position:
     if not patches:
         raise GearoptError(
             "load", math.degrees(u_rad), "no tooth pair touches at this position (deg)"
@@ -200,29 +237,53 @@ def _prepare(field: ClearanceField, u_rad: float, grid: PatchOptions, compliance
         separation_mm=np.concatenate(seps),
         lever_mm=np.concatenate(levers),
         area_mm2=np.concatenate(areas),
-        compliance_mm_per_n=block_diag(*blocks),
+        columns=_Columns(blocks, [k.size for k in keeps]),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
     )
 
 
-def _solve(pos: _Position, torque_nm: float):
-    """``(forces per pair, theta_rad)`` at one position and torque."""
-    solved = solve_load_distribution(
+class _Prepared:
+    """Prepared positions by their angle, prepared in one batch where new: those of the
+    cycle's samples ``positions`` and those asked for since."""
+
+    def __init__(self, field, positions, prepared, grid, compliance) -> None:
+        self.positions = positions
+        self._args = (field, grid, compliance)
+        self._known = dict(zip(positions.tolist(), prepared, strict=True))
+
+    def __call__(self, u_rad) -> list[_Position]:
+        new = [x for x in np.asarray(u_rad, float).tolist() if x not in self._known]
+        if new:
+            field, grid, compliance = self._args
+            self._known.update(zip(new, _prepare(field, new, grid, compliance), strict=True))
+        return [self._known[x] for x in np.asarray(u_rad, float).tolist()]
+
+
+def _solve(pos: _Position, torque_nm: float, start=None):
+    """``(forces per pair, theta_rad)`` at one position and torque; ``start``: the forces of
+    another torque's solution at the position, a warm start."""
+    solved = solve_load_columns(
         separation_mm=pos.separation_mm,
         area_mm2=pos.area_mm2,
-        compliance_mm_per_n=pos.compliance_mm_per_n,
         lever_arm_mm=pos.lever_mm,
         torque_n_mm=torque_nm * 1e3,
+        columns=pos.columns,
+        start_forces_n=None if start is None else _flat(pos, start),
     )
     forces = np.asarray(solved.forces_n)
-    per_pair, start = [], 0
+    per_pair, at = [], 0
     for p, keep in zip(pos.patches, pos.keep, strict=True):
         f = np.zeros(p.valid.size)
-        f[keep] = forces[start : start + keep.size]
-        start += keep.size
+        f[keep] = forces[at : at + keep.size]
+        at += keep.size
         per_pair.append(f.reshape(p.valid.shape))
     return per_pair, float(solved.theta_rad)
+
+
+def _flat(pos: _Position, per_pair) -> NDArray:
+    """The candidate patches' forces of one position as the solver orders them."""
+    return np.concatenate([f.ravel()[keep] for f, keep in zip(per_pair, pos.keep, strict=True)])
 
 
 def _truncated(pos: _Position, per_pair) -> bool:
@@ -240,7 +301,7 @@ def loaded_contact(
     frame,
     grid: PatchOptions | None = None,
     side: str = "drive",
-    refine_steps: int = 8,
+    refine_rounds: int = 3,
 ) -> list[LoadedContact]:
     """Loaded TCA of one side at the unloaded TCA's positions, one result per torque.
 
@@ -254,30 +315,34 @@ def loaded_contact(
     torques_nm
         Output torques on the gear (N m).
     compliance
-        ``compliance(pair_patches, keep) -> (m, m)`` the compliance (mm/N) between a pair's
-        candidate patches: both teeth's bending and the contact's local compliance.
+        ``compliance(pair_patches, keep) -> columns``: ``columns(idx) -> (m, len(idx))`` the
+        compliance (mm/N) between a pair's ``m`` candidate patches (flat indices ``keep`` of
+        its patch grid) and those of them numbered ``idx``: both teeth's bending and the
+        contact's local compliance, a symmetric positive definite matrix asked for by columns
+        (the load distribution needs those of the patches it tries only).
     frame
         The pattern coordinates (:class:`gearopt.mesh.ToothFrame`).
     grid
         The patch grid of the potential contact zone; where the load reaches its end inside the
         flanks, the reach is doubled (twice at most).
-    refine_steps
-        Golden-section steps that refine the LTE's minimum between the samples (the hand-over
-        of light loads).
+    refine_rounds
+        Rounds of :data:`REFINE_POINTS` extra positions that refine the LTE's minimum between
+        the samples (the hand-over of light loads): each narrows the bracket to 2 / (points +
+        1) of its width.
     """
     # many small dense solves: BLAS threads only contend (measured 30x slower on two busy cores)
     with threadpool_limits(limits=1, user_api="blas"):
-        return _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refine_steps)
+        return _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refine_rounds)
 
 
-def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refine_steps):
+def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, rounds):
     torques = check_torques(torques_nm)
     grid = grid or PatchOptions()
     u = np.radians(np.asarray(tca.phi1_deg, float))
     top = max(torques)
     for _ in range(3):
-        prepared = [_prepare(field, float(uj), grid, compliance) for uj in u]
-        at_top = [_solve(pos, top) for pos in prepared]  # (reused for the largest torque)
+        prepared = _prepare(field, u, grid, compliance)
+        at_top = [_solve(pos, top) for pos in prepared]
         if top == 0.0 or not any(
             _truncated(pos, per_pair) for pos, (per_pair, _) in zip(prepared, at_top, strict=True)
         ):
@@ -292,14 +357,19 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refin
             float(np.ptp(reference) * ARCSEC),
             "the loaded contact's unloaded lags disagree with the TCA's (arcsec)",
         )
+    prepared_at = _Prepared(field, u, prepared, grid, compliance)
+    # from the largest torque down, each solve started from the next larger torque's
+    solved = {top: at_top}
+    for t in sorted(set(torques) - {top}, reverse=True):
+        above = solved[min(k for k in solved if k > t)]
+        solved[t] = [
+            _solve(pos, t, per_pair) for pos, (per_pair, _) in zip(prepared, above, strict=True)
+        ]
     out = []
     for t in torques:
-        solved = at_top if t == top else [_solve(pos, t) for pos in prepared]
-        result = _at_torque(t, prepared, solved, tca, g_min, frame, side)
+        result = _at_torque(t, prepared, solved[t], tca, g_min, frame, side)
         if t > 0.0:
-            low = _refined_minimum(
-                field, u, result.lte_arcsec, t, g_min, grid, compliance, refine_steps
-            )
+            low = _refined_minimum(result.lte_arcsec, t, g_min, prepared_at, rounds)
             high = _peak(result.lte_arcsec, 1.0)
             result = replace(
                 result,
@@ -331,7 +401,7 @@ def _resolved_pressure(field, u, result: LoadedContact, torque_nm, grid, complia
         return best
     fine = replace(grid, across=21, max_half_width_mm=1.5 * half)
     for _ in range(3):
-        pos = _prepare(field, float(u[j]), fine, compliance)
+        (pos,) = _prepare(field, u[j], fine, compliance)
         per_pair, _ = _solve(pos, torque_nm)
         sides = [
             bool(((f > 0.0) & (p.open_end | p.boundary))[:, [0, -1]].any())
@@ -346,32 +416,22 @@ def _resolved_pressure(field, u, result: LoadedContact, torque_nm, grid, complia
     return best
 
 
-def _refined_minimum(field, u, lte, torque_nm, g_min, grid, compliance, steps) -> float:
-    """The LTE's least value between the samples around its sampled minimum: golden-section
-    search on the LTE evaluated at extra positions (a light load's hand-over is a sharp
-    valley that samples miss)."""
+def _refined_minimum(lte, torque_nm, g_min, prepared_at, rounds) -> float:
+    """The LTE's least value between the samples around its sampled minimum (a light load's
+    hand-over is a sharp valley that samples miss): ``rounds`` times, the LTE at
+    :data:`REFINE_POINTS` positions evenly inside the bracket (one batch), the bracket then
+    narrowed to the least one's neighbours. ``prepared_at``: the prepared positions of an
+    array of positions (kept, so that the torques of a sweep share them)."""
+    u = prepared_at.positions
     k = int(np.argmin(lte))
-    a = u[max(k - 1, 0)]
-    b = u[min(k + 1, len(u) - 1)]
-
-    def value(x: float) -> float:
-        pos = _prepare(field, x, grid, compliance)
-        return (g_min - _solve(pos, torque_nm)[1]) * ARCSEC
-
-    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    c, d = b - ratio * (b - a), a + ratio * (b - a)
-    fc, fd = value(c), value(d)
-    best = min(fc, fd)
-    for _ in range(steps):
-        if fc < fd:
-            b, d, fd = d, c, fc
-            c = b - ratio * (b - a)
-            fc = value(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + ratio * (b - a)
-            fd = value(d)
-        best = min(best, fc, fd)
+    a, b = u[max(k - 1, 0)], u[min(k + 1, len(u) - 1)]
+    best = float(lte[k])
+    for _ in range(rounds):
+        x = np.linspace(a, b, REFINE_POINTS + 2)
+        values = [(g_min - _solve(pos, torque_nm)[1]) * ARCSEC for pos in prepared_at(x[1:-1])]
+        i = int(np.argmin(values)) + 1
+        best = min(best, float(values[i - 1]))
+        a, b = x[i - 1], x[i + 1]
     return best
 
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from gearopt.load_options import LoadOptions
 from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
-from gearopt.loaded.halfspace import composite_compliance_mm2_per_n, halfspace_compliance_mm_per_n
+from gearopt.loaded.halfspace import composite_compliance_mm2_per_n, halfspace_columns_mm_per_n
 from gearopt.loaded.ltca import LoadedContact, loaded_contact
 from gearopt.loaded.separations import PairPatches
 
@@ -75,19 +75,18 @@ def loaded_sides(
         pinion = models["pinion"][field.pinion.flank]
         gear = models["gear"][field.gear.flank]
 
-        def compliance(p: PairPatches, keep, pinion=pinion, gear=gear) -> np.ndarray:
-            s1, t1 = p.face_mm.ravel()[keep], p.profile_mm.ravel()[keep]
-            s2, t2 = p.gear_face_mm.ravel()[keep], p.gear_profile_mm.ravel()[keep]
-            local = halfspace_compliance_mm_per_n(
-                p.x_mm.ravel()[keep],
-                p.y_mm.ravel()[keep],
-                0.5 * p.length_mm.ravel()[keep],
-                0.5 * p.width_mm.ravel()[keep],
-                composite,
-            )
-            bending = pinion.influence_mm_per_n(s1, t1, s1, t1)
-            bending += gear.influence_mm_per_n(s2, t2, s2, t2)
-            return local + 0.5 * (bending + bending.T)
+        def compliance(p: PairPatches, keep, pinion=pinion, gear=gear):
+            x, y = p.x_mm.ravel()[keep], p.y_mm.ravel()[keep]
+            a, b = 0.5 * p.length_mm.ravel()[keep], 0.5 * p.width_mm.ravel()[keep]
+            w1 = pinion.weights(p.face_mm.ravel()[keep], p.profile_mm.ravel()[keep])
+            w2 = gear.weights(p.gear_face_mm.ravel()[keep], p.gear_profile_mm.ravel()[keep])
+            g1, g2 = w1 @ pinion.table_mm_per_n, w2 @ gear.table_mm_per_n
+
+            def columns(cols: np.ndarray) -> np.ndarray:
+                local = halfspace_columns_mm_per_n(x, y, a, b, cols, composite)
+                return local + g1 @ w1[cols].T + g2 @ w2[cols].T
+
+            return columns
 
         out[side] = loaded_contact(
             field,

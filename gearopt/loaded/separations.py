@@ -30,10 +30,19 @@ from gearopt.contact import ClearanceField
 from gearopt.flank import FlankMap, axial_plane
 from gearopt.load_options import PatchOptions
 
-__all__ = ["PatchOptions", "PairPatches", "contact_patches", "flank_point", "flank_points"]
+__all__ = [
+    "PatchOptions",
+    "PairPatches",
+    "contact_patches",
+    "flank_point",
+    "flank_points",
+    "position_patches",
+]
 
-#: finite-difference step of the separation's curvature and of the surface's tangents (mm)
+#: finite-difference step of the separation's curvature (mm)
 _STEP_MM = 0.05
+#: forward-difference step of the flank's tangent along the contact line (mm)
+_TANGENT_STEP_MM = 1e-4
 
 
 def flank_point(flank: FlankMap, face_mm, profile_mm) -> NDArray:
@@ -125,16 +134,19 @@ class PairPatches:
     contact_rad: float
 
 
-def _curvature(field: ClearanceField, phi: float, s0: float, h0: float, factor: float):
-    """The separation's second derivatives (mm per mm^2) at ``(s0, h0)`` by differences."""
+def _curvature(field: ClearanceField, phi, s0, h0, factor):
+    """``(k, 2, 2)`` the separation's second derivatives (mm per mm^2) at ``(s0, h0)`` (each
+    ``(k,)``) by differences."""
     e = _STEP_MM
     ds = np.array([0.0, e, -e, 0.0, 0.0, e, e, -e, -e])
     dh = np.array([0.0, 0.0, 0.0, e, -e, e, -e, e, -e])
-    d, _ = field.clearance_at_grid(s0 + ds, h0 + dh, phi)
-    hss = (d[1] - 2.0 * d[0] + d[2]) / (e * e)
-    hhh = (d[3] - 2.0 * d[0] + d[4]) / (e * e)
-    hsh = (d[5] - d[6] - d[7] + d[8]) / (4.0 * e * e)
-    return factor * np.array([[hss, hsh], [hsh, hhh]])
+    d, _ = field.clearance_at_grid(s0[:, None] + ds, h0[:, None] + dh, phi[:, None])
+    hss = (d[:, 1] - 2.0 * d[:, 0] + d[:, 2]) / (e * e)
+    hhh = (d[:, 3] - 2.0 * d[:, 0] + d[:, 4]) / (e * e)
+    hsh = (d[:, 5] - d[:, 6] - d[:, 7] + d[:, 8]) / (4.0 * e * e)
+    return factor[:, None, None] * np.stack(
+        [np.stack([hss, hsh], -1), np.stack([hsh, hhh], -1)], -2
+    )
 
 
 def contact_patches(
@@ -143,99 +155,136 @@ def contact_patches(
     """The contact patches of the tooth pairs ``pairs`` (offsets in pitches from the base pair)
     at relative pinion rotation ``u_rad`` (direction of motion), each around its refined
     unloaded contact point (module docstring). Pairs that do not touch are left out."""
+    return position_patches(field, [u_rad], pairs, grid)[0]
+
+
+def position_patches(
+    field: ClearanceField, u_rad, pairs, grid: PatchOptions | None = None
+) -> list[list[PairPatches]]:
+    """:func:`contact_patches` at several positions ``u_rad`` at once (one array operation for
+    all positions and pairs): one list per position. ``pairs``: the same offsets at every
+    position, or one row of offsets per position."""
     grid = grid or PatchOptions()
     pinion, gear = field.pinion, field.gear
-    pitch = pinion.pitch_rad
-    phis = field.sense * (u_rad + np.asarray(pairs, float) * pitch)
+    u = np.atleast_1d(np.asarray(u_rad, float))
+    offsets = np.broadcast_to(np.asarray(pairs, np.intp), (len(u), np.shape(pairs)[-1]))
+    phis = (field.sense * (u[:, None] + offsets * pinion.pitch_rad)).ravel()
     sample = field.sample(phis)
+    rows = np.flatnonzero(np.isfinite(sample.minimum_rad))
+    out: list[list[PairPatches]] = [[] for _ in u]
+    if rows.size == 0:
+        return out
+    phi = phis[rows]
+    m0 = sample.minimum_rad[rows]
+    s0, h0 = sample.contact_face_mm[rows], sample.contact_profile_mm[rows]
+    p0, n0, _, _ = flank_points(pinion, s0, h0)
+    f0 = field.clearance_of_points(p0, n0, phi).normal_factor_mm
+    lam, vec = np.linalg.eigh(_curvature(field, phi, s0, h0, f0))
+    major, minor = vec[:, :, 0], vec[:, :, 1]  # least curvature: along the contact line
     reach_mm = grid.reach_um * 1e-3
-    out = []
-    span_s = float(pinion.face_mm[-1] - pinion.face_mm[0])
-    span_h = float(pinion.profile_mm[-1] - pinion.profile_mm[0])
-    for k, phi in enumerate(phis):
-        m0 = float(sample.minimum_rad[k])
-        if not math.isfinite(m0):
-            continue
-        s0, h0 = float(sample.contact_face_mm[k]), float(sample.contact_profile_mm[k])
-        p0, n0, _, _ = flank_points(pinion, np.array([s0]), np.array([h0]))
-        f0 = float(field.clearance_of_points(p0, n0, phi).normal_factor_mm[0])
-        curv = _curvature(field, phi, s0, h0, f0)
-        lam, vec = np.linalg.eigh(curv)
-        major, minor = vec[:, 0], vec[:, 1]  # least curvature: along the contact line
-        longest = math.hypot(span_s, span_h)
-        half_l = longest if lam[0] <= 0.0 else min(math.sqrt(2.0 * reach_mm / lam[0]), longest)
-        half_w = grid.max_half_width_mm
-        if lam[1] > 0.0:
-            half_w = min(math.sqrt(2.0 * reach_mm / lam[1]), half_w)
-        t = np.linspace(-half_l, half_l, grid.along)
-        w = np.linspace(-half_w, half_w, grid.across)
-        # each strip centred on the valley across it (a parabola through three points)
-        cs = s0 + t * major[0]
-        ch = h0 + t * major[1]
-        probe = np.array([-0.5, 0.0, 0.5]) * half_w
-        ps = cs[:, None] + probe[None, :] * minor[0]
-        ph = ch[:, None] + probe[None, :] * minor[1]
-        d, _ = field.clearance_at_grid(ps, ph, phi)
-        curve = d[:, 0] - 2.0 * d[:, 1] + d[:, 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            shift = np.where(curve > 0.0, 0.25 * half_w * (d[:, 0] - d[:, 2]) / curve, 0.0)
-        shift = np.clip(shift, -0.5 * half_w, 0.5 * half_w)
-        shift[grid.along // 2] = 0.0  # the strip through the contact point itself
-        s = cs[:, None] + (shift[:, None] + w[None, :]) * minor[0]
-        h = ch[:, None] + (shift[:, None] + w[None, :]) * minor[1]
-        p, n, p_s, p_t = flank_points(pinion, s, h)
-        at = field.clearance_of_points(p, n, phi)
-        on_pinion = pinion.inside(s, h)
-        valid = at.valid & on_pinion & np.isfinite(at.clearance_rad)
-        # the gear's grid coordinates of the points (for the gear's compliance)
-        q = field.gear_frame_points(p, phi)
-        gs, gh = gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
-        dt = t[1] - t[0]
-        dw = w[1] - w[0]
-        scale_a = np.linalg.norm(p_s * major[0] + p_t * major[1], axis=-1)
-        scale_w = np.linalg.norm(p_s * minor[0] + p_t * minor[1], axis=-1)
-        along_mm, across_mm = scale_a * dt, scale_w * dw
-        centre = (grid.along // 2, grid.across // 2)
-        x_mm = np.broadcast_to(t[:, None] * scale_a[centre], s.shape)
-        y_mm = (shift[:, None] + w[None, :]) * scale_w[centre]
-        # one patch further on every side, beyond the grid too: on the flanks?
-        ext_t = np.concatenate([[t[0] - dt], t, [t[-1] + dt]])
-        ext_shift = np.concatenate([[shift[0]], shift, [shift[-1]]])
-        ext_w = np.concatenate([[w[0] - dw], w, [w[-1] + dw]])
-        es = s0 + ext_t[:, None] * major[0] + (ext_shift[:, None] + ext_w[None, :]) * minor[0]
-        eh = h0 + ext_t[:, None] * major[1] + (ext_shift[:, None] + ext_w[None, :]) * minor[1]
-        ext = field.clearance_of_points(flank_point(pinion, es, eh), None, phi)
-        ext_valid = ext.valid & pinion.inside(es, eh)
-        ext_valid[1:-1, 1:-1] = valid
-        off = (
-            ~ext_valid[:-2, 1:-1]
-            | ~ext_valid[2:, 1:-1]
-            | ~ext_valid[1:-1, :-2]
-            | ~ext_valid[1:-1, 2:]
-        )
-        boundary = valid & off
-        at_end = np.zeros_like(valid)
-        at_end[0, :] = at_end[-1, :] = at_end[:, 0] = at_end[:, -1] = True
-        open_end = valid & at_end & ~off
-        out.append(
+    longest = math.hypot(
+        float(pinion.face_mm[-1] - pinion.face_mm[0]),
+        float(pinion.profile_mm[-1] - pinion.profile_mm[0]),
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        half_l = np.where(lam[:, 0] > 0.0, np.sqrt(2.0 * reach_mm / lam[:, 0]), longest)
+        half_w = np.where(lam[:, 1] > 0.0, np.sqrt(2.0 * reach_mm / lam[:, 1]), np.inf)
+    half_l = np.minimum(half_l, longest)
+    half_w = np.minimum(half_w, grid.max_half_width_mm)
+    along, across = grid.along, grid.across
+    t = half_l[:, None] * np.linspace(-1.0, 1.0, along)
+    w = half_w[:, None] * np.linspace(-1.0, 1.0, across)
+    dt, dw = t[:, 1] - t[:, 0], w[:, 1] - w[:, 0]
+    # each strip centred on the valley across it (a parabola through three points)
+    probe = half_w[:, None] * np.array([-0.5, 0.0, 0.5])
+    ps = s0[:, None, None] + t[:, :, None] * major[:, None, None, 0]
+    ph = h0[:, None, None] + t[:, :, None] * major[:, None, None, 1]
+    d, _ = field.clearance_at_grid(
+        ps + probe[:, None, :] * minor[:, None, None, 0],
+        ph + probe[:, None, :] * minor[:, None, None, 1],
+        phi[:, None, None],
+    )
+    curve = d[..., 0] - 2.0 * d[..., 1] + d[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shift = np.where(curve > 0.0, 0.25 * half_w[:, None] * (d[..., 0] - d[..., 2]) / curve, 0.0)
+    shift = np.clip(shift, -0.5 * half_w[:, None], 0.5 * half_w[:, None])
+    shift[:, along // 2] = 0.0  # the strip through the contact point itself
+    # the patch centres and one patch further on every side (beyond the grid too)
+    ext_t = np.concatenate([t[:, :1] - dt[:, None], t, t[:, -1:] + dt[:, None]], axis=1)
+    ext_shift = np.concatenate([shift[:, :1], shift, shift[:, -1:]], axis=1)
+    ext_w = np.concatenate([w[:, :1] - dw[:, None], w, w[:, -1:] + dw[:, None]], axis=1)
+    off = ext_shift[:, :, None] + ext_w[:, None, :]
+    es = (
+        s0[:, None, None]
+        + ext_t[:, :, None] * major[:, None, None, 0]
+        + off * minor[:, None, None, 0]
+    )
+    eh = (
+        h0[:, None, None]
+        + ext_t[:, :, None] * major[:, None, None, 1]
+        + off * minor[:, None, None, 1]
+    )
+    points = flank_point(pinion, es, eh)
+    s, h = es[:, 1:-1, 1:-1], eh[:, 1:-1, 1:-1]
+    p = points[:, 1:-1, 1:-1]
+    # tangents: across the contact line by the strips' central differences, along it by
+    # forward differences (the strips' shifts differ)
+    e = _TANGENT_STEP_MM
+    ahead = flank_point(pinion, s + e * major[:, None, None, 0], h + e * major[:, None, None, 1])
+    p_major = (ahead - p) / e
+    p_minor = (points[:, 1:-1, 2:] - points[:, 1:-1, :-2]) / (2.0 * dw[:, None, None, None])
+    normal = np.cross(p_major, p_minor)
+    area = np.linalg.norm(normal, axis=-1)
+    normal /= area[..., None]
+    mid = tuple(np.array(pinion.shape) // 2)
+    orient = np.sign(np.einsum("kijc,c->k", normal, pinion.normals[mid]))  # out of the tooth
+    normal *= np.where(orient == 0.0, 1.0, orient)[:, None, None, None]
+    at = field.clearance_of_points(p, normal, phi[:, None, None])
+    ring = np.ones(es.shape[1:], dtype=bool)
+    ring[1:-1, 1:-1] = False
+    beyond = field.clearance_of_points(points[:, ring], None, phi[:, None]).valid
+    valid = at.valid & np.isfinite(at.clearance_rad) & pinion.inside(s, h)
+    ext_valid = np.empty(es.shape, dtype=bool)
+    ext_valid[:, ring] = beyond & pinion.inside(es[:, ring], eh[:, ring])
+    ext_valid[:, 1:-1, 1:-1] = valid
+    beside = (
+        ~ext_valid[:, :-2, 1:-1]
+        | ~ext_valid[:, 2:, 1:-1]
+        | ~ext_valid[:, 1:-1, :-2]
+        | ~ext_valid[:, 1:-1, 2:]
+    )
+    at_end = np.zeros(valid.shape[1:], bool)
+    at_end[0, :] = at_end[-1, :] = at_end[:, 0] = at_end[:, -1] = True
+    # the gear's grid coordinates of the points (for the gear's compliance)
+    q = field.gear_frame_points(p, phi[:, None, None])
+    gs, gh = gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
+    length = np.linalg.norm(p_major, axis=-1) * dt[:, None, None]
+    width = np.linalg.norm(p_minor, axis=-1) * dw[:, None, None]
+    centre = (along // 2, across // 2)
+    scale_a = np.linalg.norm(p_major[:, centre[0], centre[1]], axis=-1)
+    scale_w = np.linalg.norm(p_minor[:, centre[0], centre[1]], axis=-1)
+    x = np.broadcast_to((t * scale_a[:, None])[:, :, None], s.shape)
+    y = (shift[:, :, None] + w[:, None, :]) * scale_w[:, None, None]
+    for j, row in enumerate(rows):
+        out[row // offsets.shape[1]].append(
             PairPatches(
-                pair=int(pairs[k]),
-                phi_rad=float(phi),
-                face_mm=s,
-                profile_mm=h,
-                gear_face_mm=np.asarray(gs),
-                gear_profile_mm=np.asarray(gh),
-                clearance_rad=np.where(valid, at.clearance_rad, np.inf),
-                factor_mm=np.asarray(at.normal_factor_mm),
-                area_mm2=np.linalg.norm(np.cross(p_s, p_t), axis=-1) * dt * dw,
-                length_mm=along_mm,
-                width_mm=across_mm,
-                x_mm=np.array(x_mm),
-                y_mm=y_mm,
-                valid=valid,
-                boundary=boundary,
-                open_end=open_end,
-                contact_rad=m0,
+                pair=int(offsets.flat[row]),
+                phi_rad=float(phi[j]),
+                face_mm=s[j],
+                profile_mm=h[j],
+                gear_face_mm=gs[j],
+                gear_profile_mm=gh[j],
+                clearance_rad=np.where(valid[j], at.clearance_rad[j], np.inf),
+                factor_mm=at.normal_factor_mm[j],
+                area_mm2=area[j] * dt[j] * dw[j],
+                length_mm=length[j],
+                width_mm=width[j],
+                x_mm=np.array(x[j]),
+                y_mm=y[j],
+                valid=valid[j],
+                boundary=valid[j] & beside[j],
+                open_end=valid[j] & at_end & ~beside[j],
+                contact_rad=float(m0[j]),
             )
         )
     return out
