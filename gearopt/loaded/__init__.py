@@ -7,7 +7,7 @@
   or columns of them on demand, compiled in :mod:`gearopt.loaded.kernels`);
 - :mod:`gearopt.loaded.lcp`: the load distribution at one mesh position, the linear
   complementarity problem of the patch forces and the rotation lag solved exactly by an
-  active-set method;
+  active-set method, on a dense compliance or on its columns requested as needed;
 - :mod:`gearopt.loaded.separations`: the initial separations, patches around each tooth pair's
   unloaded contact on the flanks' interpolants;
 - :mod:`gearopt.loaded.ltca`: one side's loaded TCA over the mesh cycle (LTE, load sharing,
@@ -35,7 +35,12 @@ from gearopt.loaded.halfspace import (
     patch_grid,
     rectangle_influence_mm_per_mpa,
 )
-from gearopt.loaded.lcp import ComplementarityResiduals, LoadDistribution, solve_load_distribution
+from gearopt.loaded.lcp import (
+    ComplementarityResiduals,
+    LoadDistribution,
+    solve_load_columns,
+    solve_load_distribution,
+)
 from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
 from gearopt.loaded.pair import loaded_sides
 from gearopt.loaded.separations import PairPatches, contact_patches
@@ -65,6 +70,7 @@ __all__ = [
     "patch_grid",
     "rectangle_influence_mm_per_mpa",
     "solid_model",
+    "solve_load_columns",
     "solve_load_distribution",
     "tooth_compliance",
 ]
