@@ -58,6 +58,7 @@ from tqdm import tqdm
 
 from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
+from gearopt.loaded import kernels as loaded_kernels
 from gearopt.results import ResultsStore
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
@@ -511,9 +512,10 @@ def run_study(
         for _ in range(min(jobs - busy, max(free, 0))):
             ask()
 
-    # the contact engine's kernels compiled (or loaded) here once, before the workers start:
-    # they load the cache rather than compile it side by side
+    # the compiled kernels (contact engine, loaded contact) compiled (or loaded) here once,
+    # before the workers start: they load the cache rather than compile it side by side
     contact_kernels.warm()
+    loaded_kernels.warm()
     executor = _executor(jobs, backend, scheduler)
     busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
     try:

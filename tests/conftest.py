@@ -20,12 +20,14 @@ SEED_CASES = Path(__file__).parent / "data" / "seed_cases.json"
 
 @pytest.fixture(scope="session", autouse=True)
 def _compiled_kernels():
-    """The contact engine's kernels compiled (or loaded from the disk cache) once in this
-    process before any test starts a subprocess: CLI and study workers then load the cache
-    rather than compile it side by side."""
+    """The compiled kernels (contact engine, loaded contact) compiled (or loaded from the disk
+    cache) once in this process before any test starts a subprocess: CLI and study workers
+    then load the cache rather than compile it side by side."""
     from gearopt.contact import kernels as contact_kernels
+    from gearopt.loaded import kernels as loaded_kernels
 
     contact_kernels.warm()
+    loaded_kernels.warm()
 
 
 @pytest.fixture(scope="session")

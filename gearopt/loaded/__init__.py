@@ -3,10 +3,11 @@
 - :mod:`gearopt.loaded.compliance`: the bending and shear compliance of a member's tooth,
   finite-element influence numbers of a model built from its two FlankMaps;
 - :mod:`gearopt.loaded.halfspace`: the local contact compliance of two elastic bodies, Love's
-  uniformly loaded rectangle on Boussinesq half-spaces (influence coefficients of a patch grid);
+  uniformly loaded rectangle on Boussinesq half-spaces (influence coefficients of a patch grid,
+  or columns of them on demand, compiled in :mod:`gearopt.loaded.kernels`);
 - :mod:`gearopt.loaded.lcp`: the load distribution at one mesh position, the linear
   complementarity problem of the patch forces and the rotation lag solved exactly by an
-  active-set method;
+  active-set method, on a dense compliance or on its columns requested as needed;
 - :mod:`gearopt.loaded.separations`: the initial separations, patches around each tooth pair's
   unloaded contact on the flanks' interpolants;
 - :mod:`gearopt.loaded.ltca`: one side's loaded TCA over the mesh cycle (LTE, load sharing,
@@ -26,19 +27,27 @@ from gearopt.loaded.compliance import (
     tooth_compliance,
 )
 from gearopt.loaded.halfspace import (
+    FAR_FIELD_RATIO,
     PatchGrid,
     composite_compliance_mm2_per_n,
+    halfspace_columns_mm_per_n,
     halfspace_compliance_mm_per_n,
     patch_grid,
     rectangle_influence_mm_per_mpa,
 )
-from gearopt.loaded.lcp import ComplementarityResiduals, LoadDistribution, solve_load_distribution
+from gearopt.loaded.lcp import (
+    ComplementarityResiduals,
+    LoadDistribution,
+    solve_load_columns,
+    solve_load_distribution,
+)
 from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
 from gearopt.loaded.pair import loaded_sides
 from gearopt.loaded.separations import PairPatches, contact_patches
 
 __all__ = [
     "DEFAULT_MESH",
+    "FAR_FIELD_RATIO",
     "ComplementarityResiduals",
     "Factorised",
     "LoadDistribution",
@@ -53,6 +62,7 @@ __all__ = [
     "composite_compliance_mm2_per_n",
     "contact_patches",
     "factorise",
+    "halfspace_columns_mm_per_n",
     "halfspace_compliance_mm_per_n",
     "loaded_contact",
     "loaded_sides",
@@ -60,6 +70,7 @@ __all__ = [
     "patch_grid",
     "rectangle_influence_mm_per_mpa",
     "solid_model",
+    "solve_load_columns",
     "solve_load_distribution",
     "tooth_compliance",
 ]

@@ -21,13 +21,21 @@ with ``theta`` the multiplier of the moment equation and ``gap`` the multipliers
 
 Method: a primal active-set method, Lawson & Hanson's NNLS algorithm (*Solving Least Squares
 Problems*, 1974, ch. 23) carried over to this programme. The support ``P`` (patches in contact)
-starts as the patch that closes first, ``argmin s_i / r_i``, carrying all the load. On ``P``
+starts as the patch that closes first, ``argmin s_i / r_i``, carrying all the load, or as the
+support of a warm start (any forces ``>= 0`` scaled to the torque, e.g. the previous torque's
+of a sweep: a feasible point; while the solution on its support has tensile forces, they are
+all dropped at once, the rest scaled to the torque, a feasible point again, before the steps
+below). On ``P``
 the equations hold with equality: ``C_PP F_P - r_P theta = -s_P``, ``r_P^T F_P = T``, solved by
 Cholesky of ``C_PP`` and the Schur complement ``theta = (T + r^T C^-1 s) / (r^T C^-1 r)``. Each
-outer iteration adds the patches outside ``P`` whose gap is negative (interpenetration); of
-those, the ones that would take a tensile force are taken out again at once, and when none
-remain the single most penetrating patch is added (Lawson-Hanson's rule, for which the new
-force is provably positive). Patches of ``P`` that would go tensile are dropped with the
+outer iteration adds patches outside ``P`` whose gap is negative (interpenetration): the most
+penetrating ones, at most ``max(32, |P| / 2)`` at a time (the support grows geometrically and
+the columns of ``C`` the method touches stay near the final support); of those, the ones that
+would take a tensile force are taken out again at once, and when none remain the single most
+penetrating patch is added (Lawson-Hanson's rule, for which the new force is provably
+positive). The method only ever reads the columns ``C[:, P]`` of the patches it has tried
+(:func:`solve_load_columns` requests them as needed). Patches of ``P`` that would go tensile
+are dropped with the
 Lawson-Hanson step back along the segment to the new solution, which keeps every force
 non-negative and the moment equation exact. The objective strictly decreases from one support
 to the next, so no support repeats and the method ends in finitely many steps with the exact
@@ -61,13 +69,22 @@ import scipy.linalg
 
 from gearopt.errors import GearoptError
 
-__all__ = ["ComplementarityResiduals", "LoadDistribution", "solve_load_distribution"]
+__all__ = [
+    "ComplementarityResiduals",
+    "LoadDistribution",
+    "solve_load_columns",
+    "solve_load_distribution",
+]
 
 #: relative tolerance of the symmetry and semidefiniteness checks of the compliance
 COMPLIANCE_RTOL = 1e-8
 #: a compliance block whose Cholesky pivots fall below this fraction of its largest diagonal
 #: entry, or whose reduced eigenvalues below this fraction of the largest, counts as singular
 SINGULAR_RTOL = 1e-10
+#: the block addition takes at most the ``max(_BLOCK_LEAST, _BLOCK_SHARE |P|)`` most
+#: penetrating patches at a time (module docstring)
+_BLOCK_LEAST = 32
+_BLOCK_SHARE = 0.5
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -132,7 +149,7 @@ class LoadDistribution:
     residuals: ComplementarityResiduals
 
 
-def _check_inputs(separation_mm, area_mm2, compliance_mm_per_n, lever_arm_mm, torque_n_mm):
+def _check_vectors(separation_mm, area_mm2, lever_arm_mm, torque_n_mm):
     s = np.asarray(separation_mm, dtype=float)
     if s.ndim != 1 or s.size == 0:
         raise GearoptError("separation_mm", s.shape, "must be a non-empty 1-D array (one a patch)")
@@ -159,6 +176,12 @@ def _check_inputs(separation_mm, area_mm2, compliance_mm_per_n, lever_arm_mm, to
     t = float(torque_n_mm)
     if not np.isfinite(t) or t < 0.0:
         raise GearoptError("torque_n_mm", t, "must be finite and >= 0")
+    return s, area, r, t
+
+
+def _check_inputs(separation_mm, area_mm2, compliance_mm_per_n, lever_arm_mm, torque_n_mm):
+    s, area, r, t = _check_vectors(separation_mm, area_mm2, lever_arm_mm, torque_n_mm)
+    n = s.size
     c = np.asarray(compliance_mm_per_n, dtype=float)
     if c.shape != (n, n):
         raise GearoptError("compliance_mm_per_n", c.shape, f"must be square of size {n}")
@@ -188,8 +211,87 @@ def _check_inputs(separation_mm, area_mm2, compliance_mm_per_n, lever_arm_mm, to
     return s, area, c, r, t
 
 
-def _solve_on_support(c, s, r, t, support):
-    """The equality-constrained subproblem on the support ``P``.
+def _check_start(start_forces_n, r, t):
+    """The warm start scaled to the torque, ``F T / (r^T F)``, or None for no force at all."""
+    f = np.asarray(start_forces_n, dtype=float)
+    if f.shape != r.shape:
+        raise GearoptError(
+            "start_forces_n", f.shape, f"must have the shape of separation_mm {r.shape}"
+        )
+    if not np.all(np.isfinite(f) & (f >= 0.0)):
+        bad = int(np.flatnonzero(~(np.isfinite(f) & (f >= 0.0)))[0])
+        raise GearoptError(f"start_forces_n[{bad}]", float(f[bad]), "must be finite and >= 0")
+    moment = float(r @ f)
+    return f * (t / moment) if moment > 0.0 else None
+
+
+class _Columns:
+    """The compliance columns a solve has requested, each from the provider once.
+
+    Column ``j`` of ``C`` is stored as row ``slot[j]`` of ``rows`` (``C`` is symmetric, so it is
+    also row ``j`` of ``C``); ``requested`` counts the columns asked of the provider.
+    """
+
+    def __init__(self, provider, n):
+        self.provider = provider
+        self.n = n
+        self.slot = np.full(n, -1, dtype=np.intp)
+        self.rows = np.empty((min(n, 32), n))
+        self.requested = 0
+
+    def fetch(self, idx):
+        """Request the columns ``idx`` not yet held."""
+        missing = idx[self.slot[idx] < 0]
+        m, k = missing.size, self.requested
+        if m == 0:
+            return
+        block = np.asarray(self.provider(missing.copy()), dtype=float)
+        if block.shape != (self.n, m):
+            raise GearoptError(
+                "columns",
+                block.shape,
+                f"must return C[:, idx], shape (n, len(idx)) = {(self.n, m)}",
+            )
+        if not np.all(np.isfinite(block)):
+            raise GearoptError("columns", "non-finite entries", "must return finite compliances")
+        diagonal = block[missing, np.arange(m)]
+        if np.any(diagonal < -COMPLIANCE_RTOL * np.max(np.abs(block), axis=0)):
+            bad = int(missing[np.argmin(diagonal)])
+            raise GearoptError(
+                f"columns C[{bad}, {bad}]",
+                float(np.min(diagonal)),
+                "must be >= 0 (a positive semidefinite compliance)",
+            )
+        if k + m > self.rows.shape[0]:
+            grown = np.empty((min(self.n, max(2 * self.rows.shape[0], k + m)), self.n))
+            grown[:k] = self.rows[:k]
+            self.rows = grown
+        self.rows[k : k + m] = block.T
+        self.slot[missing] = np.arange(k, k + m)
+        self.requested = k + m
+
+    def block(self, idx):
+        """``C[np.ix_(idx, idx)]``, checked symmetric and symmetrised."""
+        self.fetch(idx)
+        b = self.rows[np.ix_(self.slot[idx], idx)]
+        asym = float(np.max(np.abs(b - b.T)))
+        if asym > COMPLIANCE_RTOL * float(np.max(np.abs(b))):
+            raise GearoptError(
+                "columns",
+                f"max |C - C^T| = {asym:.3g}",
+                f"must be symmetric (relative tolerance {COMPLIANCE_RTOL:g})",
+            )
+        return 0.5 * (b + b.T)
+
+    def times(self, idx, f):
+        """``C[:, idx] @ f[idx]`` (the columns ``idx`` held)."""
+        w = np.zeros(self.requested)
+        w[self.slot[idx]] = f[idx]
+        return w @ self.rows[: self.requested]
+
+
+def _solve_on_support(c_pp, s, r, t, support):
+    """The equality-constrained subproblem on the support ``P``, ``c_pp = C[np.ix_(P, P)]``.
 
     Returns ``(z, theta, direction)`` with ``z`` of length ``n`` (0 off ``P``). Bounded case
     (``direction`` None): ``C_PP z_P - r_P theta = -s_P``, ``r_P^T z_P = T``, by Cholesky of
@@ -201,7 +303,7 @@ def _solve_on_support(c, s, r, t, support):
     ``direction`` (``C d = 0``, ``r^T d = 0``, ``s^T d < 0``) the steepest such direction.
     """
     n, k = s.size, support.size
-    c_pp, s_p, r_p = c[np.ix_(support, support)], s[support], r[support]
+    s_p, r_p = s[support], r[support]
     z = np.zeros(n)
     try:
         low, _ = scipy.linalg.cho_factor(c_pp, lower=True, check_finite=False)
@@ -232,6 +334,174 @@ def _solve_on_support(c, s, r, t, support):
     z[support] = z0 + q @ y
     theta = r_p @ (c_pp @ z[support] + s_p) / (r_p @ r_p)
     return z, float(theta), None
+
+
+def _solve_support(cols, s, r, t, support):
+    return _solve_on_support(cols.block(support), s, r, t, support)
+
+
+def _descend(cols, s, r, t, forces, in_p, solved):
+    """Lawson-Hanson's inner loop from the feasible ``forces`` (``>= 0``, ``r^T F = T``) with
+    the support ``in_p`` and ``solved``, the subproblem's answer on it: step towards the
+    subproblem's solution (or along its descent direction when unbounded) as far as all forces
+    stay >= 0, drop the ones reaching 0, solve again. Returns ``(forces, theta, in_p)``."""
+    z, z_theta, direction = solved
+    while True:
+        p_idx = np.flatnonzero(in_p)
+        if direction is None:
+            neg = p_idx[z[p_idx] <= 0.0]
+            if neg.size == 0:
+                return z, z_theta, in_p
+            step = z - forces
+        else:
+            step = direction
+            neg = p_idx[direction[p_idx] < 0.0]
+            if neg.size == 0:  # cannot happen for r > 0 (r^T d = 0): guard only
+                raise GearoptError("columns", "semidefinite", "unbounded load distribution")
+        ratio = forces[neg] / -step[neg]
+        alpha = float(np.min(ratio))
+        forces = forces + alpha * step
+        forces[neg[ratio <= alpha]] = 0.0
+        in_p = in_p & (forces > 0.0)
+        forces[~in_p] = 0.0
+        z, z_theta, direction = _solve_support(cols, s, r, t, np.flatnonzero(in_p))
+
+
+def _warm_start(cols, s, r, t, start):
+    """The first support from a warm start (feasible: ``>= 0``, ``r^T F = T``): solved on its
+    support; while the solution has tensile forces, all of them are dropped at once and the
+    rest, scaled to the torque, is the feasible point solved again (a support far larger than
+    the contact shrinks in a few solves, where Lawson-Hanson's step back drops about one
+    patch a solve); then the inner loop (:func:`_descend`) from the last feasible point.
+    Returns ``(forces, theta, in_p)``."""
+    forces, in_p = start, start > 0.0
+    while True:
+        solved = _solve_support(cols, s, r, t, np.flatnonzero(in_p))
+        z, _, direction = solved
+        if direction is not None or np.all(z[in_p] > 0.0):
+            return _descend(cols, s, r, t, forces, in_p, solved)
+        forces = np.where(in_p & (z > 0.0), z, 0.0)  # some z > 0: r > 0 and r^T z = T > 0
+        forces *= t / (r @ forces)
+        in_p = forces > 0.0
+
+
+def solve_load_columns(
+    *,
+    separation_mm,
+    area_mm2,
+    lever_arm_mm,
+    torque_n_mm: float,
+    columns,
+    start_forces_n=None,
+    tolerance_mm: float = 1e-11,
+    max_iterations: int | None = None,
+) -> LoadDistribution:
+    """Patch forces and rotation lag at one mesh position from compliance columns on demand.
+
+    The LCP of the module docstring, solved by the same active-set method as
+    :func:`solve_load_distribution`, which only ever needs the columns ``C[:, P]`` of the
+    patches ``P`` it has tried in contact (for the gaps and the blocks ``C_PP``): a small
+    contact among many candidate patches asks for a small part of ``C``.
+
+    Parameters
+    ----------
+    separation_mm, area_mm2, lever_arm_mm, torque_n_mm
+        As :func:`solve_load_distribution`.
+    columns
+        ``columns(idx) -> C[:, idx]``: ``idx`` an ``intp`` array of patch indices (distinct,
+        not in order), the result of shape ``(n, len(idx))``, the compliance (mm/N) of a
+        symmetric positive semidefinite ``C``. Each column is requested once per solve (the
+        solver keeps those it has); the provider may cache across solves. Only what is
+        requested is checked: finite, symmetric blocks ``C_PP`` (relative tolerance
+        :data:`COMPLIANCE_RTOL`), diagonal ``>= 0``; semidefiniteness of the whole of ``C``
+        is not (an indefinite ``C`` gives an answer without guarantee).
+    start_forces_n
+        Optional warm start, shape ``(n,)``, finite, ``>= 0``: scaled to the torque
+        (``F T / (r^T F)``), its support is the initial active set (e.g. the previous
+        torque's forces of a sweep). Without it, or with no force at all (the forces of
+        ``T = 0``), the patch that closes first carries the torque. Either start leads to the
+        same solution, unique for a positive definite ``C``. Checked but not used when
+        ``T = 0``.
+    tolerance_mm, max_iterations
+        As :func:`solve_load_distribution`.
+
+    Returns
+    -------
+    LoadDistribution
+
+    Raises
+    ------
+    gearopt.errors.GearoptError
+        For bad vectors as :func:`solve_load_distribution`, a bad warm start, columns of the
+        wrong shape, non-finite or not symmetric, or no convergence within
+        ``max_iterations``.
+    """
+    s, area, r, t = _check_vectors(separation_mm, area_mm2, lever_arm_mm, torque_n_mm)
+    if not callable(columns):
+        raise GearoptError(
+            "columns", type(columns).__name__, "must be callable: columns(idx) -> C[:, idx]"
+        )
+    start = None if start_forces_n is None else _check_start(start_forces_n, r, t)
+    n = s.size
+    closing = s / r  # the rotation at which each patch closes unloaded
+    first = int(np.argmin(closing))
+    iterations = 0
+    if t == 0.0:
+        theta = float(closing[first])
+        gaps = r * (closing - theta)  # exactly 0 where the closing rotation is least
+        support = np.flatnonzero(closing == closing[first])
+        return _result(s, area, r, t, np.zeros(n), theta, gaps, support, iterations)
+
+    cols = _Columns(columns, n)
+    if start is None:
+        in_p = np.zeros(n, dtype=bool)
+        in_p[first] = True
+        forces = np.zeros(n)
+        forces[first] = t / r[first]
+        c_ff = cols.block(np.array([first]))[0, 0]
+        theta = float((s[first] + c_ff * forces[first]) / r[first])
+    else:
+        forces, theta, in_p = _warm_start(cols, s, r, t, start)
+    cap = 2 * n + 10 if max_iterations is None else int(max_iterations)
+    stuck = np.zeros(n, dtype=bool)  # added alone yet not loaded: round-off at the tolerance
+    while True:
+        p_idx = np.flatnonzero(in_p)
+        gaps = s + cols.times(p_idx, forces) - r * theta
+        candidates = ~in_p & ~stuck & (gaps < -tolerance_mm)
+        if not candidates.any():
+            break
+        if iterations >= cap:
+            raise GearoptError(
+                "columns",
+                f"{n} patches",
+                f"active set did not converge in {cap} iterations (ill-conditioned compliance?)",
+            )
+        iterations += 1
+        new = np.flatnonzero(candidates)
+        single = np.array([new[int(np.argmin(gaps[new]))]])  # Lawson-Hanson's choice
+        limit = max(_BLOCK_LEAST, int(_BLOCK_SHARE * p_idx.size))
+        if new.size > limit:
+            new = np.sort(new[np.argsort(gaps[new], kind="stable")[:limit]])
+        # block addition: take out again the new patches that would carry tension
+        while True:
+            z, z_theta, direction = _solve_support(cols, s, r, t, np.union1d(p_idx, new))
+            if direction is not None:  # unbounded: only Lawson-Hanson's single patch
+                if new.size == 1:
+                    break
+                new = single
+                continue
+            keep = z[new] > 0.0
+            if keep.all() or (new.size == 1 and not keep.any()):
+                break
+            new = new[keep] if keep.any() else single
+        if direction is None and z[new[0]] <= 0.0:  # single patch, unloaded: round-off
+            stuck[new[0]] = True
+            continue
+        in_p[new] = True
+        forces, theta, in_p = _descend(cols, s, r, t, forces, in_p, (z, z_theta, direction))
+    support = np.flatnonzero(in_p)
+    gaps = s + cols.times(support, forces) - r * theta
+    return _result(s, area, r, t, forces, theta, gaps, support, iterations)
 
 
 def solve_load_distribution(
@@ -278,89 +548,32 @@ def solve_load_distribution(
         For non-finite separations, negative or non-finite torque, areas or lever arms that are
         not positive, a compliance that is not symmetric positive semidefinite, shapes that
         disagree, or no convergence within ``max_iterations``.
+
+    See Also
+    --------
+    solve_load_columns : the same solver on compliance columns requested as needed, which this
+        function calls after checking the whole matrix.
     """
     s, area, c, r, t = _check_inputs(
         separation_mm, area_mm2, compliance_mm_per_n, lever_arm_mm, torque_n_mm
     )
-    n = s.size
-    closing = s / r  # the rotation at which each patch closes unloaded
-    first = int(np.argmin(closing))
-    forces = np.zeros(n)
-    iterations = 0
-    if t == 0.0:
-        theta = float(closing[first])
-        gaps = r * (closing - theta)  # exactly 0 where the closing rotation is least
-        support = np.flatnonzero(closing == closing[first])
-        return _result(s, area, c, r, t, forces, theta, gaps, support, iterations)
-
-    in_p = np.zeros(n, dtype=bool)
-    in_p[first] = True
-    forces[first] = t / r[first]
-    theta = float((s[first] + c[first, first] * forces[first]) / r[first])
-    cap = 2 * n + 10 if max_iterations is None else int(max_iterations)
-    stuck = np.zeros(n, dtype=bool)  # added alone yet not loaded: round-off at the tolerance
-    while True:
-        p_idx = np.flatnonzero(in_p)
-        gaps = s + c[:, p_idx] @ forces[p_idx] - r * theta
-        candidates = ~in_p & ~stuck & (gaps < -tolerance_mm)
-        if not candidates.any():
-            break
-        if iterations >= cap:
-            raise GearoptError(
-                "compliance_mm_per_n",
-                f"{n} patches",
-                f"active set did not converge in {cap} iterations (ill-conditioned compliance?)",
-            )
-        iterations += 1
-        new = np.flatnonzero(candidates)
-        single = np.array([new[int(np.argmin(gaps[new]))]])  # Lawson-Hanson's choice
-        # block addition: take out again the new patches that would carry tension
-        while True:
-            z, z_theta, direction = _solve_on_support(c, s, r, t, np.union1d(p_idx, new))
-            if direction is not None:  # unbounded: only Lawson-Hanson's single patch
-                if new.size == 1:
-                    break
-                new = single
-                continue
-            keep = z[new] > 0.0
-            if keep.all() or (new.size == 1 and not keep.any()):
-                break
-            new = new[keep] if keep.any() else single
-        if direction is None and z[new[0]] <= 0.0:  # single patch, unloaded: round-off
-            stuck[new[0]] = True
-            continue
-        in_p[new] = True
-        # Lawson-Hanson inner loop: step towards the subproblem's solution (or along its
-        # descent direction when unbounded) as far as all forces stay >= 0, drop the ones
-        # reaching 0, solve again
-        while True:
-            p_idx = np.flatnonzero(in_p)
-            if direction is None:
-                neg = p_idx[z[p_idx] <= 0.0]
-                if neg.size == 0:
-                    forces, theta = z, z_theta
-                    break
-                step = z - forces
-            else:
-                step = direction
-                neg = p_idx[direction[p_idx] < 0.0]
-                if neg.size == 0:  # cannot happen for r > 0 (r^T d = 0): guard only
-                    raise GearoptError(
-                        "compliance_mm_per_n", "semidefinite", "unbounded load distribution"
-                    )
-            ratio = forces[neg] / -step[neg]
-            alpha = float(np.min(ratio))
-            forces = forces + alpha * step
-            forces[neg[ratio <= alpha]] = 0.0
-            in_p &= forces > 0.0
-            forces[~in_p] = 0.0
-            z, z_theta, direction = _solve_on_support(c, s, r, t, np.flatnonzero(in_p))
-    support = np.flatnonzero(in_p)
-    gaps = s + c[:, support] @ forces[support] - r * theta
-    return _result(s, area, c, r, t, forces, theta, gaps, support, iterations)
+    try:
+        return solve_load_columns(
+            separation_mm=s,
+            area_mm2=area,
+            lever_arm_mm=r,
+            torque_n_mm=t,
+            columns=lambda idx: c[:, idx],
+            tolerance_mm=tolerance_mm,
+            max_iterations=max_iterations,
+        )
+    except GearoptError as err:  # the columns are this compliance's
+        if not err.parameter.startswith("columns"):
+            raise
+        raise GearoptError("compliance_mm_per_n", err.value, err.rule) from None
 
 
-def _result(s, area, c, r, t, forces, theta, gaps, support, iterations) -> LoadDistribution:
+def _result(s, area, r, t, forces, theta, gaps, support, iterations) -> LoadDistribution:
     moment = abs(float(r @ forces) - t)
     residuals = ComplementarityResiduals(
         moment_n_mm=moment,

@@ -1,0 +1,145 @@
+"""Compiled kernels of loaded contact (numba): the half-space compliance columns.
+
+:func:`halfspace_columns` fills columns of the symmetric half-space compliance of rectangular
+patches (:func:`gearopt.loaded.halfspace.halfspace_columns_mm_per_n` checks the input and
+documents the formulas), Love's exact rectangle near a patch and its multipole expansion far
+from it, entry by entry in a compiled loop. As :mod:`gearopt.contact.kernels`: where numba
+cannot be imported, or with the environment variable ``GEAROPT_JIT=0``, :data:`ENABLED` is
+False and the same functions run as plain Python (slow: for checks, not for studies).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+try:  # pragma: no cover - depends on the installed extras
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
+__all__ = ["ENABLED", "halfspace_columns", "warm"]
+
+ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
+
+
+def _compiled(func=None, *, inline=False):
+    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (plain
+    Python); ``inline``: inlined into its callers."""
+    if func is None:
+        return lambda f: _compiled(f, inline=inline)
+    if not ENABLED:
+        return func
+    options = {"inline": "always"} if inline else {}
+    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
+
+
+@_compiled(inline=True)
+def _love(dx, dy, a, b):
+    """Love's integral of 1 / distance over the rectangle of half-widths ``a, b`` whose centre
+    lies at ``(dx, dy)`` from the field point (mm).
+
+    The corners' primitives ``u asinh(v / |u|) + v asinh(u / |v|)`` with ``asinh(w) =
+    sgn(w) ln(|w| + sqrt(w^2 + 1))``: ``sgn(u) sgn(v) (|u| ln(|v| + r) + |v| ln(|u| + r))``
+    minus ``sgn(u) sgn(v) (|u| ln|u| + |v| ln|v|)``, ``r`` the corner's distance; the second
+    part cancels between corners of the same ``u`` (``v``) unless the two ``v`` (``u``) differ
+    in sign. Half the cost of eight ``asinh``, the same integral to round-off.
+    """
+    u1 = dx - a
+    u2 = dx + a
+    v1 = dy - b
+    v2 = dy + b
+    au1, au2, av1, av2 = abs(u1), abs(u2), abs(v1), abs(v2)
+    su1, su2 = math.copysign(1.0, u1), math.copysign(1.0, u2)
+    sv1, sv2 = math.copysign(1.0, v1), math.copysign(1.0, v2)
+    total = 0.0
+    r = math.sqrt(u2 * u2 + v2 * v2)
+    if r > 0.0:
+        total += su2 * sv2 * (au2 * math.log(av2 + r) + av2 * math.log(au2 + r))
+    r = math.sqrt(u1 * u1 + v2 * v2)
+    if r > 0.0:
+        total -= su1 * sv2 * (au1 * math.log(av2 + r) + av2 * math.log(au1 + r))
+    r = math.sqrt(u2 * u2 + v1 * v1)
+    if r > 0.0:
+        total -= su2 * sv1 * (au2 * math.log(av1 + r) + av1 * math.log(au2 + r))
+    r = math.sqrt(u1 * u1 + v1 * v1)
+    if r > 0.0:
+        total += su1 * sv1 * (au1 * math.log(av1 + r) + av1 * math.log(au1 + r))
+    across_v = sv2 - sv1
+    if across_v != 0.0:
+        if au2 > 0.0:
+            total -= across_v * su2 * au2 * math.log(au2)
+        if au1 > 0.0:
+            total += across_v * su1 * au1 * math.log(au1)
+    across_u = su2 - su1
+    if across_u != 0.0:
+        if av2 > 0.0:
+            total -= across_u * sv2 * av2 * math.log(av2)
+        if av1 > 0.0:
+            total += across_u * sv1 * av1 * math.log(av1)
+    return total
+
+
+@_compiled
+def halfspace_columns(x, y, a, b, columns, factor, far_ratio, out):
+    """``out[k, i]``: the symmetric half-space compliance between patches ``i`` and
+    ``columns[k]`` (mm/N), ``out`` of shape ``(len(columns), n)``.
+
+    ``factor`` is ``composite / pi``. First the multipole expansion to fourth order for every
+    pair (a loop without branches), then Love's exact integrals (the symmetric part of the two
+    collocations) over it where the centres lie within ``far_ratio`` times the largest
+    half-width of the two.
+    """
+    n = x.size
+    a2 = a * a
+    b2 = b * b
+    a4 = a2 * a2
+    b4 = b2 * b2
+    ab = a2 * b2
+    reach = np.maximum(a, b) * far_ratio
+    for k in range(columns.size):
+        j = columns[k]
+        xj, yj = x[j], y[j]
+        a2j, b2j, a4j, b4j, abj = a2[j], b2[j], a4[j], b4[j], ab[j]
+        row = out[k]
+        for i in range(n):
+            dx = xj - x[i]
+            dy = yj - y[i]
+            d2 = dx * dx + dy * dy
+            inv2 = 1.0 / d2 if d2 > 0.0 else 0.0
+            p2 = dx * dx * inv2
+            q2 = dy * dy * inv2
+            # the two rectangles' moments summed, hence 12 and 16 for 6 and 8
+            second = (2.0 * p2 - q2) * (a2[i] + a2j) + (2.0 * q2 - p2) * (b2[i] + b2j)
+            fourth = (a4[i] + a4j) * ((7.0 * p2 - 6.0) * p2 + 0.6)
+            fourth += (b4[i] + b4j) * ((7.0 * q2 - 6.0) * q2 + 0.6)
+            fourth += (ab[i] + abj) * ((70.0 / 3.0) * p2 * q2 - 8.0 / 3.0)
+            series = 1.0 + second * (inv2 / 12.0) + fourth * (inv2 * inv2 / 16.0)
+            row[i] = factor * math.sqrt(inv2) * series
+        aj, bj, reach_j = a[j], b[j], reach[j]
+        for i in range(n):
+            # Love's integral is even in dx and dy: |dx|, |dy| make the entries exactly
+            # symmetric
+            dx = abs(xj - x[i])
+            dy = abs(yj - y[i])
+            near = max(reach_j, reach[i])
+            if dx * dx + dy * dy <= near * near:
+                ai, bi = a[i], b[i]
+                near_j = _love(dx, dy, aj, bj) / (4.0 * aj * bj)
+                if ai == aj and bi == bj:
+                    near_i = near_j
+                else:
+                    near_i = _love(dx, dy, ai, bi) / (4.0 * ai * bi)
+                row[i] = 0.5 * factor * (near_j + near_i)
+
+
+def warm() -> None:
+    """Compile every kernel, or load it from the disk cache, in this process (on one patch),
+    before worker processes start: they then load the cache rather than compile it side by
+    side. Nothing without the kernels."""
+    if not ENABLED:
+        return
+    one = np.ones(1)
+    halfspace_columns(one, one, one, one, np.zeros(1, np.intp), 1.0, 4.0, np.empty((1, 1)))
