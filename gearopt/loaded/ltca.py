@@ -42,7 +42,9 @@ __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]
 
 ARCSEC = 180.0 * 3600.0 / math.pi
 #: extra positions per round of the LTE minimum's refinement
-REFINE_POINTS = 6
+REFINE_POINTS = 5
+#: rounds of the refinement
+REFINE_ROUNDS = 2
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -204,39 +206,40 @@ def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> li
     u = np.atleast_1d(np.asarray(u_rad, float))
     base = np.round(-u / field.pinion.pitch_rad).astype(np.intp)
     batch = position_patches(field, u, base[:, None] + np.arange(-2, 3), grid)
-    return [
-        _position(patches, float(uj), grid, compliance)
-        for uj, patches in zip(u, batch, strict=True)
-    ]
-
-
-def _position(patches, u_rad: float, grid: PatchOptions, compliance) -> _Position:
-    if not patches:
-        raise GearoptError(
-            "load", math.degrees(u_rad), "no tooth pair touches at this position (deg)"
-        )
     reach_mm = grid.reach_um * 1e-3
-    lag = min(p.contact_rad for p in patches)
-    seps, levers, areas, blocks, keeps, kept = [], [], [], [], [], []
-    for p in patches:
-        sep = (p.clearance_rad - lag) * p.factor_mm
-        keep = np.flatnonzero((p.valid & (sep <= reach_mm)).ravel())
-        if keep.size == 0:
-            continue
-        kept.append(p)
-        keeps.append(keep)
-        seps.append(p.clearance_rad.ravel()[keep] * p.factor_mm.ravel()[keep])
-        levers.append(p.factor_mm.ravel()[keep])
-        areas.append(p.area_mm2.ravel()[keep])
-        blocks.append(compliance(p, keep))
+    chosen = []
+    for uj, patches in zip(u, batch, strict=True):
+        if not patches:
+            raise GearoptError(
+                "load", math.degrees(uj), "no tooth pair touches at this position (deg)"
+            )
+        lag = min(p.contact_rad for p in patches)
+        picked = []
+        for p in patches:
+            sep = (p.clearance_rad - lag) * p.factor_mm
+            keep = np.flatnonzero((p.valid & (sep <= reach_mm)).ravel())
+            if keep.size:
+                picked.append((p, keep))
+        chosen.append((lag, picked))
+    blocks = iter(compliance([pair for _, picked in chosen for pair in picked]))
+    return [_position(lag, picked, [next(blocks) for _ in picked]) for lag, picked in chosen]
+
+
+def _position(lag: float, picked, blocks) -> _Position:
+    """One position from its pairs' candidate patches ``(patches, keep)`` and their
+    compliance columns."""
+    kept = [p for p, _ in picked]
+    keeps = [keep for _, keep in picked]
     best = min(kept, key=lambda p: p.contact_rad)
     centre = tuple(np.array(best.factor_mm.shape) // 2)
     return _Position(
         patches=tuple(kept),
         keep=tuple(keeps),
-        separation_mm=np.concatenate(seps),
-        lever_mm=np.concatenate(levers),
-        area_mm2=np.concatenate(areas),
+        separation_mm=np.concatenate(
+            [p.clearance_rad.ravel()[k] * p.factor_mm.ravel()[k] for p, k in picked]
+        ),
+        lever_mm=np.concatenate([p.factor_mm.ravel()[k] for p, k in picked]),
+        area_mm2=np.concatenate([p.area_mm2.ravel()[k] for p, k in picked]),
         columns=_Columns(blocks, [k.size for k in keeps]),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
@@ -260,16 +263,24 @@ class _Prepared:
         return [self._known[x] for x in np.asarray(u_rad, float).tolist()]
 
 
-def _solve(pos: _Position, torque_nm: float, start=None):
-    """``(forces per pair, theta_rad)`` at one position and torque; ``start``: the forces of
-    another torque's solution at the position, a warm start."""
+def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None = None):
+    """``(forces per pair, theta_rad)`` at one position and torque. A warm start: ``start``,
+    the forces of another torque's solution at the position, or ``theta_rad``, a guess of the
+    lag (a nearby position's at this torque), whose rigid interpenetration, as pressure on
+    the patches, is the first support (larger than the contact, which the solver shrinks in
+    a few solves where from one patch it grows it in many)."""
+    first = None if start is None else _flat(pos, start)
+    if first is None and theta_rad is not None:
+        first = pos.area_mm2 * np.maximum(pos.lever_mm * theta_rad - pos.separation_mm, 0.0)
+        if not first.any():
+            first = None
     solved = solve_load_columns(
         separation_mm=pos.separation_mm,
         area_mm2=pos.area_mm2,
         lever_arm_mm=pos.lever_mm,
         torque_n_mm=torque_nm * 1e3,
         columns=pos.columns,
-        start_forces_n=None if start is None else _flat(pos, start),
+        start_forces_n=first,
     )
     forces = np.asarray(solved.forces_n)
     per_pair, at = [], 0
@@ -301,7 +312,7 @@ def loaded_contact(
     frame,
     grid: PatchOptions | None = None,
     side: str = "drive",
-    refine_rounds: int = 3,
+    refine_rounds: int = REFINE_ROUNDS,
 ) -> list[LoadedContact]:
     """Loaded TCA of one side at the unloaded TCA's positions, one result per torque.
 
@@ -315,11 +326,13 @@ def loaded_contact(
     torques_nm
         Output torques on the gear (N m).
     compliance
-        ``compliance(pair_patches, keep) -> columns``: ``columns(idx) -> (m, len(idx))`` the
-        compliance (mm/N) between a pair's ``m`` candidate patches (flat indices ``keep`` of
-        its patch grid) and those of them numbered ``idx``: both teeth's bending and the
-        contact's local compliance, a symmetric positive definite matrix asked for by columns
-        (the load distribution needs those of the patches it tries only).
+        ``compliance(pairs) -> [columns, ...]``: for each ``(pair_patches, keep)`` of
+        ``pairs`` (a pair's patches and the flat indices of its candidates, ``m`` of them),
+        ``columns(idx) -> (m, len(idx))``: the compliance (mm/N) between the candidates and
+        those of them numbered ``idx``, both teeth's bending and the contact's local
+        compliance, a symmetric positive definite matrix asked for by columns (the load
+        distribution needs those of the patches it tries only). One call for all the pairs
+        of a batch of positions.
     frame
         The pattern coordinates (:class:`gearopt.mesh.ToothFrame`).
     grid
@@ -342,7 +355,9 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     top = max(torques)
     for _ in range(3):
         prepared = _prepare(field, u, grid, compliance)
-        at_top = [_solve(pos, top) for pos in prepared]
+        at_top = []
+        for pos in prepared:  # each from the last one's lag
+            at_top.append(_solve(pos, top, theta_rad=at_top[-1][1] if at_top else None))
         if top == 0.0 or not any(
             _truncated(pos, per_pair) for pos, (per_pair, _) in zip(prepared, at_top, strict=True)
         ):
@@ -402,7 +417,7 @@ def _resolved_pressure(field, u, result: LoadedContact, torque_nm, grid, complia
     fine = replace(grid, across=21, max_half_width_mm=1.5 * half)
     for _ in range(3):
         (pos,) = _prepare(field, u[j], fine, compliance)
-        per_pair, _ = _solve(pos, torque_nm)
+        per_pair, _ = _solve(pos, torque_nm, theta_rad=load.theta_rad)
         sides = [
             bool(((f > 0.0) & (p.open_end | p.boundary))[:, [0, -1]].any())
             for p, f in zip(pos.patches, per_pair, strict=True)
@@ -426,9 +441,19 @@ def _refined_minimum(lte, torque_nm, g_min, prepared_at, rounds) -> float:
     k = int(np.argmin(lte))
     a, b = u[max(k - 1, 0)], u[min(k + 1, len(u) - 1)]
     best = float(lte[k])
+    order = np.argsort(u)
+    at, values_at = u[order], np.asarray(lte, float)[order]  # the LTE known so far
     for _ in range(rounds):
         x = np.linspace(a, b, REFINE_POINTS + 2)
-        values = [(g_min - _solve(pos, torque_nm)[1]) * ARCSEC for pos in prepared_at(x[1:-1])]
+        guess = np.interp(x[1:-1], at, g_min - np.asarray(values_at) / ARCSEC)
+        values = [
+            (g_min - _solve(pos, torque_nm, theta_rad=float(th))[1]) * ARCSEC
+            for pos, th in zip(prepared_at(x[1:-1]), guess, strict=True)
+        ]
+        at = np.concatenate([at, x[1:-1]])
+        values_at = np.concatenate([values_at, values])
+        order = np.argsort(at)
+        at, values_at = at[order], values_at[order]
         i = int(np.argmin(values)) + 1
         best = min(best, float(values[i - 1]))
         a, b = x[i - 1], x[i + 1]

@@ -45,6 +45,25 @@ def _compliance_of(flanks: Mapping, blank, material: Material, mesh) -> dict:
     return value
 
 
+def _pair_columns(p: PairPatches, keep, pinion, gear, composite):
+    """The compliance columns of one pair's candidate patches: Love's rectangles between the
+    patches plus both teeth's influence numbers (``(model, weights)`` of each member's
+    table at the patches), the tables' products formed when first asked for."""
+    x, y = p.x_mm.ravel()[keep], p.y_mm.ravel()[keep]
+    a, b = 0.5 * p.length_mm.ravel()[keep], 0.5 * p.width_mm.ravel()[keep]
+    products = []
+
+    def columns(cols: np.ndarray) -> np.ndarray:
+        if not products:
+            products.extend(w @ model.table_mm_per_n for model, w in (pinion, gear))
+        out = halfspace_columns_mm_per_n(x, y, a, b, cols, composite)
+        for g, (_, w) in zip(products, (pinion, gear), strict=True):
+            out = out + g @ w[cols].T
+        return out
+
+    return columns
+
+
 def loaded_sides(
     pair, sides: Mapping, blank, load: LoadOptions, *, which=("drive", "coast")
 ) -> dict[str, list[LoadedContact]]:
@@ -75,18 +94,20 @@ def loaded_sides(
         pinion = models["pinion"][field.pinion.flank]
         gear = models["gear"][field.gear.flank]
 
-        def compliance(p: PairPatches, keep, pinion=pinion, gear=gear):
-            x, y = p.x_mm.ravel()[keep], p.y_mm.ravel()[keep]
-            a, b = 0.5 * p.length_mm.ravel()[keep], 0.5 * p.width_mm.ravel()[keep]
-            w1 = pinion.weights(p.face_mm.ravel()[keep], p.profile_mm.ravel()[keep])
-            w2 = gear.weights(p.gear_face_mm.ravel()[keep], p.gear_profile_mm.ravel()[keep])
-            g1, g2 = w1 @ pinion.table_mm_per_n, w2 @ gear.table_mm_per_n
+        def compliance(pairs, pinion=pinion, gear=gear) -> list:
+            picked = [(p, k) for p, k in pairs]
+            sizes = np.cumsum([k.size for _, k in picked])[:-1]
 
-            def columns(cols: np.ndarray) -> np.ndarray:
-                local = halfspace_columns_mm_per_n(x, y, a, b, cols, composite)
-                return local + g1 @ w1[cols].T + g2 @ w2[cols].T
+            def flat(name):
+                return np.concatenate([getattr(p, name).ravel()[k] for p, k in picked])
 
-            return columns
+            # the weights of all pairs in one call each (numpy's overhead paid once)
+            w1 = np.split(pinion.weights(flat("face_mm"), flat("profile_mm")), sizes)
+            w2 = np.split(gear.weights(flat("gear_face_mm"), flat("gear_profile_mm")), sizes)
+            return [
+                _pair_columns(p, k, (pinion, a), (gear, b), composite)
+                for (p, k), a, b in zip(picked, w1, w2, strict=True)
+            ]
 
         out[side] = loaded_contact(
             field,
