@@ -23,7 +23,13 @@ from gearopt.assembly import Misalignment
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank_jet import FlankJet, cross
 from gearopt.load_options import LoadOptions
-from gearopt.loaded.separations import contact_patches, flank_points, position_patches
+from gearopt.loaded.separations import (
+    contact_patches,
+    flank_jets,
+    flank_point,
+    flank_points,
+    position_patches,
+)
 from gearopt.studyfile import load_study_spec
 from gearopt.trial import evaluate_trial
 
@@ -443,3 +449,25 @@ def test_the_patches_of_a_batch_are_each_positions_own(section53):
                 np.testing.assert_allclose(getattr(p, key), getattr(q, key), rtol=1e-12)
             np.testing.assert_array_equal(p.valid, q.valid)
             np.testing.assert_array_equal(p.boundary, q.boundary)
+
+
+@pytest.mark.parametrize("study", ["seed001_section5_3.toml", "face_milling_tapered.toml"])
+def test_the_compiled_flank_jets_are_the_interpolants_derivatives(study):
+    # the patches' points and tangents in one compiled pass: the interpolant's own points and
+    # its central differences, on a uniform-depth and a tapered-depth member, inside the flank
+    # and beyond it (where the edge cell's polynomial goes on)
+    pair = meshed_pair(gearopt.load_design(STUDIES / study), AnalysisOptions())
+    rng = np.random.default_rng(7)
+    for flank in (pair.drive.pinion, pair.coast.gear):
+        span_s = flank.face_mm[-1] - flank.face_mm[0]
+        span_t = flank.profile_mm[-1] - flank.profile_mm[0]
+        s = flank.face_mm[0] + span_s * rng.uniform(-0.1, 1.1, (40, 3))
+        t = flank.profile_mm[0] + span_t * rng.uniform(-0.1, 1.1, (40, 3))
+        jets = flank_jets(flank, s, t)
+        assert jets.shape == (40, 3, 3, 3)
+        np.testing.assert_allclose(jets[..., 0, :], flank_point(flank, s, t), rtol=0, atol=1e-9)
+        e = 1e-4
+        d_s = (flank_point(flank, s + e, t) - flank_point(flank, s - e, t)) / (2 * e)
+        d_t = (flank_point(flank, s, t + e) - flank_point(flank, s, t - e)) / (2 * e)
+        np.testing.assert_allclose(jets[..., 1, :], d_s, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(jets[..., 2, :], d_t, rtol=0, atol=1e-6)

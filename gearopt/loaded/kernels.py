@@ -1,4 +1,5 @@
-"""Compiled kernels of loaded contact (numba): the half-space compliance columns.
+"""Compiled kernels of loaded contact (numba): the half-space compliance columns, the flank's
+points and tangents at the contact patches.
 
 :func:`halfspace_columns` fills columns of the symmetric half-space compliance of rectangular
 patches (:func:`gearopt.loaded.halfspace.halfspace_columns_mm_per_n` checks the input and
@@ -20,7 +21,7 @@ try:  # pragma: no cover - depends on the installed extras
 except ImportError:  # pragma: no cover
     numba = None
 
-__all__ = ["ENABLED", "halfspace_columns", "warm"]
+__all__ = ["ENABLED", "flank_jets", "halfspace_columns", "warm"]
 
 ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
 
@@ -135,6 +136,66 @@ def halfspace_columns(x, y, a, b, columns, factor, far_ratio, out):
                 row[i] = 0.5 * factor * (near_j + near_i)
 
 
+@_compiled
+def flank_jets(s, t, grid, coef, out):
+    """Points of a flank's local interpolant and their tangents at grid coordinates ``(s, t)``
+    (``(n,)`` each; :func:`gearopt.loaded.separations.flank_point` and its derivatives):
+    writes ``out`` (``(n, 3, 3)``: the point, d/ds, d/dt, member frame). ``grid``: the cells'
+    origin, scale and last index along the face and the profile, cells per row, sin and cos
+    of the pitch angle, the taper (flag, pivot, alpha, beta); ``coef`` the cells' bicubics
+    (:class:`gearopt.flank.HermiteCells`)."""
+    s0, fscale, last_row, t0, pscale, last_col, columns, sg, cg, tapered, pivot, al, be = grid
+    for k in range(s.shape[0]):
+        x = (s[k] - s0) * fscale
+        y = (t[k] - t0) * pscale
+        if not math.isfinite(x):
+            x = -1.0
+        if not math.isfinite(y):
+            y = -1.0
+        i = int(min(max(x, 0.0), last_row))
+        j = int(min(max(y, 0.0), last_col))
+        u = x - i
+        v = y - j
+        c = int(i * columns + j)
+        theta = 0.0
+        theta_u = 0.0
+        theta_v = 0.0
+        for a in range(3, -1, -1):  # Horner in u over the rows c_a(v) = sum_b c_ab v^b
+            c3, c2, c1, c0 = (
+                coef[c, 4 * a + 3],
+                coef[c, 4 * a + 2],
+                coef[c, 4 * a + 1],
+                coef[c, 4 * a],
+            )
+            w = ((c3 * v + c2) * v + c1) * v + c0
+            dw = (3.0 * c3 * v + 2.0 * c2) * v + c1
+            theta_u = theta_u * u + theta
+            theta = theta * u + w
+            theta_v = theta_v * u + dw
+        theta_s = theta_u * fscale
+        theta_t = theta_v * pscale
+        if tapered:
+            h = t[k] + (s[k] - pivot) * (al + be * t[k])
+            h_s = al + be * t[k]
+            h_t = 1.0 + (s[k] - pivot) * be
+        else:
+            h = t[k]
+            h_s = 0.0
+            h_t = 1.0
+        big_r = s[k] * sg + h * cg
+        ct, st = math.cos(theta), math.sin(theta)
+        r_s, r_t = sg + h_s * cg, h_t * cg
+        out[k, 0, 0] = big_r * ct
+        out[k, 0, 1] = big_r * st
+        out[k, 0, 2] = s[k] * cg - h * sg
+        out[k, 1, 0] = r_s * ct - big_r * st * theta_s
+        out[k, 1, 1] = r_s * st + big_r * ct * theta_s
+        out[k, 1, 2] = cg - h_s * sg
+        out[k, 2, 0] = r_t * ct - big_r * st * theta_t
+        out[k, 2, 1] = r_t * st + big_r * ct * theta_t
+        out[k, 2, 2] = -h_t * sg
+
+
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process (on one patch),
     before worker processes start: they then load the cache rather than compile it side by
@@ -143,3 +204,5 @@ def warm() -> None:
         return
     one = np.ones(1)
     halfspace_columns(one, one, one, one, np.zeros(1, np.intp), 1.0, 4.0, np.empty((1, 1)))
+    grid = (0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1, 0.0, 1.0, False, 0.0, 0.0, 0.0)
+    flank_jets(one, one, grid, np.zeros((1, 16)), np.empty((1, 3, 3)))

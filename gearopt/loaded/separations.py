@@ -29,11 +29,13 @@ from numpy.typing import NDArray
 from gearopt.contact import ClearanceField
 from gearopt.flank import FlankMap, axial_plane
 from gearopt.load_options import PatchOptions
+from gearopt.loaded import kernels
 
 __all__ = [
     "PatchOptions",
     "PairPatches",
     "contact_patches",
+    "flank_jets",
     "flank_point",
     "flank_points",
     "position_patches",
@@ -41,8 +43,6 @@ __all__ = [
 
 #: finite-difference step of the separation's curvature (mm)
 _STEP_MM = 0.05
-#: forward-difference step of the flank's tangent along the contact line (mm)
-_TANGENT_STEP_MM = 1e-4
 
 
 def flank_point(flank: FlankMap, face_mm, profile_mm) -> NDArray:
@@ -53,6 +53,39 @@ def flank_point(flank: FlankMap, face_mm, profile_mm) -> NDArray:
     big_l, big_r = axial_plane(s, flank.height_at(s, t), math.radians(flank.pitch_angle_deg))
     theta = flank.polar_angle_local(s, t)
     return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
+
+
+def flank_jets(flank: FlankMap, face_mm, profile_mm) -> NDArray:
+    """``(..., 3, 3)``: points of a flank's local interpolant at grid coordinates ``(s, t)``
+    (as :func:`flank_point`) and their derivatives d/ds and d/dt, member frame, unturned
+    (one compiled pass, :func:`gearopt.loaded.kernels.flank_jets`)."""
+    s, t = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
+    cells, taper = flank.cells, flank.taper
+    g = math.radians(flank.pitch_angle_deg)
+    grid = (
+        float(cells.face0_mm),
+        float(cells.face_scale),
+        float(cells.last_row),
+        float(cells.profile0_mm),
+        float(cells.profile_scale),
+        float(cells.last_column),
+        int(cells.columns),
+        math.sin(g),
+        math.cos(g),
+        taper is not None,
+        float(taper.pivot_mm) if taper is not None else 0.0,
+        float(taper.alpha) if taper is not None else 0.0,
+        float(taper.beta) if taper is not None else 0.0,
+    )
+    out = np.empty((s.size, 3, 3))
+    kernels.flank_jets(
+        np.ascontiguousarray(s).ravel(),
+        np.ascontiguousarray(t).ravel(),
+        grid,
+        np.ascontiguousarray(cells.coefficients, dtype=float),
+        out,
+    )
+    return out.reshape(s.shape + (3, 3))
 
 
 def flank_points(flank: FlankMap, face_mm: NDArray, profile_mm: NDArray):
@@ -224,15 +257,14 @@ def position_patches(
         + ext_t[:, :, None] * major[:, None, None, 1]
         + off * minor[:, None, None, 1]
     )
-    points = flank_point(pinion, es, eh)
+    jets = flank_jets(pinion, es, eh)
+    points = jets[..., 0, :]
     s, h = es[:, 1:-1, 1:-1], eh[:, 1:-1, 1:-1]
     p = points[:, 1:-1, 1:-1]
-    # tangents: across the contact line by the strips' central differences, along it by
-    # forward differences (the strips' shifts differ)
-    e = _TANGENT_STEP_MM
-    ahead = flank_point(pinion, s + e * major[:, None, None, 0], h + e * major[:, None, None, 1])
-    p_major = (ahead - p) / e
-    p_minor = (points[:, 1:-1, 2:] - points[:, 1:-1, :-2]) / (2.0 * dw[:, None, None, None])
+    # the tangents along the contact line and across it
+    p_s, p_t = jets[:, 1:-1, 1:-1, 1, :], jets[:, 1:-1, 1:-1, 2, :]
+    p_major = p_s * major[:, None, None, :1] + p_t * major[:, None, None, 1:]
+    p_minor = p_s * minor[:, None, None, :1] + p_t * minor[:, None, None, 1:]
     normal = np.cross(p_major, p_minor)
     area = np.linalg.norm(normal, axis=-1)
     normal /= area[..., None]
