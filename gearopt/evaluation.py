@@ -40,6 +40,10 @@ class Evaluation:
     report
         JSON-ready details for people (what ``gearopt analyze --json`` prints), keyed by
         section (``{"tca": {...}}``); optional.
+    curves
+        Named curves for the study's ``curves`` table, ``{curve: {side: (x, y)}}`` (x and y
+        of one length, the curve's unit in its name: ``lte_50nm``, ``lte_fluctuation``); a
+        study stores them as it stores the TCA's (rows of non-finite points left out).
     """
 
     evaluator: str
@@ -47,6 +51,7 @@ class Evaluation:
     arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
     conditions: Mapping[str, Any] = field(default_factory=dict)
     report: Mapping[str, Any] = field(default_factory=dict)
+    curves: Mapping[str, Mapping[str, tuple[Any, Any]]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for key, value in self.metrics.items():
@@ -54,6 +59,15 @@ class Evaluation:
                 raise PluginError(
                     f"evaluator {self.evaluator!r} metric {key!r}", value, "must be a finite number"
                 )
+        for name, by_side in self.curves.items():
+            for side, xy in by_side.items():
+                shapes = [len(v) for v in xy] if len(xy) == 2 else None
+                if shapes is None or shapes[0] != shapes[1]:
+                    raise PluginError(
+                        f"evaluator {self.evaluator!r} curve {name!r} ({side})",
+                        shapes,
+                        "must be (x, y) of one length",
+                    )
 
 
 class BaseEvaluator(abc.ABC):

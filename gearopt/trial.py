@@ -101,6 +101,17 @@ def _curves(label: str, arrays: Mapping[str, np.ndarray]) -> list[tuple]:
     return rows
 
 
+def _named_curves(label: str, evaluation) -> list[tuple]:
+    """The curves an evaluation names itself (:attr:`gearopt.evaluation.Evaluation.curves`)."""
+    return [
+        (label, curve, side, i, float(a), float(b))
+        for curve, by_side in evaluation.curves.items()
+        for side, (x, y) in by_side.items()
+        for i, (a, b) in enumerate(zip(np.ravel(x), np.ravel(y), strict=True))
+        if math.isfinite(a) and math.isfinite(b)
+    ]
+
+
 def _patterns(label: str, evaluation) -> list[tuple]:
     """Pattern outlines of an evaluation that carries the ``tca`` evaluator's pattern arrays,
     at the marking compound of its conditions."""
@@ -170,7 +181,7 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
         metrics, curves, patterns = [], [], []
         for label, evaluation in evaluations.items():
             metrics += [(label, k, float(v)) for k, v in evaluation.metrics.items()]
-            curves += _curves(label, evaluation.arrays)
+            curves += _curves(label, evaluation.arrays) + _named_curves(label, evaluation)
             patterns += _patterns(label, evaluation)
         return TrialOutcome(
             number=number,

@@ -85,6 +85,14 @@ class LtcaEvaluator(BaseEvaluator):
         loaded = pair_loaded_contact(design, pair, sides, load)
         drive, coast = loaded["drive"], loaded["coast"]
         arrays = {"torque_nm": np.array(load.torque_nm)}
+        curves: dict[str, dict] = {}
+        for side, results in (("drive", drive), ("coast", coast)):
+            for r in results:
+                curves.setdefault(f"lte_{r.torque_nm:g}nm", {})[side] = (r.phi1_deg, r.lte_arcsec)
+            curves.setdefault("lte_fluctuation", {})[side] = (
+                np.array([r.torque_nm for r in results]),
+                np.array([r.lte_peak_to_peak_arcsec for r in results]),
+            )
         for prefix, results in (("", drive), ("coast_", coast)):
             arrays[f"{prefix}phi1_deg"] = results[0].phi1_deg
             arrays[f"{prefix}lte_arcsec"] = np.stack([r.lte_arcsec for r in results])
@@ -104,6 +112,7 @@ class LtcaEvaluator(BaseEvaluator):
                 "ltca": [r.as_dict() for r in drive],
                 "ltca_coast": [r.as_dict() for r in coast],
             },
+            curves=curves,
         )
 
 

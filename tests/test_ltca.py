@@ -354,6 +354,20 @@ def test_the_lte_study_evaluates_a_trial():
     (value,) = outcome.values
     assert 0.0 < value < 30.0
     assert set(outcome.constraints) == {"max_contact_pressure_mpa", "edge_loading"}
+    # the study tables hold the LTE curves as they hold the TCA's: one per torque and side
+    # at the TCA's positions, and the fluctuation over the duty cycle's torques
+    rows = [row for row in outcome.curves if row[0] == "ltca"]
+    names = {row[1] for row in rows}
+    fluctuation = sorted((r[3], r[4], r[5]) for r in rows if r[1:3] == ("lte_fluctuation", "drive"))
+    assert len(fluctuation) >= 2
+    for _, torque_nm, _ in fluctuation:
+        assert f"lte_{torque_nm:g}nm" in names
+        curve = [r for r in rows if r[1:3] == (f"lte_{torque_nm:g}nm", "coast")]
+        assert len(curve) >= 15 and all(math.isfinite(r[5]) for r in curve)
+    assert [t for _, t, _ in fluctuation] == [100.0, 400.0, 800.0]
+    # the stored curve is what the objective weighed (the study's duty cycle 0.2, 0.5, 0.3)
+    weighted = sum(w * pp for w, (_, _, pp) in zip((0.2, 0.5, 0.3), fluctuation, strict=True))
+    assert value == pytest.approx(weighted, rel=1e-12)
     metrics = {(label, name) for label, name, _ in outcome.metrics}
     assert ("ltca", "lte_peak_to_peak_arcsec") in metrics
 
