@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from gearopt.errors import GearoptError
-from gearopt.loaded import halfspace_columns_mm_per_n, solve_load_columns, solve_load_distribution
+from gearopt.loaded import (
+    ColumnCache,
+    halfspace_columns_mm_per_n,
+    solve_load_columns,
+    solve_load_distribution,
+)
 
 from .test_halfspace_columns import COMPOSITE, ltca_like_grid
 
@@ -245,3 +250,21 @@ def test_asymmetric_columns_and_no_convergence_are_named():
     with pytest.raises(GearoptError, match="did not converge") as err:
         solve_load_columns(columns=lambda idx: compliance[:, idx], max_iterations=0, **kw)
     assert err.value.parameter == "columns"
+
+
+def test_a_cache_kept_across_a_sweep_asks_for_each_column_once(halfspace_lcp):
+    # the torques of a sweep at one position share a ColumnCache: each column is fetched
+    # (and checked) once over the sweep, and each solve is the one of a fresh provider
+    problem = halfspace_lcp
+    provider = Provider(problem[2])
+    cache = ColumnCache(provider, problem[0].size)
+    for t in np.geomspace(2e3, 6e5, 5)[::-1]:
+        kept = solve(problem, t, provider=cache)
+        fresh = solve(problem, t)
+        assert_same(kept, fresh, rtol=1e-12)
+        assert_conditions(kept, problem, t)
+    assert len(provider.asked) == len(set(provider.asked)) < problem[0].size
+    separation, area, compliance, lever_arm = problem
+    shorter = (separation[:-1], area[:-1], compliance, lever_arm[:-1])
+    with pytest.raises(GearoptError, match="columns"):  # a cache of another size
+        solve(shorter, 1e3, provider=cache)

@@ -36,6 +36,7 @@ from gearopt.loaded.halfspace import (
     rectangle_influence_mm_per_mpa,
 )
 from gearopt.loaded.lcp import (
+    ColumnCache,
     ComplementarityResiduals,
     LoadDistribution,
     solve_load_columns,
@@ -46,6 +47,7 @@ from gearopt.loaded.pair import loaded_sides
 from gearopt.loaded.separations import PairPatches, contact_patches
 
 __all__ = [
+    "ColumnCache",
     "DEFAULT_MESH",
     "FAR_FIELD_RATIO",
     "ComplementarityResiduals",

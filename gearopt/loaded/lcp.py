@@ -70,6 +70,7 @@ import scipy.linalg
 from gearopt.errors import GearoptError
 
 __all__ = [
+    "ColumnCache",
     "ComplementarityResiduals",
     "LoadDistribution",
     "solve_load_columns",
@@ -227,8 +228,10 @@ def _check_start(start_forces_n, r, t):
     return f * (t / moment) if moment > 0.0 else None
 
 
-class _Columns:
-    """The compliance columns a solve has requested, each from the provider once.
+class ColumnCache:
+    """The compliance columns requested of a provider, each once and checked as fetched;
+    :func:`solve_load_columns` makes one per solve, or takes one kept across the solves of
+    one matrix (the torques of a sweep at one position).
 
     Column ``j`` of ``C`` is stored as row ``slot[j]`` of ``rows`` (``C`` is symmetric, so it is
     also row ``j`` of ``C``); ``requested`` counts the columns asked of the provider.
@@ -419,6 +422,7 @@ def solve_load_columns(
     separation_mm, area_mm2, lever_arm_mm, torque_n_mm
         As :func:`solve_load_distribution`.
     columns
+        A :class:`ColumnCache` of ``C`` (kept across solves), or its provider
         ``columns(idx) -> C[:, idx]``: ``idx`` an ``intp`` array of patch indices (distinct,
         not in order), the result of shape ``(n, len(idx))``, the compliance (mm/N) of a
         symmetric positive semidefinite ``C``. Each column is requested once per solve (the
@@ -448,7 +452,7 @@ def solve_load_columns(
         ``max_iterations``.
     """
     s, area, r, t = _check_vectors(separation_mm, area_mm2, lever_arm_mm, torque_n_mm)
-    if not callable(columns):
+    if not (isinstance(columns, ColumnCache) or callable(columns)):
         raise GearoptError(
             "columns", type(columns).__name__, "must be callable: columns(idx) -> C[:, idx]"
         )
@@ -463,7 +467,9 @@ def solve_load_columns(
         support = np.flatnonzero(closing == closing[first])
         return _result(s, area, r, t, np.zeros(n), theta, gaps, support, iterations)
 
-    cols = _Columns(columns, n)
+    cols = columns if isinstance(columns, ColumnCache) else ColumnCache(columns, n)
+    if cols.n != n:
+        raise GearoptError("columns", cols.n, f"must hold columns of {n} patches")
     if start is None:
         in_p = np.zeros(n, dtype=bool)
         in_p[first] = True

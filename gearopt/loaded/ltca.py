@@ -35,7 +35,7 @@ from threadpoolctl import threadpool_limits
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
 from gearopt.load_options import PatchOptions, check_torques
-from gearopt.loaded.lcp import solve_load_columns
+from gearopt.loaded.lcp import ColumnCache, solve_load_columns
 from gearopt.loaded.separations import PairPatches, position_patches
 
 __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]
@@ -159,16 +159,13 @@ def _hull(points: NDArray) -> NDArray:
 
 
 class _Columns:
-    """The compliance columns of one position's candidate patches, computed on demand and
-    kept: block-diagonal over the pairs (teeth of different pairs are separate bodies), each
-    pair's block from its ``columns(local) -> (m, len(local))``."""
+    """The compliance columns of one position's candidate patches: block-diagonal over the
+    pairs (teeth of different pairs are separate bodies), each pair's block from its
+    ``columns(local) -> (m, len(local))``."""
 
     def __init__(self, blocks, sizes) -> None:
         self._blocks = list(blocks)
         self._starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
-        # column-major and left empty: only the columns asked for are ever written
-        self._kept = [np.empty((m, m), order="F") for m in sizes]
-        self._done = [np.zeros(m, dtype=bool) for m in sizes]
         self.size = int(self._starts[-1])
 
     def __call__(self, idx) -> NDArray:
@@ -177,12 +174,9 @@ class _Columns:
         which = np.searchsorted(self._starts, idx, side="right") - 1
         for b in np.unique(which):
             cols = np.flatnonzero(which == b)
-            local = idx[cols] - self._starts[b]
-            missing = np.unique(local[~self._done[b][local]])
-            if missing.size:
-                self._kept[b][:, missing] = self._blocks[b](missing)
-                self._done[b][missing] = True
-            out[self._starts[b] : self._starts[b + 1], cols] = self._kept[b][:, local]
+            out[self._starts[b] : self._starts[b + 1], cols] = self._blocks[b](
+                idx[cols] - self._starts[b]
+            )
         return out
 
 
@@ -195,7 +189,7 @@ class _Position:
     separation_mm: NDArray
     lever_mm: NDArray
     area_mm2: NDArray
-    columns: _Columns
+    columns: ColumnCache  # kept for every torque
     lag_rad: float  # the unloaded lag (least clearance over the pairs)
     contact_factor_mm: float  # the normal factor at the unloaded contact
 
@@ -240,7 +234,7 @@ def _position(lag: float, picked, blocks) -> _Position:
         ),
         lever_mm=np.concatenate([p.factor_mm.ravel()[k] for p, k in picked]),
         area_mm2=np.concatenate([p.area_mm2.ravel()[k] for p, k in picked]),
-        columns=_Columns(blocks, [k.size for k in keeps]),
+        columns=ColumnCache(_Columns(blocks, [k.size for k in keeps]), sum(k.size for k in keeps)),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
     )
