@@ -43,7 +43,16 @@ MAX_LINES = 800
 #: the layers of ``gearopt`` (docs/architecture.md, Layers), lowest first: a module imports
 #: from its own layer or the ones below (a prefix names a package and its modules)
 LAYERS = (
-    ("numerics", ("gearopt.errors", "gearopt.validate", "gearopt.kinematics", "gearopt.solve")),
+    (
+        "numerics",
+        (
+            "gearopt.errors",
+            "gearopt.validate",
+            "gearopt.kinematics",
+            "gearopt.solve",
+            "gearopt.jit",
+        ),
+    ),
     (
         "geometry",
         (

@@ -25,14 +25,10 @@ functions run as plain Python (slow: for checks, not for studies).
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
-try:  # pragma: no cover - depends on the installed extras
-    import numba
-except ImportError:  # pragma: no cover
-    numba = None
+from gearopt.jit import ENABLED, compiled
 
 __all__ = [
     "ENABLED",
@@ -47,7 +43,6 @@ __all__ = [
     "zone_widths",
 ]
 
-ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
 
 _TO_TURNS = 0.5 / math.pi
 _TURN = 2.0 * math.pi
@@ -57,20 +52,7 @@ _STENCIL_S = np.array([0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 1.0, -1.0, -1.0])
 _STENCIL_T = np.array([0.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
 
 
-def _compiled(func=None, *, inline=False):
-    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (plain
-    Python); ``inline``:
-    inlined into its callers (the point evaluations, which take tuples of tables: a call
-    boundary would cost more than the evaluation)."""
-    if func is None:
-        return lambda f: _compiled(f, inline=inline)
-    if not ENABLED:
-        return func
-    options = {"inline": "always"} if inline else {}
-    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
-
-
-@_compiled(inline=True)
+@compiled(inline=True)
 def _hermite(coef, k, u, v):
     """The bicubic of cell ``k`` (``coef`` is ``(cells, 16)``, c_ab at ``4 a + b``) at
     ``(u, v)``: Horner as :func:`gearopt.flank.hermite_cells`."""
@@ -81,7 +63,7 @@ def _hermite(coef, k, u, v):
     return ((w3 * u + w2) * u + w1) * u + w0
 
 
-@_compiled(inline=True)
+@compiled(inline=True)
 def _corner(x, limit):
     """The cell's corner along one unit grid coordinate: ``trunc(fmin(fmax(x, 0), limit))``
     (a NaN coordinate takes 0)."""
@@ -91,7 +73,7 @@ def _corner(x, limit):
     return float(int(a))
 
 
-@_compiled(inline=True)
+@compiled(inline=True)
 def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
     """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``ContactEngine``'s
     qx, qy and the qz parts of the gear's unit coordinates; ``theta`` = atan2(o1, o0)) on a
@@ -116,7 +98,7 @@ def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
     return gap * sense, valid, radius
 
 
-@_compiled
+@compiled
 def node_xy(rows, side, count, xy, z, out):
     """The first two linear outputs (qx, qy in the gear frame) of the nodes of
     :func:`node_fields` into ``out`` (``(2, n, m)``, by node column; 1 beyond the row's
@@ -132,7 +114,7 @@ def node_xy(rows, side, count, xy, z, out):
         out[:, r, count[k] :] = 1.0  # (padding: a harmless angle, never read)
 
 
-@_compiled
+@compiled
 def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
     """Node fields of rows r (``rows`` as :func:`clearance_at`'s, ``side``: ``(n,)``) on the
     generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
@@ -166,14 +148,14 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
             out[2, r, g] = radius
 
 
-@_compiled
+@compiled
 def _evaluate(rows, r, s, t, pinion, gear, cells):
     """:func:`_point_in` compiled once, called: the evaluations outside the stencil (a copy
     inlined at each call site would multiply the compile time)."""
     return _point_in(rows, r, s, t, pinion, gear, cells)
 
 
-@_compiled(inline=True)
+@compiled(inline=True)
 def _point_in(rows, r, s, t, pinion, gear, cells):
     """Clearance of the pinion point at grid coordinates ``(s, t)`` on row ``r`` (as
     :func:`clearance_at`): ``(delta, valid)``, valid on the gear flank and in the pinion's
@@ -202,7 +184,7 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     return gap, on and cells[cell] and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
 
 
-@_compiled
+@compiled
 def clearance_at(rows, sh, pinion, gear, delta, valid):
     """Clearance at pinion grid coordinates ``sh`` (``(2, n, m)``: m points on each of n rows)
     by the pinion's local interpolant; writes ``delta`` (the smooth extension beyond the
@@ -219,7 +201,7 @@ def clearance_at(rows, sh, pinion, gear, delta, valid):
             )
 
 
-@_compiled(inline=True)
+@compiled(inline=True)
 def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
     """One row of :func:`gearopt.contact._pseudo_newton`: ``(step_s, step_h, curved_s,
     curved_h)``."""
@@ -267,7 +249,7 @@ def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
     )
 
 
-@_compiled
+@compiled
 def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25, first=0):
     """The clearance on the refinement's stencil around ``(s, t)`` (``fraction`` of a
     ``cell``): centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f`` from point
@@ -283,7 +265,7 @@ def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25, first=0):
     return valid
 
 
-@_compiled
+@compiled
 def refine(
     rows,
     s,
@@ -375,7 +357,7 @@ def refine(
                 _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r], 0.25, 1)
 
 
-@_compiled(inline=True)
+@compiled(inline=True)
 def _row_at(maker, phi, rows):
     """The one-row constants ``rows`` (as :func:`clearance_at`'s, filled in place) at pinion
     angle ``phi``, gear angle 0: ``maker`` = (the rotation table ``(8, 2)``, the side's gear
@@ -392,7 +374,7 @@ def _row_at(maker, phi, rows):
     row_pinion_offset[0] = pinion_offset
 
 
-@_compiled
+@compiled
 def tangency(rows, s, t, cell, pinion, gear, generated, f):
     """The tangency point of the flanks on a one-row ``rows``: the unconstrained minimum of
     the clearance over the pinion flank's smooth extension (where the gradient of the
@@ -442,7 +424,7 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
     return False, s, t, False
 
 
-@_compiled
+@compiled
 def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generated):
     """Where the tangency point (:func:`tangency`) leaves the flanks, near pinion angle
     ``phi`` where the contact point is near ``(s, t)``: stepping by ``step`` (signed, toward
@@ -505,7 +487,7 @@ def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generat
     return True, a, b, s, t
 
 
-@_compiled
+@compiled
 def lowest_nodes(field, keep, side, pick, values):
     """The lowest nodes of each row of ``field`` (``(n, nodes)``) among its side's refinable
     nodes (``keep[side[r]]``), as many as ``pick`` has columns, in ascending order (ties: the
@@ -530,7 +512,7 @@ def lowest_nodes(field, keep, side, pick, values):
             values[r, c] = best
 
 
-@_compiled(inline=True)
+@compiled(inline=True)
 def _zone_value(f, k, compound, face, profile, points, perp, tk, big):
     """The separation on line k at ``tk`` minus the compound (``big`` minus it off the grid),
     bilinear as :func:`gearopt.mesh.pattern.widths`'s ``value``."""
@@ -552,7 +534,7 @@ def _zone_value(f, k, compound, face, profile, points, perp, tk, big):
     return val - compound
 
 
-@_compiled
+@compiled
 def zone_widths(f, compound, face, profile, points, perp, tau, big, out):
     """:func:`gearopt.mesh.pattern.widths` line by line: the extent of {f < compound} (``f``:
     ``(K, n_f, n_p)`` separations, capped at ``big``, bilinear between the nodes) along each

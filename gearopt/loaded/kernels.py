@@ -12,32 +12,15 @@ False and the same functions run as plain Python (slow: for checks, not for stud
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
-try:  # pragma: no cover - depends on the installed extras
-    import numba
-except ImportError:  # pragma: no cover
-    numba = None
+from gearopt.jit import ENABLED, compiled
 
 __all__ = ["ENABLED", "flank_jets", "halfspace_columns", "warm"]
 
-ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
 
-
-def _compiled(func=None, *, inline=False):
-    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is (plain
-    Python); ``inline``: inlined into its callers."""
-    if func is None:
-        return lambda f: _compiled(f, inline=inline)
-    if not ENABLED:
-        return func
-    options = {"inline": "always"} if inline else {}
-    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
-
-
-@_compiled(inline=True)
+@compiled(inline=True)
 def _love(dx, dy, a, b):
     """Love's integral of 1 / distance over the rectangle of half-widths ``a, b`` whose centre
     lies at ``(dx, dy)`` from the field point (mm).
@@ -83,7 +66,7 @@ def _love(dx, dy, a, b):
     return total
 
 
-@_compiled
+@compiled
 def halfspace_columns(x, y, a, b, columns, factor, far_ratio, out):
     """``out[k, i]``: the symmetric half-space compliance between patches ``i`` and
     ``columns[k]`` (mm/N), ``out`` of shape ``(len(columns), n)``.
@@ -136,7 +119,7 @@ def halfspace_columns(x, y, a, b, columns, factor, far_ratio, out):
                 row[i] = 0.5 * factor * (near_j + near_i)
 
 
-@_compiled
+@compiled
 def flank_jets(s, t, grid, coef, out):
     """Points of a flank's local interpolant and their tangents at grid coordinates ``(s, t)``
     (``(n,)`` each; :func:`gearopt.loaded.separations.flank_point` and its derivatives):

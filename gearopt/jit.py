@@ -1,0 +1,31 @@
+"""The compiled kernels' switch: numba's ``njit`` (cached on disk), or plain Python.
+
+Where numba cannot be imported, or with the environment variable ``GEAROPT_JIT=0``,
+:data:`ENABLED` is False and :func:`compiled` hands functions back as they are: the same
+kernels run as plain Python (slow: for checks, not for studies).
+"""
+
+from __future__ import annotations
+
+import os
+
+try:  # pragma: no cover - depends on the installed extras
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
+__all__ = ["ENABLED", "compiled"]
+
+ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
+
+
+def compiled(func=None, *, inline=False):
+    """``func`` compiled (cached on disk) when the kernels are enabled, else as it is;
+    ``inline``: inlined into its callers (point evaluations that take tuples of tables, where
+    a call boundary would cost more than the evaluation)."""
+    if func is None:
+        return lambda f: compiled(f, inline=inline)
+    if not ENABLED:
+        return func
+    options = {"inline": "always"} if inline else {}
+    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
