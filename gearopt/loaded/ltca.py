@@ -134,16 +134,17 @@ class LoadedContact:
 
 
 def _peak(values: NDArray, sign: float) -> float:
-    """The extreme of sampled values (max for sign +1, min for -1) refined by the parabola
-    through the extreme sample and its neighbours (the sample itself at an end)."""
+    """The extreme of sampled values (max for sign +1, min for -1): each interior local
+    extreme refined by the parabola through it and its neighbours, the ends as sampled (the
+    cycle's samples repeat it, so an extreme at an end stands again inside, where the
+    parabola refines it: ties between them decide nothing)."""
     y = sign * np.asarray(values, float)
-    k = int(np.argmax(y))
-    if 0 < k < len(y) - 1:
-        a, b, c = y[k - 1], y[k], y[k + 1]
-        curve = a - 2.0 * b + c
-        if curve < 0.0:
-            return sign * float(b - 0.125 * (c - a) ** 2 / curve)
-    return sign * float(y[k])
+    a, b, c = y[:-2], y[1:-1], y[2:]
+    curve = a - 2.0 * b + c
+    peak = (b >= a) & (b >= c) & (curve < 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        refined = np.where(peak, b - 0.125 * (c - a) ** 2 / np.where(peak, curve, -1.0), b)
+    return sign * float(max(y[0], y[-1], float(np.max(refined, initial=-np.inf))))
 
 
 def _hull(points: NDArray) -> NDArray:
@@ -265,7 +266,11 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
     a few solves where from one patch it grows it in many)."""
     first = None if start is None else _flat(pos, start)
     if first is None and theta_rad is not None:
-        first = pos.area_mm2 * np.maximum(pos.lever_mm * theta_rad - pos.separation_mm, 0.0)
+        # within a Hertzian contact the rigid interpenetration exceeds half its largest value
+        reach = pos.lever_mm * theta_rad - pos.separation_mm
+        ends = np.cumsum([k.size for k in pos.keep])[:-1]
+        half = np.concatenate([np.full(r.size, 0.5 * r.max()) for r in np.split(reach, ends)])
+        first = pos.area_mm2 * np.maximum(reach - np.maximum(half, 0.0), 0.0)
         if not first.any():
             first = None
     solved = solve_load_columns(
@@ -432,7 +437,7 @@ def _refined_minimum(lte, torque_nm, g_min, prepared_at, rounds) -> float:
     narrowed to the least one's neighbours. ``prepared_at``: the prepared positions of an
     array of positions (kept, so that the torques of a sweep share them)."""
     u = prepared_at.positions
-    k = int(np.argmin(lte))
+    k = 1 + int(np.argmin(lte[1:-1])) if len(lte) > 2 else int(np.argmin(lte))  # (see _peak)
     a, b = u[max(k - 1, 0)], u[min(k + 1, len(u) - 1)]
     best = float(lte[k])
     order = np.argsort(u)
