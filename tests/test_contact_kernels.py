@@ -158,3 +158,20 @@ def test_zone_widths_kernel_gives_the_numpy_reference(case, monkeypatch):
         for k in ("width_mm", "ellipse_major_axis_mm")
     ]
     assert got == compiled.tolist()
+
+
+def test_a_misalignment_that_leaves_no_refinable_node_is_reported_not_raised():
+    # seed 003 case A with a 4.99 deg shaft-angle error: at some positions no refinable node
+    # of a pair faces the gear, while the cycle's extra evaluations (near rows) still refine;
+    # the engine raised IndexError there (an empty row set and one "first" flag). Now every
+    # position reports its contact, at the flanks' edges
+    design = gearopt.load_design(STUDIES / "seed003_case_A.toml")
+    options = AnalysisOptions.from_conditions(
+        {"misalignment": Misalignment(shaft_angle_deg=4.99)}, design=design
+    )
+    pair = mesh_pair(
+        design, generated_flanks(design, options.grid), misalignment=options.misalignment
+    )
+    tca = contact_sides(pair, options)["drive"]
+    assert np.all(np.isfinite(tca.te_arcsec))
+    assert all(tca.edge)

@@ -575,7 +575,8 @@ class ContactEngine:
                 v, s_r, h_r, e_r = (a[: rows.size] for a in out)
             order = np.lexsort((v, rows))
             rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
-            first = np.r_[True, rows[1:] != rows[:-1]]
+            first = np.ones(rows.size, bool)  # each row's least (none where no node is)
+            first[1:] = rows[1:] != rows[:-1]
             best[rows[first]] = v[first]
             s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
             e_best[rows[first]] = e_r[first]
