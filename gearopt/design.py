@@ -194,12 +194,15 @@ class PairData:
         for name in ("shaft_angle_deg", "mean_spiral_angle_deg", "pressure_angle_deg"):
             set_(self, name, float(getattr(self, name)))
         set_(self, "face_width_mm", face)
-        if face >= 2.0 * am:
+        outer = am + 0.5 * face  # the outer cone distance R_e
+        if not outer / 20.0 <= face <= 0.5 * outer:
             raise DesignError(
                 "pair.face_width_mm",
                 face,
-                f"must be < 2 mean_cone_distance_mm = {2 * am:g} (the inner cone distance "
-                "A_m - F/2 must be positive)",
+                f"must lie between 1/20 and 1/2 of the outer cone distance R_e = "
+                f"mean_cone_distance_mm + face_width_mm / 2 = {outer:g} mm, i.e. between "
+                f"{am / 19.5:.4g} and {2.0 * am / 3.0:.4g} mm (a wider face leaves the toe's "
+                "teeth too small to cut; ISO 23509 advises at most R_e / 3)",
             )
         add = self.outer_addendum_mm if self.outer_addendum_mm is not None else derived
         ded = self.outer_dedendum_mm if self.outer_dedendum_mm is not None else 1.25 * derived

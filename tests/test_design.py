@@ -134,7 +134,21 @@ BAD = [
         ("face_width_mm = 32.0", "face_width_mm = 190.0"),
         DesignError,
         "pair.face_width_mm",
-        "inner cone distance",
+        "1/2 of the outer cone distance",
+    ),
+    (
+        "face width over half the outer cone distance",  # A_m = 91.265: at most 60.84 mm
+        ("face_width_mm = 32.0", "face_width_mm = 61.0"),
+        DesignError,
+        "pair.face_width_mm",
+        "between 4.68 and 60.84 mm",
+    ),
+    (
+        "face width under a twentieth of the outer cone distance",
+        ("face_width_mm = 32.0", "face_width_mm = 0.001"),
+        DesignError,
+        "pair.face_width_mm",
+        "between 1/20 and 1/2",
     ),
     (
         "bad hand",
