@@ -302,7 +302,16 @@ def outer_phase_rad(
         d = np.array([math.cos(angle), math.sin(angle)])
         w = centre - other_centre
         bq = float(d @ w)
-        return centre + (-bq + math.sqrt(bq * bq - float(w @ w) + other_radius**2)) * d
+        disc = bq * bq - float(w @ w) + other_radius**2
+        if not disc >= 0.0:
+            raise SettingsError(
+                "machine.inner_cutter_radius_mm, outer_cutter_radius_mm",
+                (inner.cutter_radius_mm, outer.cutter_radius_mm),
+                f"the blade circles must meet half a blade group (180/{blade_groups} deg) away "
+                "from the mean point, where the next blade cuts: these radii are too far apart "
+                "or too small for the cone distance",
+            )
+        return centre + (-bq + math.sqrt(disc)) * d
 
     o_i, a_i = centre_and_angle(inner)
     o_o, a_o = centre_and_angle(outer)

@@ -291,3 +291,15 @@ def test_conjugate_members_touch_at_the_pitch_point(conjugate):
         p, g = at_pitch_point("pinion", pinion_flank), at_pitch_point("gear", gear_flank)
         assert np.abs(p["point"] - g["point"]).max() < 1e-9
         assert np.abs(p["normal"] + g["normal"]).max() < 1e-9
+
+
+def test_cutter_radii_whose_blades_cannot_follow_are_a_clear_error():
+    # r_ci = 8.5 mm passes "> m_b N_b / 2 = 8.493 mm", yet with r_co = 75.5 mm the outer blade
+    # half a blade group away never meets the inner blade's circle (a math domain error before)
+    design = gearopt.with_overrides(
+        gearopt.load_design(STUDIES / "seed001_section5_3.toml"),
+        {"machine.inner_cutter_radius_mm": 8.5},
+    )
+    with pytest.raises(GearoptError) as info:
+        gearopt.basic_settings(design)
+    assert "inner_cutter_radius_mm" in str(info.value) and "(8.5, 75.5)" in str(info.value)
