@@ -9,7 +9,6 @@ synthesises the settings from a ``[synthesis]`` table). The file's tables are li
 from __future__ import annotations
 
 import copy
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -21,7 +20,7 @@ from gearopt.errors import DesignError, GearoptError
 from gearopt.load_options import LoadOptions
 from gearopt.plugins import get_machine_model
 from gearopt.te_target import TETarget
-from gearopt.validate import check_keys, read_table
+from gearopt.validate import check_keys, read_table, read_toml
 
 if TYPE_CHECKING:
     import pluggy
@@ -112,10 +111,7 @@ def parse_design(
 
 def loads_design(text: str, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
     """Parse a design from TOML text."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError("design", rule=f"malformed TOML: {exc}") from None
+    data = read_toml(text, lambda rule: DesignError("design", rule=rule))
     return parse_design(data, plugin_manager=plugin_manager)
 
 
@@ -130,10 +126,7 @@ def load_design(path: str | Path, *, plugin_manager: pluggy.PluginManager | None
         raise DesignError(
             "design file", str(path), f"cannot be read as UTF-8 text ({exc})"
         ) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError("design file", str(path), f"malformed TOML: {exc}") from None
+    data = read_toml(text, lambda rule: DesignError("design file", str(path), rule))
     return parse_design(data, plugin_manager=plugin_manager, path=str(path))
 
 

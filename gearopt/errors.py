@@ -13,6 +13,7 @@ from typing import Any
 
 __all__ = [
     "GearoptError",
+    "shortened",
     "DesignError",
     "UnknownKeyError",
     "SettingsError",
@@ -22,6 +23,19 @@ __all__ = [
 ]
 
 _MISSING = object()
+
+
+#: the longest value an error message repeats (characters of its repr)
+LONGEST_VALUE = 120
+
+
+def shortened(value: Any) -> str:
+    """``repr(value)``, cut to :data:`LONGEST_VALUE` characters with a note of its length
+    (an error message names the value it was given, not all 50 MB of it)."""
+    text = repr(value)
+    if len(text) <= LONGEST_VALUE:
+        return text
+    return f"{text[: LONGEST_VALUE - 20]}... ({len(text)} characters)"
 
 
 class GearoptError(ValueError):
@@ -46,7 +60,7 @@ class GearoptError(ValueError):
         if value is _MISSING:
             message = f"{parameter}: {rule}"
         else:
-            message = f"{parameter} = {value!r}: {rule}"
+            message = f"{parameter} = {shortened(value)}: {rule}"
         super().__init__(message)
 
 

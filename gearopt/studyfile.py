@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import itertools
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -56,6 +55,7 @@ from gearopt.design_files import load_design, with_overrides
 from gearopt.errors import GearoptError, PluginError, StudyError
 from gearopt.machine import SearchDimension
 from gearopt.plugins import evaluators, get_machine_model, objectives
+from gearopt.validate import read_toml
 
 __all__ = [
     "SAMPLERS",
@@ -365,9 +365,10 @@ def load_study_spec(path: str | Path) -> StudySpec:
     """Read and validate a study file."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise StudyError("study file", str(path), "does not exist") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError("study file", str(path), f"malformed TOML: {exc}") from None
+    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
+        raise StudyError("study file", str(path), f"cannot be read as UTF-8 text ({exc})") from None
+    data = read_toml(text, lambda rule: StudyError("study file", str(path), rule))
     return parse_study_spec(data, path=path)

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Iterable, Mapping
+import tomllib
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from gearopt.errors import DesignError, UnknownKeyError
+from gearopt.errors import DesignError, GearoptError, UnknownKeyError
 
 __all__ = [
     "check_keys",
@@ -24,7 +25,32 @@ __all__ = [
     "read_choice",
     "read_member_pair",
     "read_table",
+    "read_toml",
+    "MAX_TOML_CHARACTERS",
 ]
+
+#: the longest design or study file read (characters): the largest real ones hold a few thousand
+MAX_TOML_CHARACTERS = 1_000_000
+
+
+def read_toml(text: str, error: Callable[[str], GearoptError]) -> dict:
+    """The tables of a design or study file's TOML text. A UTF-8 byte-order mark is dropped;
+    text over :data:`MAX_TOML_CHARACTERS`, malformed TOML and nesting deeper than the parser
+    goes raise ``error(rule)``."""
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    if len(text) > MAX_TOML_CHARACTERS:
+        raise error(
+            f"holds {len(text)} characters: a design or study file holds at most "
+            f"{MAX_TOML_CHARACTERS}"
+        )
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"malformed TOML: {exc}") from None
+    except RecursionError:
+        raise error("malformed TOML: arrays or tables nested too deeply") from None
+
 
 _UNIT_SUFFIXES = ("_mm", "_deg", "_rad", "_in", "_inch", "_m", "_um", "_arcsec", "_per_mm")
 

@@ -8,6 +8,7 @@ import pytest
 
 import gearopt
 from gearopt.errors import DesignError, GearoptError, UnknownKeyError
+from gearopt.studyfile import load_study_spec
 
 from .conftest import STUDIES
 
@@ -379,3 +380,30 @@ def test_errors_are_value_errors_and_carry_their_parts():
     assert isinstance(exc, GearoptError)
     assert (exc.parameter, exc.value) == ("pair.pinion_teeth", 3)
     assert str(exc) == "pair.pinion_teeth = 3: must be >= 5 and <= 500"
+
+
+def test_what_a_careless_or_hostile_file_holds_is_read_or_refused_in_one_line(
+    table3_text, tmp_path
+):
+    # issue 27: a byte-order mark (Windows editors write one) is no reason to refuse a file
+    marked = tmp_path / "marked.toml"
+    marked.write_text("\ufeff" + table3_text, encoding="utf-8")
+    assert gearopt.load_design(marked).pair.face_width_mm == 32.0
+    # arrays nested 2000 deep: one line, not a 3000-line RecursionError
+    deep = table3_text + "\n[te_target]\nv = " + "[" * 2000 + "]" * 2000 + "\n"
+    with pytest.raises(DesignError) as info:
+        gearopt.loads_design(deep)
+    assert "nested too deeply" in str(info.value) and "\n" not in str(info.value)
+    # a file far beyond any design's size is refused before it is parsed
+    huge = table3_text.replace("[pair]", '[pair]\nnote = "' + "x" * 2_000_000 + '"')
+    with pytest.raises(DesignError, match="at most 1000000"):
+        gearopt.loads_design(huge)
+    # an unknown key holding a long string: the message names it, not all of it
+    long = table3_text.replace("[pair]", '[pair]\nnote = "' + "x" * 50_000 + '"')
+    with pytest.raises(UnknownKeyError) as info:
+        gearopt.loads_design(long)
+    assert len(str(info.value)) < 1000 and "(50002 characters)" in str(info.value)
+    study = tmp_path / "study.toml"
+    study.write_bytes(b"\xff\xfe" + b"\x00" * 10)
+    with pytest.raises(GearoptError, match="cannot be read as UTF-8 text"):
+        load_study_spec(study)
