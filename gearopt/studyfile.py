@@ -217,10 +217,17 @@ def _dimension(key: str, value: Any, design: Design) -> Dimension:
             key=key,
             low=_float(bounds["low"], where),
             high=_float(bounds["high"], where),
-            log=bool(bounds.get("log", False)),
+            log=_boolean(bounds.get("log", False), f"{where}.log"),
         )
     except PluginError as exc:
         raise StudyError(where, value, exc.rule) from None
+
+
+def _boolean(value: Any, where: str) -> bool:
+    """A TOML boolean (``"no"`` or ``0`` is not one: ``bool("false")`` is True)."""
+    if not isinstance(value, bool):
+        raise StudyError(where, value, "must be true or false (a TOML boolean, unquoted)")
+    return value
 
 
 def _objective(entry: Any, kind: str, where: str, known: Mapping[str, EvaluationSpec]):
@@ -338,6 +345,8 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
     seed = study.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
         raise StudyError("study.seed", seed, "must be an integer")
+    if seed is not None and not 0 <= seed < 2**32:
+        raise StudyError("study.seed", seed, "must lie in [0, 2^32) (numpy's random seeds)")
     default_name = Path(path).stem if path else "study"
     spec = StudySpec(
         name=str(study.get("name", default_name)),
@@ -349,7 +358,7 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         sampler=str(study.get("sampler", "tpe")),
         seed=seed,
         pick=str(study.get("pick", "utopia")),
-        artifacts=bool(study.get("artifacts", False)),
+        artifacts=_boolean(study.get("artifacts", False), "study.artifacts"),
         path=str(path) if path else None,
     )
     given = tuple(spec.check_params(p, f"enqueue[{i}]") for i, p in enumerate(_given(data)))

@@ -121,6 +121,13 @@ def test_example_study_file_is_valid():
         (("= 75.0\n", "= 80.0\n"), "enqueue[0].machine.pinion.inner_cutter_radius_mm"),
         (('sampler = "tpe"', 'sampler = "cmaes2"'), "study.sampler"),
         (('name = "worst_te"', 'name = "backlash_window"'), "objectives[0].name"),
+        # issue 27: booleans are booleans ("no" and "false" are true in Python), seeds numpy's
+        (('sampler = "tpe"', 'sampler = "tpe"\nartifacts = "no"'), "study.artifacts"),
+        (
+            ("= [74.0, 76.0]", '= { low = 74.0, high = 76.0, log = "false" }'),
+            "search.machine.pinion.inner_cutter_radius_mm.log",
+        ),
+        (("seed = 20261123", "seed = -1"), "study.seed"),
     ],
 )
 def test_bad_study_files_name_the_parameter(tmp_path, edit, parameter):
