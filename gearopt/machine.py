@@ -44,9 +44,12 @@ class SearchDimension:
     log: bool = False
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):
+        width = self.high - self.low
+        if not (math.isfinite(self.low) and math.isfinite(width) and self.low < self.high):
             raise PluginError(
-                f"search dimension {self.key}", (self.low, self.high), "needs finite low < high"
+                f"search dimension {self.key}",
+                (self.low, self.high),
+                "needs finite low < high, high - low finite too",
             )
         if self.log and self.low <= 0.0:
             raise PluginError(f"search dimension {self.key}", self.low, "log scale needs low > 0")

@@ -44,6 +44,7 @@ A study file::
 from __future__ import annotations
 
 import itertools
+import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -69,6 +70,8 @@ __all__ = [
 
 SAMPLERS = ("tpe", "random", "nsga2", "qmc")
 _STUDY_KEYS = ("name", "design", "sampler", "seed", "pick", "artifacts")
+#: the most designs a ``[grid]`` may give (each a trial)
+MAX_GRID_DESIGNS = 100_000
 _TABLES = (
     "study",
     "search",
@@ -282,16 +285,29 @@ def _evaluations(table: Mapping[str, Any]) -> tuple[EvaluationSpec, ...]:
 def _given(data: Mapping[str, Any]) -> list[dict]:
     """The given designs: the ``[[enqueue]]`` entries, then every combination of ``[grid]``."""
     given = []
-    for i, entry in enumerate(data.get("enqueue", [])):
+    entries = data.get("enqueue", [])
+    if not isinstance(entries, list):
+        raise StudyError("enqueue", entries, "must be tables [[enqueue]] of design keys")
+    for i, entry in enumerate(entries):
         if not isinstance(entry, Mapping):
             raise StudyError(f"enqueue[{i}]", entry, "must be a table of design keys")
         given.append(dict(entry))
     grid = data.get("grid", {})
+    if not isinstance(grid, Mapping):
+        raise StudyError("grid", grid, "must be a table of design keys and lists of values")
     if grid:
         keys = list(grid)
         for key in keys:
             if not isinstance(grid[key], list) or not grid[key]:
                 raise StudyError(f"grid.{key}", grid[key], "must be a non-empty list of values")
+        size = math.prod(len(grid[k]) for k in keys)
+        if size > MAX_GRID_DESIGNS:
+            raise StudyError(
+                "grid",
+                f"{size} designs",
+                f"must give at most {MAX_GRID_DESIGNS} designs (the product of its lists' "
+                "lengths), counted before they are built",
+            )
         for combo in itertools.product(*(grid[k] for k in keys)):
             given.append(dict(zip(keys, combo, strict=True)))
     return given
@@ -309,6 +325,8 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         raise StudyError("study", sorted(set(study) - set(_STUDY_KEYS)), f"known: {_STUDY_KEYS}")
     if "design" not in study:
         raise StudyError("study.design", rule="name the base design file")
+    if not isinstance(study["design"], str) or not study["design"].strip():
+        raise StudyError("study.design", study["design"], "must be the base design's file name")
     design = load_design(_folder(path) / study["design"])
     fixed = data.get("fixed", {})
     if not isinstance(fixed, Mapping):

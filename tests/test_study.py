@@ -15,6 +15,7 @@ import signal
 import subprocess
 import sys
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -128,6 +129,8 @@ def test_example_study_file_is_valid():
             "search.machine.pinion.inner_cutter_radius_mm.log",
         ),
         (("seed = 20261123", "seed = -1"), "study.seed"),
+        (('design = "seed001_section5_3.toml"', "design = 5"), "study.design"),
+        (("= [74.0, 76.0]", "= [-1e308, 1e308]"), "search.machine.pinion.inner_cutter_radius_mm"),
     ],
 )
 def test_bad_study_files_name_the_parameter(tmp_path, edit, parameter):
@@ -139,6 +142,22 @@ def test_bad_study_files_name_the_parameter(tmp_path, edit, parameter):
     with pytest.raises(StudyError) as info:
         load_study_spec(path)
     assert info.value.parameter.startswith(parameter)
+
+
+def test_given_designs_are_counted_and_typed_before_any_is_built(tmp_path):
+    # issue 27: "enqueue = 5" was a traceback, a [grid] of 4 keys x 300 values a MemoryError
+    # after 29 s: the tables are checked, and the grid's size counted, first
+    data = tomllib.loads(EXAMPLE.read_text())
+    path = tmp_path / "study.toml"
+    shutil.copy(STUDIES / "seed001_section5_3.toml", tmp_path)
+    with pytest.raises(StudyError, match="must be tables"):
+        parse_study_spec({**data, "enqueue": 5}, path=path)
+    values = list(np.linspace(0.0, 1.0, 300))
+    keys = ["machine.pinion.inner_cutter_radius_mm", "machine.pinion.outer_cutter_radius_mm"]
+    keys += ["machine.gear.inner_cutter_radius_mm", "machine.gear.outer_cutter_radius_mm"]
+    with pytest.raises(StudyError) as info:  # (8.1e9 designs: built, they would not fit)
+        parse_study_spec({**data, "grid": dict.fromkeys(keys, values)}, path=path)
+    assert info.value.parameter == "grid" and "8100000000 designs" in str(info.value)
 
 
 def test_the_study_analysis_table_overrides_the_base_design(tmp_path):
