@@ -53,7 +53,7 @@ from typing import Any
 
 from gearopt.design import Design
 from gearopt.design_files import load_design, with_overrides
-from gearopt.errors import GearoptError, PluginError, StudyError
+from gearopt.errors import GearoptError, PluginError, StudyError, UnknownKeyError
 from gearopt.machine import SearchDimension
 from gearopt.plugins import evaluators, get_machine_model, objectives
 from gearopt.validate import read_toml
@@ -226,6 +226,19 @@ def _dimension(key: str, value: Any, design: Design) -> Dimension:
         raise StudyError(where, value, exc.rule) from None
 
 
+def _check_search_keys(design: Design, dims) -> None:
+    """Every searched key is one the design knows: the base design with each key at its
+    range's middle, checked for unknown keys only (a trial's design may be invalid for
+    other reasons, which its trial reports)."""
+    for d in dims:
+        try:
+            with_overrides(design, {d.key: 0.5 * (d.low + d.high)})
+        except UnknownKeyError as exc:
+            raise StudyError(f"search.{d.key}", exc.value, exc.rule) from None
+        except GearoptError:
+            pass
+
+
 def _boolean(value: Any, where: str) -> bool:
     """A TOML boolean (``"no"`` or ``0`` is not one: ``bool("false")`` is True)."""
     if not isinstance(value, bool):
@@ -348,6 +361,7 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
     if not isinstance(search, Mapping):
         raise StudyError("search", search, "must be a table of design keys")
     dims = tuple(_dimension(key, value, design) for key, value in search.items())
+    _check_search_keys(design, dims)
     evals = _evaluations(data.get("evaluations", {}))
     if not evals:
         raise StudyError("evaluations", rule="name at least one evaluation")

@@ -130,6 +130,10 @@ def test_example_study_file_is_valid():
         ),
         (("seed = 20261123", "seed = -1"), "study.seed"),
         (('design = "seed001_section5_3.toml"', "design = 5"), "study.design"),
+        (
+            ('"machine.pinion.inner_cutter_radius_mm" =', '"machine.pinion.no_such_key_mm" ='),
+            "search.machine.pinion.no_such_key_mm",
+        ),
         (("= [74.0, 76.0]", "= [-1e308, 1e308]"), "search.machine.pinion.inner_cutter_radius_mm"),
     ],
 )
