@@ -67,6 +67,7 @@ __all__ = [
     "STALE_AFTER_S",
     "RunSummary",
     "default_storage_url",
+    "masked_url",
     "enqueue",
     "open_study",
     "pick_best",
@@ -82,6 +83,25 @@ MAX_ATTEMPTS = 3
 _COORD = "gearopt_coordinator"
 _ATTEMPT = "gearopt_attempt"
 _COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP BY state")
+
+
+def masked_url(url: str) -> str:
+    """A storage URL fit to print: its password replaced by ``***`` (never echoed, in errors,
+    summaries or ``--json``)."""
+    try:
+        return sa.engine.make_url(url).render_as_string(hide_password=True)
+    except Exception:  # not a URL SQLAlchemy reads: mask what looks like user:password@
+        return re.sub(r"(://[^:/@]*:)[^@]*@", r"\1***@", str(url))
+
+
+def _masked_text(text: str, url: str) -> str:
+    """``text`` with the URL's password, wherever it stands, replaced by ``***``."""
+    try:
+        password = sa.engine.make_url(url).password
+    except Exception:
+        password = None
+    text = text.replace(url, masked_url(url))
+    return text.replace(str(password), "***") if password else text
 
 
 def default_storage_url(spec: StudySpec) -> str:
@@ -152,18 +172,21 @@ def open_study(spec: StudySpec, storage: str | None = None):
             load_if_exists=True,
         )
     except (ImportError, ModuleNotFoundError) as exc:
-        raise StudyError("storage", url, f"needs a driver that is not installed ({exc})") from None
+        raise StudyError(
+            "storage", masked_url(url), f"needs a driver that is not installed ({exc})"
+        ) from None
     except Exception as exc:  # SQLAlchemy/driver errors: a storage that cannot be opened
         if isinstance(exc, GearoptError):
             raise
-        why = f"cannot be opened ({type(exc).__name__}: {exc})"
-        raise StudyError("storage", url, why) from None
+        why = _masked_text(f"cannot be opened ({type(exc).__name__}: {exc})", url)
+        raise StudyError("storage", masked_url(url), why) from None
     wanted = [optuna.study.StudyDirection[d.upper()] for d in spec.directions]
     if list(study.directions) != wanted:
         raise StudyError(
             "study.name",
             spec.name,
-            f"exists in {url} with other directions {[d.name for d in study.directions]}",
+            f"exists in {masked_url(url)} with other directions "
+            f"{[d.name for d in study.directions]}",
         )
     _fast_sqlite(rdb.engine)
     results = ResultsStore(url, engine=rdb.engine)
@@ -605,7 +628,7 @@ def run_study(
     wall = time.perf_counter() - start
     return RunSummary(
         study=spec.name,
-        storage=url,
+        storage=masked_url(url),
         complete=complete,
         failed_this_run=failed,
         evaluated_this_run=evaluated,

@@ -467,6 +467,11 @@ def test_bad_cli_input_is_one_line(tmp_path, toy_site):
     assert run.returncode == 2 and "--trials" in run.stderr
     run = _gearopt(["study", "run", study, "--storage", "nosuchdb://x"], toy_site, check=False)
     assert run.returncode == 2 and "storage" in run.stderr
+    # issue 27: a storage's password is never echoed (a server that refuses the connection)
+    url = "postgresql://gear:s3cret-Pw@127.0.0.1:9/opt"
+    run = _gearopt(["study", "run", study, "--storage", url], toy_site, check=False)
+    assert run.returncode == 2 and "storage" in run.stderr, run.stderr
+    assert "s3cret" not in run.stderr + run.stdout and "gear:***@" in run.stderr
 
 
 def test_the_dask_backend_runs_the_evaluations_on_a_cluster(tmp_path, toy_site):
