@@ -85,6 +85,22 @@ _ATTEMPT = "gearopt_attempt"
 _COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP BY state")
 
 
+def _check_storage_url(url: str) -> None:
+    """Refuse a storage that cannot hold a study: SQLite in memory (it vanishes with the
+    coordinator, and workers and later runs never see it)."""
+    try:
+        parsed = sa.engine.make_url(url)
+    except Exception:
+        return  # the driver's own error says more
+    if parsed.get_backend_name() == "sqlite" and parsed.database in (None, "", ":memory:"):
+        raise StudyError(
+            "storage",
+            masked_url(url),
+            "must be a database file or server: an in-memory SQLite database vanishes with "
+            "the coordinator, and its results with it",
+        )
+
+
 def masked_url(url: str) -> str:
     """A storage URL fit to print: its password replaced by ``***`` (never echoed, in errors,
     summaries or ``--json``)."""
@@ -161,6 +177,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
     designs added to the file since (a design with a trial already is skipped)."""
 
     url = storage or default_storage_url(spec)
+    _check_storage_url(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
         rdb = _rdb_storage(url)

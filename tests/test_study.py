@@ -472,6 +472,10 @@ def test_bad_cli_input_is_one_line(tmp_path, toy_site):
     run = _gearopt(["study", "run", study, "--storage", url], toy_site, check=False)
     assert run.returncode == 2 and "storage" in run.stderr, run.stderr
     assert "s3cret" not in run.stderr + run.stdout and "gear:***@" in run.stderr
+    run = _gearopt(
+        ["study", "run", study, "--storage", "sqlite:///:memory:"], toy_site, check=False
+    )
+    assert run.returncode == 2 and "in-memory" in run.stderr and "Traceback" not in run.stderr
 
 
 def test_the_dask_backend_runs_the_evaluations_on_a_cluster(tmp_path, toy_site):
