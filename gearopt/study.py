@@ -68,6 +68,7 @@ __all__ = [
     "RunSummary",
     "default_storage_url",
     "masked_url",
+    "study_exists",
     "enqueue",
     "open_study",
     "pick_best",
@@ -99,6 +100,28 @@ def _check_storage_url(url: str) -> None:
             "must be a database file or server: an in-memory SQLite database vanishes with "
             "the coordinator, and its results with it",
         )
+
+
+def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
+    """Whether the storage holds the study ``spec.name``, found without creating anything
+    (no database file, schema or study where there was none)."""
+    url = storage or default_storage_url(spec)
+    _check_storage_url(url)
+    parsed = sa.engine.make_url(url)
+    if parsed.get_backend_name() == "sqlite" and not Path(parsed.database).is_file():
+        return False
+    engine = sa.create_engine(url)
+    try:
+        if "studies" not in sa.inspect(engine).get_table_names():
+            return False
+        with engine.connect() as con:
+            query = sa.text("SELECT 1 FROM studies WHERE study_name = :n")
+            return con.execute(query, {"n": spec.name}).first() is not None
+    except sqlalchemy.exc.SQLAlchemyError as exc:
+        why = _masked_text(f"cannot be read ({type(exc).__name__}: {exc})", url)
+        raise StudyError("storage", masked_url(url), why) from None
+    finally:
+        engine.dispose()
 
 
 def masked_url(url: str) -> str:

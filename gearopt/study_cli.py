@@ -113,7 +113,9 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from gearopt.export import export_study
 
     spec = load_study_spec(args.study)
-    written = export_study(spec, Path(args.out), fmt=args.format, storage=args.storage)
+    written = export_study(
+        spec, Path(args.out), fmt=args.format, storage=args.storage, force=args.force
+    )
     for path in written:
         print(path)
     return 0
@@ -156,5 +158,6 @@ def add_study_parser(sub) -> None:
     p.add_argument("study", help="study TOML file")
     p.add_argument("--format", choices=("csv", "parquet"), default="csv")
     p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--force", action="store_true", help="replace existing files")
     p.add_argument("--storage", help=storage_help)
     p.set_defaults(func=_cmd_export)

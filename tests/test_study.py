@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import optuna
+import pandas as pd
 import pytest
 import sqlalchemy as sa
 from optuna.trial import TrialState
@@ -451,10 +452,36 @@ def test_export_writes_the_trials_and_tables(tmp_path, toy_site):
     listed = _gearopt(["study", "export", study, "--out", out], toy_site).stdout.split()
     names = {Path(p).name for p in listed}
     assert {"toy_probe_trials.csv", "toy_probe_gearopt_metrics.csv"} <= names
-    import pandas as pd
 
     trials = pd.read_csv(out / "toy_probe_trials.csv")
     assert len(trials) == 3 and "params_machine.tool_tip_width_mm" in trials.columns
+
+
+def test_export_creates_no_study_and_writes_only_new_regular_files(tmp_path, toy_site):
+    # issue 27: export of a study never run created its database, the study and a WAITING
+    # trial; --out overwrote files and wrote through symbolic links
+    study = _toy_study(tmp_path)
+    out = tmp_path / "export"
+    run = _gearopt(["study", "export", study, "--out", out], toy_site, check=False)
+    assert run.returncode == 2 and "run it first" in run.stderr
+    assert not (tmp_path / "toy_probe.db").exists() and not out.exists()
+    _gearopt(["study", "run", study, "--trials", 2, "--no-progress"], toy_site)
+    out.mkdir()
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    (out / "toy_probe_trials.csv").symlink_to(victim)
+    for force in ([], ["--force"]):
+        args = ["study", "export", study, "--out", out, *force]
+        run = _gearopt(args, toy_site, check=False)
+        assert run.returncode == 2 and "symbolic link" in run.stderr
+    assert victim.read_text() == "keep me"
+    (out / "toy_probe_trials.csv").unlink()
+    first = _gearopt(["study", "export", study, "--out", out], toy_site).stdout.split()
+    run = _gearopt(["study", "export", study, "--out", out], toy_site, check=False)
+    assert run.returncode == 2 and "--force" in run.stderr
+    again = _gearopt(["study", "export", study, "--out", out, "--force"], toy_site)
+    assert again.stdout.split() == first
+    assert len(pd.read_csv(out / "toy_probe_trials.csv")) == 2
 
 
 def test_bad_cli_input_is_one_line(tmp_path, toy_site):
