@@ -102,6 +102,27 @@ def _check_storage_url(url: str) -> None:
         )
 
 
+#: the prefix of the coordinators' temporary folders (a worker's pid marker per trial)
+MARKERS_PREFIX = "gearopt-trials-"
+
+
+def _trial_markers(pid: int) -> str:
+    """A new temporary folder for the trials' markers, its owner's pid in ``owner``; first
+    the folders of coordinators of this host that are gone (killed: nothing removed them)."""
+    root = Path(tempfile.gettempdir())
+    for folder in root.glob(MARKERS_PREFIX + "*"):
+        try:
+            owner = int((folder / "owner").read_text())
+            os.kill(owner, 0)
+        except ProcessLookupError:
+            shutil.rmtree(folder, ignore_errors=True)
+        except (OSError, ValueError):  # no owner file (yet), or not ours to judge
+            continue
+    markers = tempfile.mkdtemp(prefix=MARKERS_PREFIX)
+    Path(markers, "owner").write_text(str(pid))
+    return markers
+
+
 def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
     """Whether the storage holds the study ``spec.name``, found without creating anything
     (no database file, schema or study where there was none)."""
@@ -462,7 +483,7 @@ def run_study(
     labels.update({c.label: "constraint" for c in spec.constraints})
     limit = max(10, trials) if max_failures is None else max_failures
     batch = deterministic or jobs == 1 or backend == "dask"
-    markers = tempfile.mkdtemp(prefix="gearopt-trials-")
+    markers = _trial_markers(pid)
     pending: dict[int, tuple[Any, cf.Future, dict, int]] = {}
     failed = evaluated = 0
     worker_s = 0.0

@@ -14,6 +14,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 import tomllib
 from pathlib import Path
@@ -425,6 +426,11 @@ def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
     before = _trials(db)
     running = [t for t in before if t.state == TrialState.RUNNING]
     assert running
+    # the killed coordinator's temporary folder stays behind, until the next run starts
+    folders = Path(tempfile.gettempdir()).glob("gearopt-trials-*")
+    owned = [f for f in folders if (f / "owner").is_file()]
+    left = [f for f in owned if (f / "owner").read_text() == str(proc.pid)]
+    assert len(left) == 1
     # a trial asked but not yet given its parameters never reached a worker
     killed = {t.number: t.params["machine.tool_tip_width_mm"] for t in running if t.params}
     unsampled = {t.number for t in running if not t.params}
@@ -433,6 +439,7 @@ def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
     states = _states(after)
     assert states["COMPLETE"] == 10 and "RUNNING" not in states
     assert len({t.number for t in after}) == len(after)
+    assert not left[0].exists()
     by_number = {t.number: t for t in after}
     retries = [t for t in after if "gearopt_retry_of" in t.user_attrs]
     for number, width in killed.items():
