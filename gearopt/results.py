@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import time
 from collections.abc import Iterable
 
 import sqlalchemy as sa
@@ -139,7 +140,14 @@ class ResultsStore:
 
     def __init__(self, url: str, *, engine: sa.Engine | None = None) -> None:
         self.engine = engine or sa.create_engine(url)
-        _meta.create_all(self.engine)
+        for attempt in range(5):  # another coordinator may be creating the same tables
+            try:
+                _meta.create_all(self.engine)
+                break
+            except sa.exc.DBAPIError:
+                if attempt == 4:
+                    raise
+                time.sleep(0.3 * (attempt + 1))
         with self.engine.begin() as con:
             existing = set(sa.inspect(con).get_view_names())
             for name, body in VIEWS.items():

@@ -190,7 +190,19 @@ def _rdb_storage(url: str, attempts: int = 5) -> optuna.storages.RDBStorage:
             return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
         except (sqlalchemy.exc.IntegrityError, sqlalchemy.exc.ProgrammingError):
             time.sleep(0.3 * (attempt + 1))
+        except sqlalchemy.exc.OperationalError as exc:  # SQLite's "table ... already exists"
+            if not _schema_race(exc):
+                raise
+            time.sleep(0.3 * (attempt + 1))
     return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
+
+
+def _schema_race(exc: Exception) -> bool:
+    """Whether a database error is another coordinator creating the same schema at the same
+    moment (SQLite says so with an OperationalError, other dialects with integrity or
+    programming errors)."""
+    text = str(exc).lower()
+    return "already exists" in text or "database is locked" in text
 
 
 def _engine_kwargs(url: str) -> dict:

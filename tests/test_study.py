@@ -749,3 +749,25 @@ def test_a_stop_during_a_hand_over_waits_for_it():
         assert signal.getsignal(signal.SIGTERM) is stop
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def test_two_coordinators_starting_together_on_a_fresh_sqlite_file(tmp_path, toy_site):
+    # issue 27: two coordinators creating the schema of a new SQLite file at the same moment;
+    # SQLite reports the loser's "table ... already exists" as an OperationalError, which the
+    # retry did not catch (one died in 5 of 12 pairs). Both must finish, every trial done
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    for k in range(2):
+        folder = tmp_path / f"pair{k}"
+        folder.mkdir()
+        study = _toy_study(folder)
+        args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study)]
+        args += ["--trials", "3", "--no-progress"]
+        procs = [
+            subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+            for _ in range(2)
+        ]
+        outs = [p.communicate(timeout=300) for p in procs]
+        for p, (_, err) in zip(procs, outs, strict=True):
+            assert p.returncode == 0, err.decode()[-2000:]
+        states = _states(_trials(folder / "toy_probe.db"))
+        assert states.get("COMPLETE", 0) >= 3 and "RUNNING" not in states
