@@ -31,7 +31,7 @@ import sqlalchemy as sa
 
 from gearopt.trial import TrialOutcome
 
-__all__ = ["ResultsStore", "TABLES", "VIEWS"]
+__all__ = ["ResultsStore", "SCHEMA_NAMES", "TABLES", "VIEWS"]
 
 _meta = sa.MetaData()
 
@@ -123,6 +123,9 @@ VIEWS = {
         JOIN trials t ON t.study_id = s.study_id AND t.number = m.trial_number
         WHERE t.state = 'COMPLETE'""",
 }
+
+#: every table and view gearopt makes (its schema's names)
+SCHEMA_NAMES = frozenset(_meta.tables) | frozenset(VIEWS)
 
 
 def _rows(table: sa.Table, key: dict, tuples) -> list[dict]:

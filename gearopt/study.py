@@ -59,7 +59,7 @@ from tqdm import tqdm
 from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
 from gearopt.loaded import kernels as loaded_kernels
-from gearopt.results import ResultsStore
+from gearopt.results import SCHEMA_NAMES, ResultsStore
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 
@@ -143,6 +143,46 @@ def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
         raise StudyError("storage", masked_url(url), why) from None
     finally:
         engine.dispose()
+
+
+def _check_own_tables(url: str) -> None:
+    """Refuse a database that holds tables neither Optuna's nor gearopt's (a user's own
+    SQLite file given as ``--storage``: gearopt would add its tables and views to it), unless
+    the study file says ``shared_storage = true``."""
+    try:
+        parsed = sa.engine.make_url(url)
+    except Exception:
+        return
+    if parsed.get_backend_name() == "sqlite" and not Path(parsed.database or "").is_file():
+        return
+    engine = sa.create_engine(url)
+    try:
+        inspector = sa.inspect(engine)
+        present = set(inspector.get_table_names()) | set(inspector.get_view_names())
+    except Exception:
+        return  # opening it says more
+    finally:
+        engine.dispose()
+    foreign = sorted(present - _own_tables())
+    if foreign:
+        raise StudyError(
+            "storage",
+            masked_url(url),
+            f"holds tables that are not Optuna's or gearopt's ({', '.join(foreign[:5])}"
+            f"{', ...' if len(foreign) > 5 else ''}): give a database of its own, or set "
+            "shared_storage = true in the study file's [study] table",
+        )
+
+
+def _own_tables() -> set[str]:
+    """The names of Optuna's tables (as this Optuna makes them) and gearopt's."""
+    optuna_tables = getattr(_own_tables, "cached", None)
+    if optuna_tables is None:
+        probe = optuna.storages.RDBStorage("sqlite:///:memory:")
+        optuna_tables = set(sa.inspect(probe.engine).get_table_names())
+        probe.engine.dispose()
+        _own_tables.cached = optuna_tables
+    return optuna_tables | SCHEMA_NAMES | {"sqlite_sequence"}
 
 
 def masked_url(url: str) -> str:
@@ -234,6 +274,8 @@ def open_study(spec: StudySpec, storage: str | None = None):
 
     url = storage or default_storage_url(spec)
     _check_storage_url(url)
+    if not spec.shared_storage:
+        _check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
         rdb = _rdb_storage(url)

@@ -9,6 +9,7 @@ A study file::
     seed = 7
     pick = "utopia"                     # multi-objective: utopia | "objective:<label>"
     artifacts = false                   # per-trial PNG plots as Optuna artifacts
+    shared_storage = false              # true: a database holding others' tables too
 
     [search]                            # dotted design keys: [low, high] or {low, high, log}
     "machine.pinion.inner_cutter_radius_mm" = [73.0, 77.0]
@@ -69,7 +70,7 @@ __all__ = [
 ]
 
 SAMPLERS = ("tpe", "random", "nsga2", "qmc")
-_STUDY_KEYS = ("name", "design", "sampler", "seed", "pick", "artifacts")
+_STUDY_KEYS = ("name", "design", "sampler", "seed", "pick", "artifacts", "shared_storage")
 #: the most designs a ``[grid]`` may give (each a trial)
 MAX_GRID_DESIGNS = 100_000
 _TABLES = (
@@ -134,6 +135,7 @@ class StudySpec:
     seed: int | None = None
     pick: str = "utopia"
     artifacts: bool = False
+    shared_storage: bool = False
     enqueue: tuple[Mapping[str, float], ...] = ()
     path: str | None = None
 
@@ -391,6 +393,7 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         seed=seed,
         pick=str(study.get("pick", "utopia")),
         artifacts=_boolean(study.get("artifacts", False), "study.artifacts"),
+        shared_storage=_boolean(study.get("shared_storage", False), "study.shared_storage"),
         path=str(path) if path else None,
     )
     given = tuple(spec.check_params(p, f"enqueue[{i}]") for i, p in enumerate(_given(data)))

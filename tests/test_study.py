@@ -771,3 +771,27 @@ def test_two_coordinators_starting_together_on_a_fresh_sqlite_file(tmp_path, toy
             assert p.returncode == 0, err.decode()[-2000:]
         states = _states(_trials(folder / "toy_probe.db"))
         assert states.get("COMPLETE", 0) >= 3 and "RUNNING" not in states
+
+
+def test_a_database_of_someone_elses_is_refused_unless_shared(tmp_path, toy_site):
+    # issue 27: --storage pointed at a user's own SQLite file added gearopt's 22 tables and
+    # views to it; now it is refused, untouched, unless the study file says it is shared
+    own = tmp_path / "inventory.db"
+    engine = sa.create_engine(f"sqlite:///{own}")
+    with engine.begin() as con:
+        con.execute(sa.text("CREATE TABLE parts (id INTEGER PRIMARY KEY, name TEXT)"))
+    engine.dispose()
+    before = own.read_bytes()
+    study = _toy_study(tmp_path)
+    args = ["study", "run", study, "--trials", 2, "--no-progress", "--storage", f"sqlite:///{own}"]
+    run = _gearopt(args, toy_site, check=False)
+    assert run.returncode == 2 and "parts" in run.stderr and "shared_storage" in run.stderr
+    assert own.read_bytes() == before
+    shared = _toy_study(tmp_path, extra="")
+    shared.write_text(shared.read_text().replace("seed = 11", "seed = 11\nshared_storage = true"))
+    _gearopt(args, toy_site)
+    engine = sa.create_engine(f"sqlite:///{own}")
+    with engine.connect() as con:
+        assert con.execute(sa.text("SELECT COUNT(*) FROM parts")).scalar() == 0
+    engine.dispose()
+    assert _states(_trials(own))["COMPLETE"] == 2
