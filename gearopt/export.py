@@ -9,7 +9,8 @@ import sqlalchemy as sa
 
 from gearopt.errors import NotAvailableError, StudyError
 from gearopt.results import TABLES, VIEWS
-from gearopt.study import open_study, study_exists
+from gearopt.storage import study_exists
+from gearopt.study import open_study
 from gearopt.studyfile import StudySpec
 
 __all__ = ["export_study"]

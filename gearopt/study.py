@@ -29,7 +29,6 @@ import contextlib
 import datetime as dt
 import math
 import os
-import re
 import shutil
 import signal
 import socket
@@ -59,7 +58,16 @@ from tqdm import tqdm
 from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
 from gearopt.loaded import kernels as loaded_kernels
-from gearopt.results import SCHEMA_NAMES, ResultsStore
+from gearopt.results import ResultsStore
+from gearopt.storage import (
+    check_own_tables,
+    check_storage_url,
+    default_storage_url,
+    fast_sqlite,
+    masked_text,
+    masked_url,
+    rdb_storage,
+)
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 
@@ -67,8 +75,6 @@ __all__ = [
     "STALE_AFTER_S",
     "RunSummary",
     "default_storage_url",
-    "masked_url",
-    "study_exists",
     "enqueue",
     "open_study",
     "pick_best",
@@ -84,22 +90,6 @@ MAX_ATTEMPTS = 3
 _COORD = "gearopt_coordinator"
 _ATTEMPT = "gearopt_attempt"
 _COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP BY state")
-
-
-def _check_storage_url(url: str) -> None:
-    """Refuse a storage that cannot hold a study: SQLite in memory (it vanishes with the
-    coordinator, and workers and later runs never see it)."""
-    try:
-        parsed = sa.engine.make_url(url)
-    except Exception:
-        return  # the driver's own error says more
-    if parsed.get_backend_name() == "sqlite" and parsed.database in (None, "", ":memory:"):
-        raise StudyError(
-            "storage",
-            masked_url(url),
-            "must be a database file or server: an in-memory SQLite database vanishes with "
-            "the coordinator, and its results with it",
-        )
 
 
 #: the prefix of the coordinators' temporary folders (a worker's pid marker per trial)
@@ -123,93 +113,6 @@ def _trial_markers(pid: int) -> str:
     return markers
 
 
-def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
-    """Whether the storage holds the study ``spec.name``, found without creating anything
-    (no database file, schema or study where there was none)."""
-    url = storage or default_storage_url(spec)
-    _check_storage_url(url)
-    parsed = sa.engine.make_url(url)
-    if parsed.get_backend_name() == "sqlite" and not Path(parsed.database).is_file():
-        return False
-    engine = sa.create_engine(url)
-    try:
-        if "studies" not in sa.inspect(engine).get_table_names():
-            return False
-        with engine.connect() as con:
-            query = sa.text("SELECT 1 FROM studies WHERE study_name = :n")
-            return con.execute(query, {"n": spec.name}).first() is not None
-    except sqlalchemy.exc.SQLAlchemyError as exc:
-        why = _masked_text(f"cannot be read ({type(exc).__name__}: {exc})", url)
-        raise StudyError("storage", masked_url(url), why) from None
-    finally:
-        engine.dispose()
-
-
-def _check_own_tables(url: str) -> None:
-    """Refuse a database that holds tables neither Optuna's nor gearopt's (a user's own
-    SQLite file given as ``--storage``: gearopt would add its tables and views to it), unless
-    the study file says ``shared_storage = true``."""
-    try:
-        parsed = sa.engine.make_url(url)
-    except Exception:
-        return
-    if parsed.get_backend_name() == "sqlite" and not Path(parsed.database or "").is_file():
-        return
-    engine = sa.create_engine(url)
-    try:
-        inspector = sa.inspect(engine)
-        present = set(inspector.get_table_names()) | set(inspector.get_view_names())
-    except Exception:
-        return  # opening it says more
-    finally:
-        engine.dispose()
-    foreign = sorted(present - _own_tables())
-    if foreign:
-        raise StudyError(
-            "storage",
-            masked_url(url),
-            f"holds tables that are not Optuna's or gearopt's ({', '.join(foreign[:5])}"
-            f"{', ...' if len(foreign) > 5 else ''}): give a database of its own, or set "
-            "shared_storage = true in the study file's [study] table",
-        )
-
-
-def _own_tables() -> set[str]:
-    """The names of Optuna's tables (as this Optuna makes them) and gearopt's."""
-    optuna_tables = getattr(_own_tables, "cached", None)
-    if optuna_tables is None:
-        probe = optuna.storages.RDBStorage("sqlite:///:memory:")
-        optuna_tables = set(sa.inspect(probe.engine).get_table_names())
-        probe.engine.dispose()
-        _own_tables.cached = optuna_tables
-    return optuna_tables | SCHEMA_NAMES | {"sqlite_sequence"}
-
-
-def masked_url(url: str) -> str:
-    """A storage URL fit to print: its password replaced by ``***`` (never echoed, in errors,
-    summaries or ``--json``)."""
-    try:
-        return sa.engine.make_url(url).render_as_string(hide_password=True)
-    except Exception:  # not a URL SQLAlchemy reads: mask what looks like user:password@
-        return re.sub(r"(://[^:/@]*:)[^@]*@", r"\1***@", str(url))
-
-
-def _masked_text(text: str, url: str) -> str:
-    """``text`` with the URL's password, wherever it stands, replaced by ``***``."""
-    try:
-        password = sa.engine.make_url(url).password
-    except Exception:
-        password = None
-    text = text.replace(url, masked_url(url))
-    return text.replace(str(password), "***") if password else text
-
-
-def default_storage_url(spec: StudySpec) -> str:
-    """``sqlite:///<study name>.db`` beside the study file (the name sanitised)."""
-    name = re.sub(r"[^A-Za-z0-9_.-]", "_", spec.name)
-    return f"sqlite:///{spec.folder / (name + '.db')}"
-
-
 def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
     seed = spec.seed
     if spec.sampler == "tpe":
@@ -221,64 +124,18 @@ def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
     return optuna.samplers.QMCSampler(seed=seed)
 
 
-def _rdb_storage(url: str, attempts: int = 5) -> optuna.storages.RDBStorage:
-    """Optuna's RDB storage; a new database's schema is created by whichever coordinator comes
-    first, and one that meets another creating it at the same moment tries again."""
-
-    for attempt in range(attempts - 1):
-        try:
-            return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
-        except (sqlalchemy.exc.IntegrityError, sqlalchemy.exc.ProgrammingError):
-            time.sleep(0.3 * (attempt + 1))
-        except sqlalchemy.exc.OperationalError as exc:  # SQLite's "table ... already exists"
-            if not _schema_race(exc):
-                raise
-            time.sleep(0.3 * (attempt + 1))
-    return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
-
-
-def _schema_race(exc: Exception) -> bool:
-    """Whether a database error is another coordinator creating the same schema at the same
-    moment (SQLite says so with an OperationalError, other dialects with integrity or
-    programming errors)."""
-    text = str(exc).lower()
-    return "already exists" in text or "database is locked" in text
-
-
-def _engine_kwargs(url: str) -> dict:
-    """SQLite: wait for a lock rather than fail at once (a second reader, a dashboard)."""
-    return {"connect_args": {"timeout": 30.0}} if url.startswith("sqlite") else {}
-
-
-def _fast_sqlite(engine: sa.Engine) -> None:
-    """SQLite in WAL mode with ``synchronous = NORMAL``: a commit no longer waits for the disk
-    (a transaction is safe against a killed process; only a power cut may lose the last
-    ones), which takes the coordinator's time per trial from about 100 ms to a few ms."""
-    if engine.dialect.name != "sqlite":
-        return
-
-    @sa.event.listens_for(engine, "connect")
-    def _pragmas(connection, _record):
-        cursor = connection.cursor()
-        cursor.execute("PRAGMA journal_mode=WAL")
-        cursor.execute("PRAGMA synchronous=NORMAL")
-        cursor.close()
-
-    engine.dispose()  # connections made before the listener get the pragmas when remade
-
-
 def open_study(spec: StudySpec, storage: str | None = None):
     """The Optuna study of ``spec`` (created when new) and its :class:`ResultsStore`; a new
     study gets its metric names and the study file's given designs, an existing one the given
     designs added to the file since (a design with a trial already is skipped)."""
 
     url = storage or default_storage_url(spec)
-    _check_storage_url(url)
+    check_storage_url(url)
     if not spec.shared_storage:
-        _check_own_tables(url)
+        check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
-        rdb = _rdb_storage(url)
+        rdb = rdb_storage(url)
         study = optuna.create_study(
             storage=rdb,
             sampler=_sampler(spec),
@@ -293,7 +150,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
     except Exception as exc:  # SQLAlchemy/driver errors: a storage that cannot be opened
         if isinstance(exc, GearoptError):
             raise
-        why = _masked_text(f"cannot be opened ({type(exc).__name__}: {exc})", url)
+        why = masked_text(f"cannot be opened ({type(exc).__name__}: {exc})", url)
         raise StudyError("storage", masked_url(url), why) from None
     wanted = [optuna.study.StudyDirection[d.upper()] for d in spec.directions]
     if list(study.directions) != wanted:
@@ -303,7 +160,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
             f"exists in {masked_url(url)} with other directions "
             f"{[d.name for d in study.directions]}",
         )
-    _fast_sqlite(rdb.engine)
+    fast_sqlite(rdb.engine)
     results = ResultsStore(url, engine=rdb.engine)
     search = {d.key: [d.low, d.high, d.log] for d in spec.search}
     first = results.register_study(spec.name, search)

@@ -81,7 +81,7 @@ LAYERS = (
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
     ("analysis", ("gearopt.analysis", "gearopt.plots")),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
-    ("study", ("gearopt.results", "gearopt.study", "gearopt.export")),
+    ("study", ("gearopt.results", "gearopt.storage", "gearopt.study", "gearopt.export")),
     (
         "cli",
         ("gearopt.cli", "gearopt.flank_cli", "gearopt.study_cli", "gearopt.bench", "gearopt"),
