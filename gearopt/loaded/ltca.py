@@ -374,9 +374,9 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     prepared_at = _Prepared(field, u, prepared, grid, compliance)
     # from the largest torque down, each solve started from the next larger torque's
     solved = {top: at_top}
+    above = at_top
     for t in sorted(set(torques) - {top}, reverse=True):
-        above = solved[min(k for k in solved if k > t)]
-        solved[t] = [
+        above = solved[t] = [
             _solve(pos, t, per_pair) for pos, (per_pair, _) in zip(prepared, above, strict=True)
         ]
     out = []
@@ -437,25 +437,23 @@ def _refined_minimum(lte, torque_nm, g_min, prepared_at, rounds) -> float:
     narrowed to the least one's neighbours. ``prepared_at``: the prepared positions of an
     array of positions (kept, so that the torques of a sweep share them)."""
     u = prepared_at.positions
+    lte = np.asarray(lte, float)
     k = 1 + int(np.argmin(lte[1:-1])) if len(lte) > 2 else int(np.argmin(lte))  # (see _peak)
-    a, b = u[max(k - 1, 0)], u[min(k + 1, len(u) - 1)]
+    near = [max(k - 1, 0), k, min(k + 1, len(u) - 1)]
+    x, values = u[near], lte[near]  # the bracket, its middle, and the LTE there
     best = float(lte[k])
-    order = np.argsort(u)
-    at, values_at = u[order], np.asarray(lte, float)[order]  # the LTE known so far
     for _ in range(rounds):
-        x = np.linspace(a, b, REFINE_POINTS + 2)
-        guess = np.interp(x[1:-1], at, g_min - np.asarray(values_at) / ARCSEC)
-        values = [
+        order = np.argsort(x)  # the guesses' lag, interpolated from the LTE known
+        inside = np.linspace(x[0], x[-1], REFINE_POINTS + 2)
+        guess = np.interp(inside[1:-1], x[order], g_min - values[order] / ARCSEC)
+        found = [
             (g_min - _solve(pos, torque_nm, theta_rad=float(th))[1]) * ARCSEC
-            for pos, th in zip(prepared_at(x[1:-1]), guess, strict=True)
+            for pos, th in zip(prepared_at(inside[1:-1]), guess, strict=True)
         ]
-        at = np.concatenate([at, x[1:-1]])
-        values_at = np.concatenate([values_at, values])
-        order = np.argsort(at)
-        at, values_at = at[order], values_at[order]
-        i = int(np.argmin(values)) + 1
-        best = min(best, float(values[i - 1]))
-        a, b = x[i - 1], x[i + 1]
+        full = np.concatenate([values[:1], found, values[-1:]])
+        i = int(np.argmin(found)) + 1
+        best = min(best, float(full[i]))
+        x, values = inside[i - 1 : i + 2], full[i - 1 : i + 2]
     return best
 
 
