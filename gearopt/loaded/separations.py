@@ -38,6 +38,7 @@ __all__ = [
     "flank_jets",
     "flank_point",
     "flank_points",
+    "outward",
     "position_patches",
 ]
 
@@ -91,20 +92,19 @@ def flank_jets(flank: FlankMap, face_mm, profile_mm) -> NDArray:
 def flank_points(flank: FlankMap, face_mm: NDArray, profile_mm: NDArray):
     """Points, unit normals (out of the tooth) and tangents of a flank's local interpolant at
     grid coordinates ``(s, t)`` (member frame, unturned): ``(p, n, p_s, p_t)``, each
-    ``(..., 3)``; the tangents by central differences of :func:`flank_point`."""
-    s = np.asarray(face_mm, float)
-    t = np.asarray(profile_mm, float)
-    e = 1e-3
-    p = flank_point(flank, s, t)
-    p_s = (flank_point(flank, s + e, t) - flank_point(flank, s - e, t)) / (2.0 * e)
-    p_t = (flank_point(flank, s, t + e) - flank_point(flank, s, t - e)) / (2.0 * e)
-    cross = np.cross(p_s, p_t)
-    n = cross / np.linalg.norm(cross, axis=-1)[..., None]
-    # out of the tooth: as the FlankMap's own normals
-    mid = tuple(np.array(flank.shape) // 2)
-    reference = flank.normals[mid]
-    sign = np.sign(np.sum(n.reshape(-1, 3) @ reference))
-    return p, n * (sign if sign != 0.0 else 1.0), p_s, p_t
+    ``(..., 3)``, from :func:`flank_jets`."""
+    jets = flank_jets(flank, face_mm, profile_mm)
+    p, p_s, p_t = jets[..., 0, :], jets[..., 1, :], jets[..., 2, :]
+    return p, outward(flank, np.cross(p_s, p_t)), p_s, p_t
+
+
+def outward(flank: FlankMap, normals: NDArray) -> NDArray:
+    """``(..., 3)`` normals of a flank made unit and turned out of the tooth, each as the
+    FlankMap's own normal at its middle node points."""
+    n = normals / np.linalg.norm(normals, axis=-1, keepdims=True)
+    reference = flank.normals[tuple(np.array(flank.shape) // 2)]
+    sign = np.sign(n @ reference)
+    return n * np.where(sign == 0.0, 1.0, sign)[..., None]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -267,10 +267,7 @@ def position_patches(
     p_minor = p_s * minor[:, None, None, :1] + p_t * minor[:, None, None, 1:]
     normal = np.cross(p_major, p_minor)
     area = np.linalg.norm(normal, axis=-1)
-    normal /= area[..., None]
-    mid = tuple(np.array(pinion.shape) // 2)
-    orient = np.sign(np.einsum("kijc,c->k", normal, pinion.normals[mid]))  # out of the tooth
-    normal *= np.where(orient == 0.0, 1.0, orient)[:, None, None, None]
+    normal = outward(pinion, normal)
     at = field.clearance_of_points(p, normal, phi[:, None, None])
     ring = np.ones(es.shape[1:], dtype=bool)
     ring[1:-1, 1:-1] = False
