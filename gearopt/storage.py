@@ -4,6 +4,7 @@ storage made safe for coordinators starting together, and SQLite tuned for many 
 
 from __future__ import annotations
 
+import functools
 import re
 import time
 from pathlib import Path
@@ -21,9 +22,9 @@ __all__ = [
     "check_storage_url",
     "default_storage_url",
     "fast_sqlite",
-    "masked_text",
     "masked_url",
     "rdb_storage",
+    "storage_error",
     "study_exists",
 ]
 
@@ -37,7 +38,7 @@ def masked_url(url: str) -> str:
         return re.sub(r"(://[^:/@]*:)[^@]*@", r"\1***@", str(url))
 
 
-def masked_text(text: str, url: str) -> str:
+def _masked_text(text: str, url: str) -> str:
     """``text`` with the URL's password, wherever it stands, replaced by ``***``."""
     try:
         password = sa.engine.make_url(url).password
@@ -45,6 +46,13 @@ def masked_text(text: str, url: str) -> str:
         password = None
     text = text.replace(url, masked_url(url))
     return text.replace(str(password), "***") if password else text
+
+
+def storage_error(url: str, what: str, exc: Exception) -> StudyError:
+    """The error of a storage that fails (``what``: "cannot be opened"), the driver's message
+    and the URL with its password masked."""
+    why = _masked_text(f"{what} ({type(exc).__name__}: {exc})", url)
+    return StudyError("storage", masked_url(url), why)
 
 
 def check_storage_url(url: str) -> None:
@@ -95,14 +103,12 @@ def check_own_tables(url: str) -> None:
         )
 
 
-def _own_tables() -> set[str]:
+@functools.cache
+def _own_tables() -> frozenset[str]:
     """The names of Optuna's tables (as this Optuna makes them) and gearopt's."""
-    optuna_tables = getattr(_own_tables, "cached", None)
-    if optuna_tables is None:
-        probe = optuna.storages.RDBStorage("sqlite:///:memory:")
-        optuna_tables = set(sa.inspect(probe.engine).get_table_names())
-        probe.engine.dispose()
-        _own_tables.cached = optuna_tables
+    probe = optuna.storages.RDBStorage("sqlite:///:memory:")
+    optuna_tables = frozenset(sa.inspect(probe.engine).get_table_names())
+    probe.engine.dispose()
     return optuna_tables | SCHEMA_NAMES | {"sqlite_sequence"}
 
 
@@ -123,8 +129,7 @@ def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
     try:
         engine = sa.create_engine(url)
     except Exception as exc:  # an unknown dialect, a missing driver
-        why = masked_text(f"cannot be opened ({type(exc).__name__}: {exc})", url)
-        raise StudyError("storage", masked_url(url), why) from None
+        raise storage_error(url, "cannot be opened", exc) from None
     try:
         if "studies" not in sa.inspect(engine).get_table_names():
             return False
@@ -132,8 +137,7 @@ def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
             query = sa.text("SELECT 1 FROM studies WHERE study_name = :n")
             return con.execute(query, {"n": spec.name}).first() is not None
     except sqlalchemy.exc.SQLAlchemyError as exc:
-        why = masked_text(f"cannot be read ({type(exc).__name__}: {exc})", url)
-        raise StudyError("storage", masked_url(url), why) from None
+        raise storage_error(url, "cannot be read", exc) from None
     finally:
         engine.dispose()
 

@@ -64,9 +64,9 @@ from gearopt.storage import (
     check_storage_url,
     default_storage_url,
     fast_sqlite,
-    masked_text,
     masked_url,
     rdb_storage,
+    storage_error,
 )
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
@@ -103,11 +103,10 @@ def _trial_markers(pid: int) -> str:
     for folder in root.glob(MARKERS_PREFIX + "*"):
         try:
             owner = int((folder / "owner").read_text())
-            os.kill(owner, 0)
-        except ProcessLookupError:
-            shutil.rmtree(folder, ignore_errors=True)
-        except (OSError, ValueError):  # no owner file (yet), or not ours to judge
+        except (OSError, ValueError):  # no owner file (yet): not ours to judge
             continue
+        if not _alive(owner):
+            shutil.rmtree(folder, ignore_errors=True)
     markers = tempfile.mkdtemp(prefix=MARKERS_PREFIX)
     Path(markers, "owner").write_text(str(pid))
     return markers
@@ -150,8 +149,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
     except Exception as exc:  # SQLAlchemy/driver errors: a storage that cannot be opened
         if isinstance(exc, GearoptError):
             raise
-        why = masked_text(f"cannot be opened ({type(exc).__name__}: {exc})", url)
-        raise StudyError("storage", masked_url(url), why) from None
+        raise storage_error(url, "cannot be opened", exc) from None
     wanted = [optuna.study.StudyDirection[d.upper()] for d in spec.directions]
     if list(study.directions) != wanted:
         raise StudyError(
