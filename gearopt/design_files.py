@@ -20,7 +20,7 @@ from gearopt.errors import DesignError, GearoptError
 from gearopt.load_options import LoadOptions
 from gearopt.plugins import get_machine_model
 from gearopt.te_target import TETarget
-from gearopt.validate import check_keys, read_table, read_toml
+from gearopt.validate import check_keys, read_table, read_toml, read_toml_file
 
 if TYPE_CHECKING:
     import pluggy
@@ -118,15 +118,7 @@ def loads_design(text: str, *, plugin_manager: pluggy.PluginManager | None = Non
 def load_design(path: str | Path, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
     """Load and validate a design TOML file."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DesignError("design file", str(path), "does not exist") from None
-    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
-        raise DesignError(
-            "design file", str(path), f"cannot be read as UTF-8 text ({exc})"
-        ) from None
-    data = read_toml(text, lambda rule: DesignError("design file", str(path), rule))
+    data = read_toml_file(path, lambda rule: DesignError("design file", str(path), rule))
     return parse_design(data, plugin_manager=plugin_manager, path=str(path))
 
 

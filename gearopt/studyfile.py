@@ -57,7 +57,7 @@ from gearopt.design_files import load_design, with_overrides
 from gearopt.errors import GearoptError, PluginError, StudyError, UnknownKeyError
 from gearopt.machine import SearchDimension
 from gearopt.plugins import evaluators, get_machine_model, objectives
-from gearopt.validate import read_toml
+from gearopt.validate import read_toml_file
 
 __all__ = [
     "SAMPLERS",
@@ -408,11 +408,5 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
 def load_study_spec(path: str | Path) -> StudySpec:
     """Read and validate a study file."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise StudyError("study file", str(path), "does not exist") from None
-    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
-        raise StudyError("study file", str(path), f"cannot be read as UTF-8 text ({exc})") from None
-    data = read_toml(text, lambda rule: StudyError("study file", str(path), rule))
+    data = read_toml_file(path, lambda rule: StudyError("study file", str(path), rule))
     return parse_study_spec(data, path=path)

@@ -80,32 +80,26 @@ def pattern_outline(
 _SIDES = (("drive", ""), ("coast", "coast_"))
 
 
-def _curves(label: str, arrays: Mapping[str, np.ndarray]) -> list[tuple]:
-    """Curves an evaluation carries, by the array names the built-in evaluators use."""
+def _curves(label: str, evaluation) -> list[tuple]:
+    """Rows of the curves table: the curves an evaluation carries by the array names the
+    built-in evaluators use, and those it names itself
+    (:attr:`gearopt.evaluation.Evaluation.curves`); non-finite points left out."""
     pairs = {
         "te": ("phi1_deg", "te_arcsec"),
         "path": ("path_face_mm", "path_profile_mm"),
         "backlash": ("phi1_deg", "circumferential_um"),
     }
-    rows = []
+    arrays = evaluation.arrays
+    found: dict[str, dict] = {}
     for curve, (xk, yk) in pairs.items():
         for side, prefix in _SIDES:
             x, y = arrays.get(prefix + xk), arrays.get(prefix + yk)
-            if x is None or y is None or np.shape(x) != np.shape(y):
-                continue
-            rows += [
-                (label, curve, side, i, float(a), float(b))
-                for i, (a, b) in enumerate(zip(np.ravel(x), np.ravel(y), strict=True))
-                if math.isfinite(a) and math.isfinite(b)
-            ]
-    return rows
-
-
-def _named_curves(label: str, evaluation) -> list[tuple]:
-    """The curves an evaluation names itself (:attr:`gearopt.evaluation.Evaluation.curves`)."""
+            if x is not None and y is not None and np.shape(x) == np.shape(y):
+                found.setdefault(curve, {})[side] = (x, y)
     return [
         (label, curve, side, i, float(a), float(b))
-        for curve, by_side in evaluation.curves.items()
+        for named in (found, evaluation.curves)
+        for curve, by_side in named.items()
         for side, (x, y) in by_side.items()
         for i, (a, b) in enumerate(zip(np.ravel(x), np.ravel(y), strict=True))
         if math.isfinite(a) and math.isfinite(b)
@@ -181,7 +175,7 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
         metrics, curves, patterns = [], [], []
         for label, evaluation in evaluations.items():
             metrics += [(label, k, float(v)) for k, v in evaluation.metrics.items()]
-            curves += _curves(label, evaluation.arrays) + _named_curves(label, evaluation)
+            curves += _curves(label, evaluation)
             patterns += _patterns(label, evaluation)
         return TrialOutcome(
             number=number,

@@ -12,6 +12,7 @@ import difflib
 import math
 import tomllib
 from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
 from typing import Any
 
 from gearopt.errors import DesignError, GearoptError, UnknownKeyError
@@ -26,11 +27,24 @@ __all__ = [
     "read_member_pair",
     "read_table",
     "read_toml",
+    "read_toml_file",
     "MAX_TOML_CHARACTERS",
 ]
 
 #: the longest design or study file read (characters): the largest real ones hold a few thousand
 MAX_TOML_CHARACTERS = 1_000_000
+
+
+def read_toml_file(path: Path, error: Callable[[str], GearoptError]) -> dict:
+    """The tables of a design or study file (:func:`read_toml`); a file that does not exist or
+    cannot be read as UTF-8 text raises ``error(rule)`` too."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error("does not exist") from None
+    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as exc:
+        raise error(f"cannot be read as UTF-8 text ({exc})") from None
+    return read_toml(text, error)
 
 
 def read_toml(text: str, error: Callable[[str], GearoptError]) -> dict:
