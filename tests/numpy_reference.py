@@ -3,10 +3,24 @@ each takes the same inputs and gives the same outputs as the production function
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["widths"]
+from gearopt.flank import axial_plane
+
+__all__ = ["flank_point", "widths"]
+
+
+def flank_point(flank, face_mm, profile_mm) -> NDArray:
+    """:func:`gearopt.loaded.separations.flank_jets`'s points in numpy: ``(..., 3)`` points of a
+    flank's local interpolant at grid coordinates ``(s, t)``, member frame, unturned."""
+    s = np.asarray(face_mm, float)
+    t = np.asarray(profile_mm, float)
+    big_l, big_r = axial_plane(s, flank.height_at(s, t), math.radians(flank.pitch_angle_deg))
+    theta = flank.polar_angle_local(s, t)
+    return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
 
 
 def widths(sep_mm: NDArray, compound_mm, face_mm, profile_mm, points, directions) -> NDArray:

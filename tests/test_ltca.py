@@ -26,7 +26,6 @@ from gearopt.load_options import LoadOptions
 from gearopt.loaded.separations import (
     contact_patches,
     flank_jets,
-    flank_point,
     flank_points,
     position_patches,
 )
@@ -34,6 +33,7 @@ from gearopt.studyfile import load_study_spec
 from gearopt.trial import evaluate_trial
 
 from .conftest import STUDIES
+from .numpy_reference import flank_point
 
 ARCSEC = 180.0 * 3600.0 / math.pi
 E_MPA, NU = 206000.0, 0.3

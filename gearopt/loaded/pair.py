@@ -95,7 +95,7 @@ def loaded_sides(
         gear = models["gear"][field.gear.flank]
 
         def compliance(pairs, pinion=pinion, gear=gear) -> list:
-            picked = [(p, k) for p, k in pairs]
+            picked = list(pairs)
             sizes = np.cumsum([k.size for _, k in picked])[:-1]
 
             def flat(name):

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import ClearanceField
-from gearopt.flank import FlankMap, axial_plane
+from gearopt.flank import FlankMap
 from gearopt.load_options import PatchOptions
 from gearopt.loaded import kernels
 
@@ -36,7 +36,6 @@ __all__ = [
     "PairPatches",
     "contact_patches",
     "flank_jets",
-    "flank_point",
     "flank_points",
     "outward",
     "position_patches",
@@ -46,19 +45,9 @@ __all__ = [
 _STEP_MM = 0.05
 
 
-def flank_point(flank: FlankMap, face_mm, profile_mm) -> NDArray:
-    """``(..., 3)`` points of a flank's local interpolant (the clearance field's) at grid
-    coordinates ``(s, t)``, member frame, unturned."""
-    s = np.asarray(face_mm, float)
-    t = np.asarray(profile_mm, float)
-    big_l, big_r = axial_plane(s, flank.height_at(s, t), math.radians(flank.pitch_angle_deg))
-    theta = flank.polar_angle_local(s, t)
-    return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
-
-
 def flank_jets(flank: FlankMap, face_mm, profile_mm) -> NDArray:
     """``(..., 3, 3)``: points of a flank's local interpolant at grid coordinates ``(s, t)``
-    (as :func:`flank_point`) and their derivatives d/ds and d/dt, member frame, unturned
+    (the clearance field's) and their derivatives d/ds and d/dt, member frame, unturned
     (one compiled pass, :func:`gearopt.loaded.kernels.flank_jets`)."""
     s, t = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
     cells, taper = flank.cells, flank.taper
