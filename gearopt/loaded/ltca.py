@@ -197,8 +197,29 @@ class _Position:
 
 def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> list[_Position]:
     """The candidate patches of the pairs near the mesh at the positions ``u_rad`` and their
-    compliance (all positions in one batch)."""
+    compliance (all positions in one batch). Positions a whole number of pitches apart are
+    one configuration (every tooth pair meets the same flanks at the same angles): prepared
+    once, the later ones the same object with the pairs renumbered (:func:`_periodic`)."""
     u = np.atleast_1d(np.asarray(u_rad, float))
+    pitch = field.pinion.pitch_rad
+    turns = np.round(u / pitch)
+    phase = np.round((u / pitch - turns) * 1e9)  # the position within a pitch, to 1e-9 of it
+    _, first, inverse = np.unique(phase, return_index=True, return_inverse=True)
+    unique = _prepare_unique(field, u[first], grid, compliance)
+    shift = (turns - turns[first][inverse]).astype(np.intp)
+    return [_periodic(unique[i], int(k)) for i, k in zip(inverse.ravel(), shift, strict=True)]
+
+
+def _periodic(pos: _Position, turns: int) -> _Position:
+    """``pos`` seen ``turns`` pitches later: the same patches, solution and columns (the
+    ``columns`` object is shared, which marks the copies as one problem), each pair a pitch
+    earlier per turn."""
+    if turns == 0:
+        return pos
+    return replace(pos, patches=tuple(replace(p, pair=p.pair - turns) for p in pos.patches))
+
+
+def _prepare_unique(field: ClearanceField, u, grid: PatchOptions, compliance) -> list[_Position]:
     base = np.round(-u / field.pinion.pitch_rad).astype(np.intp)
     batch = position_patches(field, u, base[:, None] + np.arange(-2, 3), grid)
     reach_mm = grid.reach_um * 1e-3
@@ -291,6 +312,24 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
     return per_pair, float(solved.theta_rad)
 
 
+def _solve_positions(prepared: list[_Position], torque_nm: float, starts=None) -> list:
+    """``_solve`` at every prepared position, each configuration once (the copies of
+    :func:`_periodic` share its solution): from ``starts`` (forces per position) or else each
+    from the last solved one's lag."""
+    known: dict[int, tuple] = {}
+    out = []
+    for j, pos in enumerate(prepared):
+        key = id(pos.columns)
+        if key not in known:
+            if starts is not None:
+                known[key] = _solve(pos, torque_nm, starts[j])
+            else:
+                lag = out[-1][1] if out else None
+                known[key] = _solve(pos, torque_nm, theta_rad=lag)
+        out.append(known[key])
+    return out
+
+
 def _flat(pos: _Position, per_pair) -> NDArray:
     """The candidate patches' forces of one position as the solver orders them."""
     return np.concatenate([f.ravel()[keep] for f, keep in zip(per_pair, pos.keep, strict=True)])
@@ -354,9 +393,7 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     top = max(torques)
     for _ in range(3):
         prepared = _prepare(field, u, grid, compliance)
-        at_top = []
-        for pos in prepared:  # each from the last one's lag
-            at_top.append(_solve(pos, top, theta_rad=at_top[-1][1] if at_top else None))
+        at_top = _solve_positions(prepared, top)
         if top == 0.0 or not any(
             _truncated(pos, per_pair) for pos, (per_pair, _) in zip(prepared, at_top, strict=True)
         ):
@@ -376,9 +413,7 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     solved = {top: at_top}
     above = at_top
     for t in sorted(set(torques) - {top}, reverse=True):
-        above = solved[t] = [
-            _solve(pos, t, per_pair) for pos, (per_pair, _) in zip(prepared, above, strict=True)
-        ]
+        above = solved[t] = _solve_positions(prepared, t, [per_pair for per_pair, _ in above])
     out = []
     for t in torques:
         result = _at_torque(t, prepared, solved[t], tca, g_min, frame, side)
