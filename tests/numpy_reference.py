@@ -98,3 +98,21 @@ def widths(sep_mm: NDArray, compound_mm, face_mm, profile_mm, points, directions
             ends.append(tau[k_in] + (tau[k_out] - tau[k_in]) * a / (a - b))
         width[k] = ends[0] - ends[1]
     return width
+
+
+def catmull_rom_dense(x, n: int) -> NDArray:
+    """``(m, n)`` dense Catmull-Rom weights on nodes 0..n-1 at index coordinates ``x``
+    (clamped; linear ghost nodes at both ends): the numpy reference of
+    ``ToothCompliance.stencil`` (each node's weight, the ghosts folded in)."""
+    x = np.clip(np.asarray(x, float).ravel(), 0.0, n - 1.0)
+    i = np.minimum(x.astype(np.intp), n - 2)
+    f = (x - i)[:, None]
+    w = 0.5 * np.hstack(
+        [-(f**3) + 2 * f**2 - f, 3 * f**3 - 5 * f**2 + 2, -3 * f**3 + 4 * f**2 + f, f**3 - f**2]
+    )
+    out = np.zeros((len(x), n + 2))
+    np.add.at(out, (np.arange(len(x))[:, None], i[:, None] + np.arange(4)), w)
+    inner = out[:, 1:-1]  # column k of out is node k - 1
+    inner[:, :2] += out[:, :1] * np.array([2.0, -1.0])
+    inner[:, -2:] += out[:, -1:] * np.array([-1.0, 2.0])
+    return inner

@@ -16,10 +16,13 @@ from gearopt.loaded import (
     DEFAULT_MESH,
     Material,
     factorise,
+    kernels,
     member_compliance,
     solid_model,
     tooth_compliance,
 )
+
+from . import numpy_reference
 
 STEEL = Material(youngs_modulus_mpa=206000.0, poisson_ratio=0.3)
 
@@ -111,6 +114,38 @@ def test_the_influence_numbers_are_physical(section_5_3):
             np.testing.assert_allclose(
                 compliance.influence_mm_per_n(f, p, f, p), table[np.ix_(i, i)], rtol=1e-9
             )
+
+
+def test_the_stencils_interpolate_the_table(section_5_3):
+    """The sparse stencils (16 table points a flank point) against dense Catmull-Rom weights
+    built independently, the compiled influence columns against the dense product W T W^T,
+    and linear fields reproduced exactly (also beyond the table, clamped onto its edge)."""
+    design, pinion, _ = section_5_3
+    compliance = member_compliance(pinion, design.blank, material=STEEL)["convex"]
+    face, profile = compliance.table_points_mm()
+    n_f, n_p = compliance.table_shape
+    rng = np.random.default_rng(7)
+    s = rng.uniform(face.min() - 1.0, face.max() + 1.0, 60)
+    low = compliance.low_mm + compliance.low_slope * s
+    t = low + rng.uniform(-0.1, 1.1, 60) * (compliance.top_mm - low)
+    u = (s - compliance.face_mm[0]) / (compliance.face_mm[-1] - compliance.face_mm[0])
+    v = (t - low) / (compliance.top_mm - low)
+    dense = (
+        numpy_reference.catmull_rom_dense(u * (n_f - 1), n_f)[:, :, None]
+        * numpy_reference.catmull_rom_dense(v * (n_p - 1), n_p)[:, None, :]
+    ).reshape(60, -1)
+    np.testing.assert_allclose(compliance.weights(s, t), dense, atol=1e-14)
+    # a field linear in the table's coordinates (face, fraction of the height)
+    a, b = np.meshgrid(np.linspace(0.0, 1.0, n_f), np.linspace(0.0, 1.0, n_p), indexing="ij")
+    points, w = compliance.stencil(s, t)
+    interpolated = (w * (2.0 + 3.0 * a - 0.5 * b).ravel()[points]).sum(axis=1)
+    expected = 2.0 + 3.0 * np.clip(u, 0.0, 1.0) - 0.5 * np.clip(v, 0.0, 1.0)
+    np.testing.assert_allclose(interpolated, expected, rtol=1e-12)
+    columns = np.array([0, 7, 31, 59])
+    out = np.zeros((columns.size, 60))
+    kernels.influence_columns(points, w, columns, compliance.table_mm_per_n, out)
+    full = dense @ compliance.table_mm_per_n @ dense.T
+    np.testing.assert_allclose(out.T, full[:, columns], rtol=1e-12, atol=1e-12 * full.max())
 
 
 def test_both_flanks_share_one_model(section_5_3):

@@ -449,22 +449,29 @@ def _side(flank, face, rows, t_root, t_top, t_rim, centre, half_pitch, low) -> _
     return _Side(flank=flank, low=low, profile_mm=t, polar_angle_rad=theta)
 
 
-def _catmull_rom(x: NDArray, n: int) -> NDArray:
-    """``(m, n)`` weights of local cubic (Catmull-Rom, C1) interpolation on nodes 0..n-1 at
-    index coordinates ``x`` (clamped to [0, n - 1]; linear ghost nodes at both ends)."""
+def _catmull_rom(x: NDArray, n: int) -> tuple[NDArray, NDArray]:
+    """``(nodes, weights)``, each ``(m, 4)``: local cubic (Catmull-Rom, C1) interpolation on
+    nodes 0..n-1 at index coordinates ``x`` (clamped to [0, n - 1]), the four nodes of each
+    point's stencil and their weights; a linear ghost node beyond either end (node -1 = 2 node
+    0 - node 1, node n = 2 node n-1 - node n-2) folded into the nodes it stands for (the
+    stencil's unused slot then weighs 0)."""
     x = np.clip(np.asarray(x, float).ravel(), 0.0, n - 1.0)
     i = np.minimum(x.astype(np.intp), n - 2)
     f = (x - i)[:, None]
     w = 0.5 * np.hstack(
         [-(f**3) + 2 * f**2 - f, 3 * f**3 - 5 * f**2 + 2, -3 * f**3 + 4 * f**2 + f, f**3 - f**2]
     )
-    out = np.zeros((len(x), n + 2))
-    rows = np.arange(len(x))[:, None]
-    np.add.at(out, (rows, i[:, None] + np.arange(4)), w)  # column k is node k - 1
-    inner = out[:, 1:-1]
-    inner[:, :2] += out[:, :1] * np.array([2.0, -1.0])
-    inner[:, -2:] += out[:, -1:] * np.array([-1.0, 2.0])
-    return inner
+    nodes = i[:, None] + np.arange(-1, 3)
+    low, high = i == 0, i == n - 2
+    ghost = w[low, 0]  # node -1: into nodes 0 (slot 1) and 1 (slot 2)
+    w[low, 1] += 2.0 * ghost
+    w[low, 2] -= ghost
+    w[low, 0] = 0.0
+    ghost = w[high, 3]  # node n: into nodes n-1 (slot 2) and n-2 (slot 1)
+    w[high, 2] += 2.0 * ghost
+    w[high, 1] -= ghost
+    w[high, 3] = 0.0
+    return np.clip(nodes, 0, n - 1), w
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -520,18 +527,29 @@ class ToothCompliance:
         profile = low[:, None] + (self.top_mm - low)[:, None] * frac
         return np.broadcast_to(self.face_mm[:, None], (n_f, n_p)), profile
 
-    def weights(self, face_mm, profile_mm) -> NDArray:
-        """``(m, n_f n_p)`` interpolation weights of the table at flank points: local cubic
-        (Catmull-Rom) in the face and in the fraction of the flank's height, points beyond the
-        table clamped onto its edge."""
+    def stencil(self, face_mm, profile_mm) -> tuple[NDArray, NDArray]:
+        """``(points, weights)``, each ``(m, 16)``: the interpolation of the table at flank
+        points, the 16 table points of each one's stencil (flat indices, some repeated with
+        weight 0 at the table's edges) and their weights: local cubic (Catmull-Rom) in the
+        face and in the fraction of the flank's height, points beyond the table clamped onto
+        its edge. The influence between flank points i and j is ``sum_pq w_ip T_pq w_jq``."""
         s = np.asarray(face_mm, float).ravel()
         t = np.asarray(profile_mm, float).ravel()
         n_f, n_p = self.table_shape
         u = (s - self.face_mm[0]) / (self.face_mm[-1] - self.face_mm[0]) * (n_f - 1)
         low = self.low_mm + self.low_slope * s
         v = (t - low) / (self.top_mm - low) * (n_p - 1)
-        wf, wp = _catmull_rom(u, n_f), _catmull_rom(v, n_p)
-        return (wf[:, :, None] * wp[:, None, :]).reshape(len(s), n_f * n_p)
+        (kf, wf), (kp, wp) = _catmull_rom(u, n_f), _catmull_rom(v, n_p)
+        points = (kf[:, :, None] * n_p + kp[:, None, :]).reshape(len(s), 16)
+        return points, (wf[:, :, None] * wp[:, None, :]).reshape(len(s), 16)
+
+    def weights(self, face_mm, profile_mm) -> NDArray:
+        """``(m, n_f n_p)`` interpolation weights of the table at flank points (the dense form
+        of :meth:`stencil`)."""
+        points, w = self.stencil(face_mm, profile_mm)
+        out = np.zeros((len(points), self.table_mm_per_n.shape[0]))
+        np.add.at(out, (np.arange(len(points))[:, None], points), w)
+        return out
 
     def influence_mm_per_n(self, face_mm_i, profile_mm_i, face_mm_j, profile_mm_j) -> NDArray:
         """``(m, n)`` normal displacement (mm, into the tooth) of flank points i under a unit

@@ -17,7 +17,7 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "flank_jets", "halfspace_columns", "warm"]
+__all__ = ["ENABLED", "flank_jets", "halfspace_columns", "influence_columns", "warm"]
 
 
 @compiled(inline=True)
@@ -179,6 +179,31 @@ def flank_jets(s, t, grid, coef, out):
         out[k, 2, 2] = -h_t * sg
 
 
+@compiled
+def influence_columns(points, weights, columns, table, out):
+    """``out[k, i] += sum_pq w_ip T_pq w_jq`` with ``j = columns[k]``: columns of a tooth's
+    influence numbers interpolated from its table ``T`` (symmetric, ``(N, N)``) at flank
+    points given by their stencils (``points``, ``weights``: ``(n, s)`` table points and
+    weights, :meth:`gearopt.loaded.compliance.ToothCompliance.stencil`), ``out`` of shape
+    ``(len(columns), n)``: per column the table's row combination ``v = sum_q w_jq T_q``
+    (``N s``), then the stencils' sums of it (``n s``)."""
+    n, width = points.shape
+    v = np.empty(table.shape[0])
+    for k in range(columns.size):
+        j = columns[k]
+        v[:] = 0.0
+        for q in range(width):
+            wq = weights[j, q]
+            if wq != 0.0:
+                v += wq * table[points[j, q]]
+        row = out[k]
+        for i in range(n):
+            total = 0.0
+            for p in range(width):
+                total += weights[i, p] * v[points[i, p]]
+            row[i] += total
+
+
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process (on one patch),
     before worker processes start: they then load the cache rather than compile it side by
@@ -189,3 +214,10 @@ def warm() -> None:
     halfspace_columns(one, one, one, one, np.zeros(1, np.intp), 1.0, 4.0, np.empty((1, 1)))
     grid = (0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1, 0.0, 1.0, False, 0.0, 0.0, 0.0)
     flank_jets(one, one, grid, np.zeros((1, 16)), np.empty((1, 3, 3)))
+    influence_columns(
+        np.zeros((1, 1), np.intp),
+        np.ones((1, 1)),
+        np.zeros(1, np.intp),
+        np.ones((1, 1)),
+        np.zeros((1, 1)),
+    )

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from gearopt.load_options import LoadOptions
+from gearopt.loaded import kernels
 from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
 from gearopt.loaded.halfspace import composite_compliance_mm2_per_n, halfspace_columns_mm_per_n
 from gearopt.loaded.ltca import LoadedContact, loaded_contact
@@ -47,18 +48,16 @@ def _compliance_of(flanks: Mapping, blank, material: Material, mesh) -> dict:
 
 def _pair_columns(p: PairPatches, keep, pinion, gear, composite):
     """The compliance columns of one pair's candidate patches: Love's rectangles between the
-    patches plus both teeth's influence numbers (``(model, weights)`` of each member's
-    table at the patches), the tables' products formed when first asked for."""
+    patches plus both teeth's influence numbers (``(model, (points, weights))`` of each
+    member: its table and its stencils at the patches, :func:`kernels.influence_columns`)."""
     x, y = p.x_mm.ravel()[keep], p.y_mm.ravel()[keep]
     a, b = 0.5 * p.length_mm.ravel()[keep], 0.5 * p.width_mm.ravel()[keep]
-    products = []
 
     def columns(cols: np.ndarray) -> np.ndarray:
-        if not products:
-            products.extend(w @ model.table_mm_per_n for model, w in (pinion, gear))
         out = halfspace_columns_mm_per_n(x, y, a, b, cols, composite)
-        for g, (_, w) in zip(products, (pinion, gear), strict=True):
-            out = out + g @ w[cols].T
+        rows = out.T  # C-ordered (len(cols), m)
+        for model, (points, weights) in (pinion, gear):
+            kernels.influence_columns(points, weights, cols, model.table_mm_per_n, rows)
         return out
 
     return columns
@@ -101,12 +100,19 @@ def loaded_sides(
             def flat(name):
                 return np.concatenate([getattr(p, name).ravel()[k] for p, k in picked])
 
-            # the weights of all pairs in one call each (numpy's overhead paid once)
-            w1 = np.split(pinion.weights(flat("face_mm"), flat("profile_mm")), sizes)
-            w2 = np.split(gear.weights(flat("gear_face_mm"), flat("gear_profile_mm")), sizes)
+            # the stencils of all pairs in one call each (numpy's overhead paid once)
+            k1, w1 = pinion.stencil(flat("face_mm"), flat("profile_mm"))
+            k2, w2 = gear.stencil(flat("gear_face_mm"), flat("gear_profile_mm"))
             return [
-                _pair_columns(p, k, (pinion, a), (gear, b), composite)
-                for (p, k), a, b in zip(picked, w1, w2, strict=True)
+                _pair_columns(p, k, (pinion, (a, b)), (gear, (c, d)), composite)
+                for (p, k), a, b, c, d in zip(
+                    picked,
+                    np.split(k1, sizes),
+                    np.split(w1, sizes),
+                    np.split(k2, sizes),
+                    np.split(w2, sizes),
+                    strict=True,
+                )
             ]
 
         out[side] = loaded_contact(
