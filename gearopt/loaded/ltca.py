@@ -197,17 +197,8 @@ class _Position:
 
 def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> list[_Position]:
     """The candidate patches of the pairs near the mesh at the positions ``u_rad`` and their
-    compliance (all positions in one batch). Positions a whole number of pitches apart are
-    one configuration (every tooth pair meets the same flanks at the same angles): prepared
-    once, the later ones the same object with the pairs renumbered (:func:`_periodic`)."""
-    u = np.atleast_1d(np.asarray(u_rad, float))
-    pitch = field.pinion.pitch_rad
-    turns = np.round(u / pitch)
-    phase = np.round((u / pitch - turns) * 1e9)  # the position within a pitch, to 1e-9 of it
-    _, first, inverse = np.unique(phase, return_index=True, return_inverse=True)
-    unique = _prepare_unique(field, u[first], grid, compliance)
-    shift = (turns - turns[first][inverse]).astype(np.intp)
-    return [_periodic(unique[i], int(k)) for i, k in zip(inverse.ravel(), shift, strict=True)]
+    compliance (all positions in one batch, each configuration once: :class:`_Prepared`)."""
+    return _Prepared(field, grid, compliance)(u_rad)
 
 
 def _periodic(pos: _Position, turns: int) -> _Position:
@@ -263,20 +254,37 @@ def _position(lag: float, picked, blocks) -> _Position:
 
 
 class _Prepared:
-    """Prepared positions by their angle, prepared in one batch where new: those of the
-    cycle's samples ``positions`` and those asked for since."""
+    """Prepared positions, kept by their configuration: positions a whole number of pitches
+    apart are one (every tooth pair meets the same flanks at the same angles), prepared once
+    and handed out with the pairs renumbered (:func:`_periodic`). Each call prepares the
+    configurations it does not know in one batch."""
 
-    def __init__(self, field, positions, prepared, grid, compliance) -> None:
-        self.positions = positions
+    def __init__(self, field, grid, compliance) -> None:
         self._args = (field, grid, compliance)
-        self._known = dict(zip(positions.tolist(), prepared, strict=True))
+        self._known: dict[int, tuple[float, _Position]] = {}  # phase -> (turns, position)
 
     def __call__(self, u_rad) -> list[_Position]:
-        new = [x for x in np.asarray(u_rad, float).tolist() if x not in self._known]
+        field, grid, compliance = self._args
+        u = np.atleast_1d(np.asarray(u_rad, float))
+        pitch = field.pinion.pitch_rad
+        turns = np.round(u / pitch)
+        # the position within a pitch, to 1e-9 of it
+        phases = np.round((u / pitch - turns) * 1e9).astype(np.int64).tolist()
+        new = {}
+        for phase, uj, k in zip(phases, u.tolist(), turns.tolist(), strict=True):
+            if phase not in self._known and phase not in new:
+                new[phase] = (uj, k)
         if new:
-            field, grid, compliance = self._args
-            self._known.update(zip(new, _prepare(field, new, grid, compliance), strict=True))
-        return [self._known[x] for x in np.asarray(u_rad, float).tolist()]
+            fresh = _prepare_unique(
+                field, np.array([uj for uj, _ in new.values()]), grid, compliance
+            )
+            for (phase, (_, k)), pos in zip(new.items(), fresh, strict=True):
+                self._known[phase] = (k, pos)
+        out = []
+        for phase, k in zip(phases, turns.tolist(), strict=True):
+            k0, pos = self._known[phase]
+            out.append(_periodic(pos, int(k - k0)))
+        return out
 
 
 def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None = None):
@@ -392,7 +400,8 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     u = np.radians(np.asarray(tca.phi1_deg, float))
     top = max(torques)
     for _ in range(3):
-        prepared = _prepare(field, u, grid, compliance)
+        prepared_at = _Prepared(field, grid, compliance)
+        prepared = prepared_at(u)
         at_top = _solve_positions(prepared, top)
         if top == 0.0 or not any(
             _truncated(pos, per_pair) for pos, (per_pair, _) in zip(prepared, at_top, strict=True)
@@ -408,21 +417,25 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
             float(np.ptp(reference) * ARCSEC),
             "the loaded contact's unloaded lags disagree with the TCA's (arcsec)",
         )
-    prepared_at = _Prepared(field, u, prepared, grid, compliance)
     # from the largest torque down, each solve started from the next larger torque's
     solved = {top: at_top}
     above = at_top
     for t in sorted(set(torques) - {top}, reverse=True):
         above = solved[t] = _solve_positions(prepared, t, [per_pair for per_pair, _ in above])
+    results = {t: _at_torque(t, prepared, solved[t], tca, g_min, frame, side) for t in solved}
+    loaded = sorted(t for t in results if t > 0.0)
+    lows = _refined_minima(
+        u, [results[t].lte_arcsec for t in loaded], loaded, g_min, prepared_at, rounds
+    )
     out = []
     for t in torques:
-        result = _at_torque(t, prepared, solved[t], tca, g_min, frame, side)
+        result = results[t]
         if t > 0.0:
-            low = _refined_minimum(result.lte_arcsec, t, g_min, prepared_at, rounds)
             high = _peak(result.lte_arcsec, 1.0)
             result = replace(
                 result,
-                lte_peak_to_peak_arcsec=high - min(low, float(result.lte_arcsec.min())),
+                lte_peak_to_peak_arcsec=high
+                - min(lows[loaded.index(t)], float(result.lte_arcsec.min())),
                 max_contact_pressure_mpa=_resolved_pressure(field, u, result, t, grid, compliance),
             )
         else:
@@ -465,31 +478,45 @@ def _resolved_pressure(field, u, result: LoadedContact, torque_nm, grid, complia
     return best
 
 
-def _refined_minimum(lte, torque_nm, g_min, prepared_at, rounds) -> float:
-    """The LTE's least value between the samples around its sampled minimum (a light load's
-    hand-over is a sharp valley that samples miss): ``rounds`` times, the LTE at
-    :data:`REFINE_POINTS` positions evenly inside the bracket (one batch), the bracket then
-    narrowed to the least one's neighbours. ``prepared_at``: the prepared positions of an
-    array of positions (kept, so that the torques of a sweep share them)."""
-    u = prepared_at.positions
-    lte = np.asarray(lte, float)
-    k = 1 + int(np.argmin(lte[1:-1])) if len(lte) > 2 else int(np.argmin(lte))  # (see _peak)
-    near = [max(k - 1, 0), k, min(k + 1, len(u) - 1)]
-    x, values = u[near], lte[near]  # the bracket, its middle, and the LTE there
-    best = float(lte[k])
+def _refined_minima(u, ltes, torques_nm, g_min, prepared_at, rounds) -> list[float]:
+    """Each torque's LTE least value between the samples ``u`` around its sampled minimum (a
+    light load's hand-over is a sharp valley that samples miss): ``rounds`` times, the LTE at
+    :data:`REFINE_POINTS` positions evenly inside the bracket, the bracket then narrowed to
+    the least one's neighbours. The bracket's middle is known (a sample, then the last
+    round's least), the other positions of all torques are prepared in one batch per round
+    (``prepared_at``, which keeps them: torques with the same bracket share them)."""
+    state = []
+    for lte in ltes:
+        lte = np.asarray(lte, float)
+        k = 1 + int(np.argmin(lte[1:-1])) if len(lte) > 2 else int(np.argmin(lte))  # (see _peak)
+        near = [max(k - 1, 0), k, min(k + 1, len(u) - 1)]
+        state.append([u[near], lte[near], float(lte[k])])  # the bracket, the LTE there, least
+    middle = REFINE_POINTS // 2 if REFINE_POINTS % 2 else -1
     for _ in range(rounds):
-        order = np.argsort(x)  # the guesses' lag, interpolated from the LTE known
-        inside = np.linspace(x[0], x[-1], REFINE_POINTS + 2)
-        guess = np.interp(inside[1:-1], x[order], g_min - values[order] / ARCSEC)
-        found = [
-            (g_min - _solve(pos, torque_nm, theta_rad=float(th))[1]) * ARCSEC
-            for pos, th in zip(prepared_at(inside[1:-1]), guess, strict=True)
-        ]
-        full = np.concatenate([values[:1], found, values[-1:]])
-        i = int(np.argmin(found)) + 1
-        best = min(best, float(full[i]))
-        x, values = inside[i - 1 : i + 2], full[i - 1 : i + 2]
-    return best
+        asks = []
+        for x, values, _ in state:
+            inside = np.linspace(x[0], x[-1], REFINE_POINTS + 2)[1:-1]
+            order = np.argsort(x)  # the guesses' lag, interpolated from the LTE known
+            guess = np.interp(inside, x[order], g_min - values[order] / ARCSEC)
+            ask = np.ones(REFINE_POINTS, bool)
+            if middle >= 0 and x[0] < x[1] < x[-1]:
+                ask[middle] = False
+            asks.append((inside, guess, ask))
+        positions = iter(prepared_at(np.concatenate([i[a] for i, _, a in asks])))
+        for entry, torque, (inside, guess, ask) in zip(state, torques_nm, asks, strict=True):
+            x, values, best = entry
+            found = np.full(REFINE_POINTS, values[1])
+            for j in np.flatnonzero(ask):
+                lag = _solve(next(positions), torque, theta_rad=float(guess[j]))[1]
+                found[j] = (g_min - lag) * ARCSEC
+            full = np.concatenate([values[:1], found, values[-1:]])
+            i = int(np.argmin(found)) + 1
+            entry[:] = [
+                np.concatenate([x[:1], inside, x[-1:]])[i - 1 : i + 2],
+                full[i - 1 : i + 2],
+                min(best, float(full[i])),
+            ]
+    return [best for _, _, best in state]
 
 
 def _at_torque(torque_nm, prepared, solved, tca, g_min, frame, side) -> LoadedContact:
