@@ -23,6 +23,13 @@ from gearopt.assembly import Misalignment
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank_jet import FlankJet, cross
 from gearopt.load_options import LoadOptions
+from gearopt.loaded import (
+    Material,
+    composite_compliance_mm2_per_n,
+    halfspace_columns_mm_per_n,
+    member_compliance,
+)
+from gearopt.loaded.pair import member_flanks
 from gearopt.loaded.separations import (
     contact_patches,
     flank_jets,
@@ -426,6 +433,35 @@ def test_the_figures_converge_with_the_patch_grid(section53, loaded53):
         assert ref.mesh_stiffness_n_per_mm_um == pytest.approx(
             result.mesh_stiffness_n_per_mm_um, rel=0.05
         )
+
+
+def test_no_patch_of_the_zone_penetrates(section53, loaded53):
+    # the solves consider only the patches near the contact (those left out proven open by a
+    # lower bound): measured on the output with the whole compliance of every pair's patches
+    # (Love's rectangles and both teeth's interpolated influence numbers), no valid patch
+    # penetrates and every loaded one touches
+    design, pair, _ = section53
+    flanks = member_flanks(pair)
+    steel = Material(youngs_modulus_mpa=E_MPA, poisson_ratio=NU)
+    pinion = member_compliance(flanks["pinion"], design.blank, material=steel)["convex"]
+    gear = member_compliance(flanks["gear"], design.blank, material=steel)["concave"]
+    composite = composite_compliance_mm2_per_n(E_MPA, NU, E_MPA, NU)
+    for result in loaded53["drive"][2:]:
+        for load in result.positions[::3]:
+            for p, f in zip(load.patches, load.forces_n, strict=True):
+                v = p.valid
+                forces, on = f[v], np.flatnonzero(f[v] > 0.0)
+                c = halfspace_columns_mm_per_n(
+                    p.x_mm[v], p.y_mm[v], 0.5 * p.length_mm[v], 0.5 * p.width_mm[v], on, composite
+                )
+                for model, s, t in (
+                    (pinion, p.face_mm, p.profile_mm),
+                    (gear, p.gear_face_mm, p.gear_profile_mm),
+                ):
+                    c = c + model.influence_mm_per_n(s[v], t[v], s[v][on], t[v][on])
+                gap_mm = p.factor_mm[v] * (p.clearance_rad[v] - load.theta_rad) + c @ forces[on]
+                assert gap_mm.min() > -1e-9, result.torque_nm
+                assert np.abs(gap_mm[on]).max(initial=0.0) < 1e-9
 
 
 def test_a_sweep_gives_each_torques_own_figures(section53, loaded53):

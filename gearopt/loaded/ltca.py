@@ -45,6 +45,8 @@ ARCSEC = 180.0 * 3600.0 / math.pi
 REFINE_POINTS = 5
 #: rounds of the refinement
 REFINE_ROUNDS = 2
+#: a patch left out of a solve counts as closed where its gap's lower bound is below -this
+_OPEN_MM = 1e-9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -180,6 +182,22 @@ class _Columns:
             )
         return out
 
+    def subset(self, rows) -> _Columns:
+        """The columns of the patches ``rows`` (ascending) among themselves."""
+        which = np.searchsorted(self._starts, rows, side="right") - 1
+        blocks = [
+            block.subset(rows[which == b] - self._starts[b]) for b, block in enumerate(self._blocks)
+        ]
+        return _Columns(blocks, np.bincount(which, minlength=len(self._blocks)))
+
+    def bending_mm(self, forces_n) -> NDArray:
+        """The teeth's part of ``C F`` (the blocks' ``bending_mm``): ``C F`` less a positive
+        part, so ``s + bending - r theta`` bounds the gaps from below."""
+        parts = np.split(np.asarray(forces_n, float), self._starts[1:-1])
+        return np.concatenate(
+            [block.bending_mm(f) for block, f in zip(self._blocks, parts, strict=True)]
+        )
+
 
 @dataclass(frozen=True, kw_only=True)
 class _Position:
@@ -193,6 +211,9 @@ class _Position:
     columns: ColumnCache  # kept for every torque
     lag_rad: float  # the unloaded lag (least clearance over the pairs)
     contact_factor_mm: float  # the normal factor at the unloaded contact
+    # the patches a solve considers and their column cache (:func:`_solve`), kept for the
+    # next torques; shared by the copies of :func:`_periodic`
+    near: list = field(default_factory=list)
 
 
 def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> list[_Position]:
@@ -292,7 +313,14 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
     the forces of another torque's solution at the position, or ``theta_rad``, a guess of the
     lag (a nearby position's at this torque), whose rigid interpenetration, as pressure on
     the patches, is the first support (larger than the contact, which the solver shrinks in
-    a few solves where from one patch it grows it in many)."""
+    a few solves where from one patch it grows it in many).
+
+    Only the patches near the contact enter the solve (the compliance columns cost in
+    proportion to the patches they span): with a guess, those that close rigidly within
+    twice the guessed approach, ``s_i <= r_i (lag + 2 (theta - lag))``, kept for the next
+    torques. Those left out are proven open afterwards: their gap is at least ``s_i +
+    bending_i - r_i theta`` (the contact's local compliance is positive), and where that is
+    not positive they join and the solve runs again from its forces."""
     first = None if start is None else _flat(pos, start)
     if first is None and theta_rad is not None:
         # within a Hertzian contact the rigid interpenetration exceeds half its largest value
@@ -302,22 +330,49 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
         first = pos.area_mm2 * np.maximum(reach - np.maximum(half, 0.0), 0.0)
         if not first.any():
             first = None
-    solved = solve_load_columns(
-        separation_mm=pos.separation_mm,
-        area_mm2=pos.area_mm2,
-        lever_arm_mm=pos.lever_mm,
-        torque_n_mm=torque_nm * 1e3,
-        columns=pos.columns,
-        start_forces_n=first,
-    )
-    forces = np.asarray(solved.forces_n)
+    s, r = pos.separation_mm, pos.lever_mm
+    if not pos.near and theta_rad is not None and theta_rad > pos.lag_rad:
+        bound = pos.lag_rad + 2.0 * (theta_rad - pos.lag_rad)
+        _narrow(pos, np.flatnonzero(s <= r * bound))
+    while True:
+        rows, columns = pos.near if pos.near else (slice(None), pos.columns)
+        solved = solve_load_columns(
+            separation_mm=s[rows],
+            area_mm2=pos.area_mm2[rows],
+            lever_arm_mm=r[rows],
+            torque_n_mm=torque_nm * 1e3,
+            columns=columns,
+            start_forces_n=None if first is None else first[rows],
+        )
+        forces = np.zeros(s.size)
+        forces[rows] = solved.forces_n
+        theta = float(solved.theta_rad)
+        if not pos.near or torque_nm == 0.0:
+            break
+        gap = s + pos.columns.provider.bending_mm(forces) - r * theta
+        out = np.ones(s.size, bool)
+        out[rows] = False
+        closed = out & (gap < -_OPEN_MM)
+        if not closed.any():
+            break
+        bound = pos.lag_rad + 2.0 * (theta - pos.lag_rad)
+        _narrow(pos, np.flatnonzero(~out | closed | (s <= r * bound)))
+        first = forces
     per_pair, at = [], 0
     for p, keep in zip(pos.patches, pos.keep, strict=True):
         f = np.zeros(p.valid.size)
         f[keep] = forces[at : at + keep.size]
         at += keep.size
         per_pair.append(f.reshape(p.valid.shape))
-    return per_pair, float(solved.theta_rad)
+    return per_pair, theta
+
+
+def _narrow(pos: _Position, rows: NDArray) -> None:
+    """Let the solves of ``pos`` consider the patches ``rows`` only (all where that is all)."""
+    if rows.size == pos.separation_mm.size:
+        pos.near[:] = []
+    else:
+        pos.near[:] = [rows, ColumnCache(pos.columns.provider.subset(rows), rows.size)]
 
 
 def _solve_positions(prepared: list[_Position], torque_nm: float, starts=None) -> list:
