@@ -176,7 +176,10 @@ def contact_patches(
 ) -> list[PairPatches]:
     """The contact patches of the tooth pairs ``pairs`` (offsets in pitches from the base pair)
     at relative pinion rotation ``u_rad`` (direction of motion), each around its refined
-    unloaded contact point (module docstring). Pairs that do not touch are left out."""
+    unloaded contact point (module docstring). Pairs that do not touch are left out, and those
+    whose unloaded contact lies more than twice the reach (``grid.reach_um``, in normal
+    separation at the contact) above the position's closest pair's: the normal factor would
+    have to halve within the zone for a patch of theirs to come within reach."""
     return position_patches(field, [u_rad], pairs, grid)[0]
 
 
@@ -201,6 +204,12 @@ def position_patches(
     s0, h0 = sample.contact_face_mm[rows], sample.contact_profile_mm[rows]
     p0, n0, _, _ = flank_points(pinion, s0, h0)
     f0 = field.clearance_of_points(p0, n0, phi).normal_factor_mm
+    # a pair whose contact lies far above its position's closest one (twice the reach, in
+    # normal separation) has no patch within reach: left out
+    least = np.full(len(u), np.inf)
+    np.minimum.at(least, rows // offsets.shape[1], m0)
+    near = (m0 - least[rows // offsets.shape[1]]) * f0 <= 2e-3 * grid.reach_um
+    rows, phi, m0, s0, h0, f0 = (a[near] for a in (rows, phi, m0, s0, h0, f0))
     lam, vec = np.linalg.eigh(_curvature(field, phi, s0, h0, f0))
     major, minor = vec[:, :, 0], vec[:, :, 1]  # least curvature: along the contact line
     reach_mm = grid.reach_um * 1e-3
