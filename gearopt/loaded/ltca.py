@@ -574,52 +574,70 @@ def _refined_minima(u, ltes, torques_nm, g_min, prepared_at, rounds) -> list[flo
     return [best for _, _, best in state]
 
 
+def _figures(pos: _Position, per_pair, theta_rad: float, frame) -> dict:
+    """One position's figures at one torque: pressures, load shares (the earliest pair in its
+    cycle first), the largest pressure and line load, edge loading, the loaded patches'
+    pattern points and the mesh stiffness (None without load or approach)."""
+    out = {"pressures": [], "share": [], "p_max": 0.0, "line_max": 0.0, "edge": False}
+    out.update(face=[], profile=[], pressed=[], stiffness=None)
+    total = float(sum(f.sum() for f in per_pair))
+    for p, f in zip(pos.patches, per_pair, strict=True):
+        pressure = np.where(p.area_mm2 > 0.0, f / p.area_mm2, 0.0)
+        out["pressures"].append(pressure)
+        out["share"].append(float(f.sum()) / total if total > 0.0 else 0.0)
+        loaded = f > 0.0
+        if loaded.any():
+            out["p_max"] = max(out["p_max"], float(pressure.max()))
+            line = f.sum(axis=1) / np.median(p.length_mm, axis=1)
+            out["line_max"] = max(out["line_max"], float(line.max()))
+            out["edge"] = out["edge"] or bool((loaded & p.boundary).any())
+            out["face"].append(p.face_mm[loaded] - frame.toe_mm)
+            out["profile"].append(p.profile_mm[loaded] - frame.root_mm)
+            out["pressed"].append(pressure[loaded])
+    order = np.argsort([-p.pair for p in pos.patches])
+    out["share"] = [out["share"][k] for k in order]
+    if total > 0.0:
+        approach_um = (theta_rad - pos.lag_rad) * pos.contact_factor_mm * 1e3
+        loaded_face = np.concatenate(
+            [p.face_mm[f > 0.0] for p, f in zip(pos.patches, per_pair, strict=True)]
+        )
+        width = float(np.ptp(loaded_face)) if loaded_face.size > 1 else 0.0
+        if approach_um > 0.0 and width > 0.0:
+            out["stiffness"] = total / width / approach_um
+    return out
+
+
 def _at_torque(torque_nm, prepared, solved, tca, g_min, frame, side) -> LoadedContact:
-    """One torque's result from its solves at the prepared positions."""
-    n = len(prepared)
-    theta = np.empty(n)
-    shares, loads = [], []
+    """One torque's result from its solves at the prepared positions (each configuration's
+    figures once, :func:`_figures`)."""
+    theta = np.array([th for _, th in solved], float)
+    known: dict[int, dict] = {}
+    shares, loads, stiffness = [], [], []
     p_max = line_max = 0.0
-    stiffness = []
     edge = False
     face, profile, pressed = [], [], []
-    for j, (pos, (per_pair, th)) in enumerate(zip(prepared, solved, strict=True)):
-        theta[j] = th
-        pressures = []
-        total = float(sum(f.sum() for f in per_pair))
-        share = []
-        for p, f in zip(pos.patches, per_pair, strict=True):
-            pressure = np.where(p.area_mm2 > 0.0, f / p.area_mm2, 0.0)
-            pressures.append(pressure)
-            share.append(float(f.sum()) / total if total > 0.0 else 0.0)
-            loaded = f > 0.0
-            if loaded.any():
-                p_max = max(p_max, float(pressure.max()))
-                line = f.sum(axis=1) / np.median(p.length_mm, axis=1)
-                line_max = max(line_max, float(line.max()))
-                edge = edge or bool((loaded & p.boundary).any())
-                face.append(p.face_mm[loaded] - frame.toe_mm)
-                profile.append(p.profile_mm[loaded] - frame.root_mm)
-                pressed.append(pressure[loaded])
-        order = np.argsort([-p.pair for p in pos.patches])  # the earliest in its cycle first
-        shares.append([share[k] for k in order])
+    for pos, (per_pair, th) in zip(prepared, solved, strict=True):
+        key = id(pos.columns)
+        if key not in known:
+            known[key] = _figures(pos, per_pair, th, frame)
+        fig = known[key]
+        p_max, line_max = max(p_max, fig["p_max"]), max(line_max, fig["line_max"])
+        edge = edge or fig["edge"]
+        face += fig["face"]
+        profile += fig["profile"]
+        pressed += fig["pressed"]
+        shares.append(fig["share"])
+        if fig["stiffness"] is not None:
+            stiffness.append(fig["stiffness"])
         loads.append(
             PositionLoad(
                 theta_rad=float(th),
                 pairs=tuple(p.pair for p in pos.patches),
                 forces_n=tuple(per_pair),
-                pressure_mpa=tuple(pressures),
+                pressure_mpa=tuple(fig["pressures"]),
                 patches=pos.patches,
             )
         )
-        if total > 0.0:
-            approach_um = (th - pos.lag_rad) * pos.contact_factor_mm * 1e3
-            loaded_face = np.concatenate(
-                [p.face_mm[f > 0.0] for p, f in zip(pos.patches, per_pair, strict=True)]
-            )
-            width = float(np.ptp(loaded_face)) if loaded_face.size > 1 else 0.0
-            if approach_um > 0.0 and width > 0.0:
-                stiffness.append(total / width / approach_um)
     lte = (g_min - theta) * ARCSEC
     k = max(len(s) for s in shares)
     share = np.array([s + [0.0] * (k - len(s)) for s in shares])
