@@ -73,6 +73,7 @@ from threadpoolctl import threadpool_limits
 from gearopt.blank import Blank
 from gearopt.errors import GearoptError
 from gearopt.flank import FLANKS, MEMBERS, FlankMap, axial_plane
+from gearopt.loaded import kernels
 
 __all__ = [
     "DEFAULT_MESH",
@@ -449,31 +450,6 @@ def _side(flank, face, rows, t_root, t_top, t_rim, centre, half_pitch, low) -> _
     return _Side(flank=flank, low=low, profile_mm=t, polar_angle_rad=theta)
 
 
-def _catmull_rom(x: NDArray, n: int) -> tuple[NDArray, NDArray]:
-    """``(nodes, weights)``, each ``(m, 4)``: local cubic (Catmull-Rom, C1) interpolation on
-    nodes 0..n-1 at index coordinates ``x`` (clamped to [0, n - 1]), the four nodes of each
-    point's stencil and their weights; a linear ghost node beyond either end (node -1 = 2 node
-    0 - node 1, node n = 2 node n-1 - node n-2) folded into the nodes it stands for (the
-    stencil's unused slot then weighs 0)."""
-    x = np.clip(np.asarray(x, float).ravel(), 0.0, n - 1.0)
-    i = np.minimum(x.astype(np.intp), n - 2)
-    f = (x - i)[:, None]
-    w = 0.5 * np.hstack(
-        [-(f**3) + 2 * f**2 - f, 3 * f**3 - 5 * f**2 + 2, -3 * f**3 + 4 * f**2 + f, f**3 - f**2]
-    )
-    nodes = i[:, None] + np.arange(-1, 3)
-    low, high = i == 0, i == n - 2
-    ghost = w[low, 0]  # node -1: into nodes 0 (slot 1) and 1 (slot 2)
-    w[low, 1] += 2.0 * ghost
-    w[low, 2] -= ghost
-    w[low, 0] = 0.0
-    ghost = w[high, 3]  # node n: into nodes n-1 (slot 2) and n-2 (slot 1)
-    w[high, 2] += 2.0 * ghost
-    w[high, 1] -= ghost
-    w[high, 3] = 0.0
-    return np.clip(nodes, 0, n - 1), w
-
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ToothCompliance:
     """Influence numbers of one flank of a member's tooth (bending, shear, fillet and rim; the
@@ -539,9 +515,10 @@ class ToothCompliance:
         u = (s - self.face_mm[0]) / (self.face_mm[-1] - self.face_mm[0]) * (n_f - 1)
         low = self.low_mm + self.low_slope * s
         v = (t - low) / (self.top_mm - low) * (n_p - 1)
-        (kf, wf), (kp, wp) = _catmull_rom(u, n_f), _catmull_rom(v, n_p)
-        points = (kf[:, :, None] * n_p + kp[:, None, :]).reshape(len(s), 16)
-        return points, (wf[:, :, None] * wp[:, None, :]).reshape(len(s), 16)
+        points = np.empty((len(s), 16), np.intp)
+        weights = np.empty((len(s), 16))
+        kernels.table_stencil(u, v, n_f, n_p, points, weights)
+        return points, weights
 
     def weights(self, face_mm, profile_mm) -> NDArray:
         """``(m, n_f n_p)`` interpolation weights of the table at flank points (the dense form

@@ -17,7 +17,14 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "flank_jets", "halfspace_columns", "influence_columns", "warm"]
+__all__ = [
+    "ENABLED",
+    "flank_jets",
+    "halfspace_columns",
+    "influence_columns",
+    "table_stencil",
+    "warm",
+]
 
 
 @compiled(inline=True)
@@ -204,6 +211,48 @@ def influence_columns(points, weights, columns, table, out):
             row[i] += total
 
 
+@compiled(inline=True)
+def _catmull_rom(x, n, nodes, weights):
+    """The four nodes and weights of local cubic (Catmull-Rom) interpolation on nodes 0..n-1
+    at index coordinate ``x`` (clamped), a linear ghost node beyond either end folded into
+    the nodes it stands for."""
+    x = min(max(x, 0.0), n - 1.0)
+    i = min(int(x), n - 2)
+    f = x - i
+    f2, f3 = f * f, f * f * f
+    weights[0] = 0.5 * (-f3 + 2.0 * f2 - f)
+    weights[1] = 0.5 * (3.0 * f3 - 5.0 * f2 + 2.0)
+    weights[2] = 0.5 * (-3.0 * f3 + 4.0 * f2 + f)
+    weights[3] = 0.5 * (f3 - f2)
+    for k in range(4):
+        nodes[k] = min(max(i - 1 + k, 0), n - 1)
+    if i == 0:  # node -1 = 2 node 0 - node 1
+        weights[1] += 2.0 * weights[0]
+        weights[2] -= weights[0]
+        weights[0] = 0.0
+    if i == n - 2:  # node n = 2 node n-1 - node n-2
+        weights[2] += 2.0 * weights[3]
+        weights[1] -= weights[3]
+        weights[3] = 0.0
+
+
+@compiled
+def table_stencil(u, v, n_f, n_p, points, weights):
+    """``points[k], weights[k]`` (16 each): the tensor-product Catmull-Rom stencil on an
+    ``n_f x n_p`` table (flat index ``a n_p + b``) at index coordinates ``(u[k], v[k])``."""
+    nf = np.empty(4, np.intp)
+    np_ = np.empty(4, np.intp)
+    wf = np.empty(4)
+    wp = np.empty(4)
+    for k in range(u.size):
+        _catmull_rom(u[k], n_f, nf, wf)
+        _catmull_rom(v[k], n_p, np_, wp)
+        for a in range(4):
+            for b in range(4):
+                points[k, 4 * a + b] = nf[a] * n_p + np_[b]
+                weights[k, 4 * a + b] = wf[a] * wp[b]
+
+
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process (on one patch),
     before worker processes start: they then load the cache rather than compile it side by
@@ -214,6 +263,7 @@ def warm() -> None:
     halfspace_columns(one, one, one, one, np.zeros(1, np.intp), 1.0, 4.0, np.empty((1, 1)))
     grid = (0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1, 0.0, 1.0, False, 0.0, 0.0, 0.0)
     flank_jets(one, one, grid, np.zeros((1, 16)), np.empty((1, 3, 3)))
+    table_stencil(one, one, 2, 2, np.empty((1, 16), np.intp), np.empty((1, 16)))
     influence_columns(
         np.zeros((1, 1), np.intp),
         np.ones((1, 1)),
