@@ -39,8 +39,10 @@ from gearopt.loaded.lcp import (
     ColumnCache,
     ComplementarityResiduals,
     LoadDistribution,
+    PatchCompliance,
     solve_load_columns,
     solve_load_distribution,
+    solve_load_patches,
 )
 from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
 from gearopt.loaded.pair import loaded_sides
@@ -56,6 +58,7 @@ __all__ = [
     "LoadedContact",
     "Material",
     "PairPatches",
+    "PatchCompliance",
     "PatchGrid",
     "PatchOptions",
     "PositionLoad",
@@ -74,5 +77,6 @@ __all__ = [
     "solid_model",
     "solve_load_columns",
     "solve_load_distribution",
+    "solve_load_patches",
     "tooth_compliance",
 ]

@@ -35,7 +35,7 @@ from threadpoolctl import threadpool_limits
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
 from gearopt.load_options import PatchOptions, check_torques
-from gearopt.loaded.lcp import ColumnCache, solve_load_columns
+from gearopt.loaded.lcp import PatchCompliance, solve_load_patches
 from gearopt.loaded.separations import PairPatches, position_patches
 
 __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]
@@ -161,44 +161,6 @@ def _hull(points: NDArray) -> NDArray:
         return pts[[0, -1]]
 
 
-class _Columns:
-    """The compliance columns of one position's candidate patches: block-diagonal over the
-    pairs (teeth of different pairs are separate bodies), each pair's block from its
-    ``columns(local) -> (m, len(local))``."""
-
-    def __init__(self, blocks, sizes) -> None:
-        self._blocks = list(blocks)
-        self._starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
-        self.size = int(self._starts[-1])
-
-    def __call__(self, idx) -> NDArray:
-        idx = np.asarray(idx, dtype=np.intp)
-        out = np.zeros((self.size, idx.size))
-        which = np.searchsorted(self._starts, idx, side="right") - 1
-        for b in np.unique(which):
-            cols = np.flatnonzero(which == b)
-            out[self._starts[b] : self._starts[b + 1], cols] = self._blocks[b](
-                idx[cols] - self._starts[b]
-            )
-        return out
-
-    def subset(self, rows) -> _Columns:
-        """The columns of the patches ``rows`` (ascending) among themselves."""
-        which = np.searchsorted(self._starts, rows, side="right") - 1
-        blocks = [
-            block.subset(rows[which == b] - self._starts[b]) for b, block in enumerate(self._blocks)
-        ]
-        return _Columns(blocks, np.bincount(which, minlength=len(self._blocks)))
-
-    def bending_mm(self, forces_n) -> NDArray:
-        """The teeth's part of ``C F`` (the blocks' ``bending_mm``): ``C F`` less a positive
-        part, so ``s + bending - r theta`` bounds the gaps from below."""
-        parts = np.split(np.asarray(forces_n, float), self._starts[1:-1])
-        return np.concatenate(
-            [block.bending_mm(f) for block, f in zip(self._blocks, parts, strict=True)]
-        )
-
-
 @dataclass(frozen=True, kw_only=True)
 class _Position:
     """One position's candidate patches and their compliance (the same for every torque)."""
@@ -208,7 +170,7 @@ class _Position:
     separation_mm: NDArray
     lever_mm: NDArray
     area_mm2: NDArray
-    columns: ColumnCache  # kept for every torque
+    compliance: PatchCompliance  # its columns kept for every torque
     lag_rad: float  # the unloaded lag (least clearance over the pairs)
     contact_factor_mm: float  # the normal factor at the unloaded contact
     # the patches a solve considers and their column cache (:func:`_solve`), kept for the
@@ -224,7 +186,7 @@ def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> li
 
 def _periodic(pos: _Position, turns: int) -> _Position:
     """``pos`` seen ``turns`` pitches later: the same patches, solution and columns (the
-    ``columns`` object is shared, which marks the copies as one problem), each pair a pitch
+    ``compliance`` object is shared, which marks the copies as one problem), each pair a pitch
     earlier per turn."""
     if turns == 0:
         return pos
@@ -268,7 +230,7 @@ def _position(lag: float, picked, blocks) -> _Position:
         ),
         lever_mm=np.concatenate([p.factor_mm.ravel()[k] for p, k in picked]),
         area_mm2=np.concatenate([p.area_mm2.ravel()[k] for p, k in picked]),
-        columns=ColumnCache(_Columns(blocks, [k.size for k in keeps]), sum(k.size for k in keeps)),
+        compliance=PatchCompliance.join(blocks),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
     )
@@ -335,13 +297,13 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
         bound = pos.lag_rad + 2.0 * (theta_rad - pos.lag_rad)
         _narrow(pos, np.flatnonzero(s <= r * bound))
     while True:
-        rows, columns = pos.near if pos.near else (slice(None), pos.columns)
-        solved = solve_load_columns(
+        rows, compliance = pos.near if pos.near else (slice(None), pos.compliance)
+        solved = solve_load_patches(
             separation_mm=s[rows],
             area_mm2=pos.area_mm2[rows],
             lever_arm_mm=r[rows],
             torque_n_mm=torque_nm * 1e3,
-            columns=columns,
+            compliance=compliance,
             start_forces_n=None if first is None else first[rows],
         )
         forces = np.zeros(s.size)
@@ -349,7 +311,7 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
         theta = float(solved.theta_rad)
         if not pos.near or torque_nm == 0.0:
             break
-        gap = s + pos.columns.provider.bending_mm(forces) - r * theta
+        gap = s + pos.compliance.bending_mm(forces) - r * theta
         out = np.ones(s.size, bool)
         out[rows] = False
         closed = out & (gap < -_OPEN_MM)
@@ -372,7 +334,7 @@ def _narrow(pos: _Position, rows: NDArray) -> None:
     if rows.size == pos.separation_mm.size:
         pos.near[:] = []
     else:
-        pos.near[:] = [rows, ColumnCache(pos.columns.provider.subset(rows), rows.size)]
+        pos.near[:] = [rows, pos.compliance.subset(rows)]
 
 
 def _solve_positions(prepared: list[_Position], torque_nm: float, starts=None) -> list:
@@ -382,7 +344,7 @@ def _solve_positions(prepared: list[_Position], torque_nm: float, starts=None) -
     known: dict[int, tuple] = {}
     out = []
     for j, pos in enumerate(prepared):
-        key = id(pos.columns)
+        key = id(pos.compliance)
         if key not in known:
             if starts is not None:
                 known[key] = _solve(pos, torque_nm, starts[j])
@@ -427,13 +389,12 @@ def loaded_contact(
     torques_nm
         Output torques on the gear (N m).
     compliance
-        ``compliance(pairs) -> [columns, ...]``: for each ``(pair_patches, keep)`` of
-        ``pairs`` (a pair's patches and the flat indices of its candidates, ``m`` of them),
-        ``columns(idx) -> (m, len(idx))``: the compliance (mm/N) between the candidates and
-        those of them numbered ``idx``, both teeth's bending and the contact's local
-        compliance, a symmetric positive definite matrix asked for by columns (the load
-        distribution needs those of the patches it tries only). One call for all the pairs
-        of a batch of positions.
+        ``compliance(pairs) -> [PatchCompliance, ...]``: for each ``(pair_patches, keep)``
+        of ``pairs`` (a pair's patches and the flat indices of its candidates), the
+        :class:`gearopt.loaded.lcp.PatchCompliance` of the candidates: both teeth's bending
+        and the contact's local compliance, a symmetric positive definite matrix whose
+        columns the load distribution computes as it needs them (those of the patches it
+        tries only). One call for all the pairs of a batch of positions.
     frame
         The pattern coordinates (:class:`gearopt.mesh.ToothFrame`).
     grid
@@ -617,7 +578,7 @@ def _at_torque(torque_nm, prepared, solved, tca, g_min, frame, side) -> LoadedCo
     edge = False
     face, profile, pressed = [], [], []
     for pos, (per_pair, th) in zip(prepared, solved, strict=True):
-        key = id(pos.columns)
+        key = id(pos.compliance)
         if key not in known:
             known[key] = _figures(pos, per_pair, th, frame)
         fig = known[key]

@@ -15,9 +15,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from gearopt.load_options import LoadOptions
-from gearopt.loaded import kernels
 from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
-from gearopt.loaded.halfspace import composite_compliance_mm2_per_n, halfspace_columns_mm_per_n
+from gearopt.loaded.halfspace import composite_compliance_mm2_per_n
+from gearopt.loaded.lcp import PatchCompliance
 from gearopt.loaded.ltca import LoadedContact, loaded_contact
 from gearopt.loaded.separations import PairPatches
 
@@ -46,56 +46,18 @@ def _compliance_of(flanks: Mapping, blank, material: Material, mesh) -> dict:
     return value
 
 
-class _PairColumns:
-    """The compliance of one pair's candidate patches, by columns: Love's rectangles between
-    the patches plus both teeth's influence numbers (each member's table with its stencils at
-    the patches, :func:`kernels.influence_columns`)."""
-
-    def __init__(self, x, y, a, b, members, composite) -> None:
-        self.x, self.y, self.a, self.b = x, y, a, b
-        self.members = members  # ((table, points, weights), ...)
-        self.composite = composite
-
-    def __call__(self, cols: np.ndarray) -> np.ndarray:
-        out = halfspace_columns_mm_per_n(self.x, self.y, self.a, self.b, cols, self.composite)
-        rows = out.T  # C-ordered (len(cols), m)
-        for table, points, weights in self.members:
-            kernels.influence_columns(points, weights, cols, table, rows)
-        return out
-
-    def subset(self, rows: np.ndarray) -> _PairColumns:
-        """The same for the patches ``rows`` only."""
-        return _PairColumns(
-            self.x[rows],
-            self.y[rows],
-            self.a[rows],
-            self.b[rows],
-            tuple((table, k[rows], w[rows]) for table, k, w in self.members),
-            self.composite,
-        )
-
-    def bending_mm(self, forces_n: np.ndarray) -> np.ndarray:
-        """The teeth's part of ``C F`` at every patch (mm): all of it but the half-spaces'
-        local part, which is positive; one table product per member."""
-        out = np.zeros(self.x.size)
-        for table, points, weights in self.members:
-            nodal = np.bincount(
-                points.ravel(), (weights * forces_n[:, None]).ravel(), minlength=table.shape[0]
-            )
-            out += (weights * (table @ nodal)[points]).sum(axis=1)
-        return out
-
-
-def _pair_columns(p: PairPatches, keep, pinion, gear, composite) -> _PairColumns:
-    """:class:`_PairColumns` of one pair's candidate patches ``keep`` (``(model, (points,
-    weights))`` of each member: its tooth model and its stencils at the patches)."""
-    return _PairColumns(
-        p.x_mm.ravel()[keep],
-        p.y_mm.ravel()[keep],
-        0.5 * p.length_mm.ravel()[keep],
-        0.5 * p.width_mm.ravel()[keep],
-        tuple((model.table_mm_per_n, k, w) for model, (k, w) in (pinion, gear)),
-        composite,
+def _pair_compliance(p: PairPatches, keep, pinion, gear, composite) -> PatchCompliance:
+    """The compliance of one pair's candidate patches ``keep``: Love's rectangles between the
+    patches plus both teeth's influence numbers (``(model, (points, weights))`` of each
+    member: its tooth model and its stencils at the patches)."""
+    return PatchCompliance(
+        starts=[0, keep.size],
+        x_mm=p.x_mm.ravel()[keep],
+        y_mm=p.y_mm.ravel()[keep],
+        a_mm=0.5 * p.length_mm.ravel()[keep],
+        b_mm=0.5 * p.width_mm.ravel()[keep],
+        composite_mm2_per_n=composite,
+        members=tuple((model.table_mm_per_n, k, w) for model, (k, w) in (pinion, gear)),
     )
 
 
@@ -140,7 +102,7 @@ def loaded_sides(
             k1, w1 = pinion.stencil(flat("face_mm"), flat("profile_mm"))
             k2, w2 = gear.stencil(flat("gear_face_mm"), flat("gear_profile_mm"))
             return [
-                _pair_columns(p, k, (pinion, (a, b)), (gear, (c, d)), composite)
+                _pair_compliance(p, k, (pinion, (a, b)), (gear, (c, d)), composite)
                 for (p, k), a, b, c, d in zip(
                     picked,
                     np.split(k1, sizes),
