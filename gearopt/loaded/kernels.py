@@ -192,24 +192,38 @@ def influence_columns(points, weights, columns, table, out):
     influence numbers interpolated from its table ``T`` (symmetric, ``(N, N)``) at flank
     points given by their stencils (``points``, ``weights``: ``(n, s)`` table points and
     weights, :meth:`gearopt.loaded.compliance.ToothCompliance.stencil`), ``out`` of shape
-    ``(len(columns), n)``: per column the table's row combination ``v = sum_q w_jq T_q``
-    (``N s``), then the stencils' sums of it (``n s``)."""
+    ``(len(columns), n)``. In chunks of columns: the table's row combinations ``v_k = sum_q
+    w_jq T_q`` side by side (``(N, chunk)``), then per point its stencil's sum over them, the
+    innermost loop along the chunk."""
     n, width = points.shape
-    v = np.empty(table.shape[0])
-    for k in range(columns.size):
-        j = columns[k]
-        v[:] = 0.0
-        for q in range(width):
-            wq = weights[j, q]
-            if wq != 0.0:
-                v += wq * table[points[j, q]]
-        row = out[k]
+    size = table.shape[0]
+    chunk = 32
+    v = np.empty((size, chunk))
+    row_v = np.empty(size)
+    acc = np.empty(chunk)
+    for k0 in range(0, columns.size, chunk):
+        kc = min(chunk, columns.size - k0)
+        for c in range(kc):
+            j = columns[k0 + c]
+            row_v[:] = 0.0
+            for q in range(width):
+                wq = weights[j, q]
+                if wq != 0.0:
+                    row = table[points[j, q]]
+                    for m in range(size):
+                        row_v[m] += wq * row[m]
+            for m in range(size):
+                v[m, c] = row_v[m]
         for i in range(n):
-            total = 0.0
+            acc[:kc] = 0.0
             for p in range(width):
-                total += weights[i, p] * v[points[i, p]]
-            row[i] += total
-
+                wp = weights[i, p]
+                if wp != 0.0:
+                    vp = v[points[i, p]]
+                    for c in range(kc):
+                        acc[c] += wp * vp[c]
+            for c in range(kc):
+                out[k0 + c, i] += acc[c]
 
 @compiled(inline=True)
 def _catmull_rom(x, n, nodes, weights):
