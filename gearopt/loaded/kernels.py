@@ -225,6 +225,7 @@ def influence_columns(points, weights, columns, table, out):
             for c in range(kc):
                 out[k0 + c, i] += acc[c]
 
+
 @compiled(inline=True)
 def _catmull_rom(x, n, nodes, weights):
     """The four nodes and weights of local cubic (Catmull-Rom) interpolation on nodes 0..n-1
