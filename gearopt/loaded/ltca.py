@@ -156,15 +156,16 @@ def _peak(values: NDArray, sign: float) -> float:
 
 
 def _hull(points: NDArray) -> NDArray:
-    """Convex hull of ``(n, 2)`` points, counter-clockwise (scipy's Qhull); the two extreme
-    points where they lie on a line."""
-    pts = np.unique(np.round(points, 9), axis=0)
-    if len(pts) < 3:
-        return pts
+    """Convex hull of ``(n, 2)`` points, counter-clockwise from its lexicographically least
+    vertex (scipy's Qhull); the distinct points, or the two extreme ones, where fewer than
+    three or all on a line."""
     try:
-        return pts[ConvexHull(pts).vertices]
-    except QhullError:  # collinear: the segment's ends
-        return pts[[0, -1]]
+        hull = points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):  # fewer than 3 distinct points, or collinear
+        pts = np.unique(np.round(points, 9), axis=0)
+        return pts if len(pts) < 3 else pts[[0, -1]]
+    first = np.lexsort((hull[:, 1], hull[:, 0]))[0]
+    return np.roll(hull, -first, axis=0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -177,6 +178,7 @@ class _Position:
     lever_mm: NDArray
     area_mm2: NDArray
     compliance: PatchCompliance  # its columns kept for every torque
+    strip_mm: tuple[NDArray, ...]  # each pair's strips' lengths along the contact line
     lag_rad: float  # the unloaded lag (least clearance over the pairs)
     contact_factor_mm: float  # the normal factor at the unloaded contact
     # the patches a solve considers and their column cache (:func:`_solve`), kept for the
@@ -237,6 +239,7 @@ def _position(lag: float, picked, blocks) -> _Position:
         lever_mm=np.concatenate([p.factor_mm.ravel()[k] for p, k in picked]),
         area_mm2=np.concatenate([p.area_mm2.ravel()[k] for p, k in picked]),
         compliance=PatchCompliance.join(blocks),
+        strip_mm=tuple(np.median(p.length_mm, axis=1) for p in kept),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
     )
@@ -549,14 +552,14 @@ def _figures(pos: _Position, per_pair, theta_rad: float, frame) -> dict:
     out = {"pressures": [], "share": [], "p_max": 0.0, "line_max": 0.0, "edge": False}
     out.update(face=[], profile=[], pressed=[], stiffness=None)
     total = float(sum(f.sum() for f in per_pair))
-    for p, f in zip(pos.patches, per_pair, strict=True):
+    for p, f, strip in zip(pos.patches, per_pair, pos.strip_mm, strict=True):
         pressure = np.where(p.area_mm2 > 0.0, f / p.area_mm2, 0.0)
         out["pressures"].append(pressure)
         out["share"].append(float(f.sum()) / total if total > 0.0 else 0.0)
         loaded = f > 0.0
         if loaded.any():
             out["p_max"] = max(out["p_max"], float(pressure.max()))
-            line = f.sum(axis=1) / np.median(p.length_mm, axis=1)
+            line = f.sum(axis=1) / strip
             out["line_max"] = max(out["line_max"], float(line.max()))
             out["edge"] = out["edge"] or bool((loaded & p.boundary).any())
             out["face"].append(p.face_mm[loaded] - frame.toe_mm)
