@@ -201,9 +201,13 @@ def _periodic(pos: _Position, turns: int) -> _Position:
     return replace(pos, patches=tuple(replace(p, pair=p.pair - turns) for p in pos.patches))
 
 
-def _prepare_unique(field: ClearanceField, u, grid: PatchOptions, compliance) -> list[_Position]:
+def _prepare_unique(
+    field: ClearanceField, u, grid: PatchOptions, compliance, max_half_width_mm=None
+) -> list[_Position]:
+    """The positions ``u`` prepared in one batch (``max_half_width_mm``: one per position,
+    default the grid's), each as it is."""
     base = np.round(-u / field.pinion.pitch_rad).astype(np.intp)
-    batch = position_patches(field, u, base[:, None] + np.arange(-2, 3), grid)
+    batch = position_patches(field, u, base[:, None] + np.arange(-2, 3), grid, max_half_width_mm)
     reach_mm = grid.reach_um * 1e-3
     chosen = []
     for uj, patches in zip(u, batch, strict=True):
@@ -453,6 +457,8 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     lows = _refined_minima(
         u, [results[t].lte_arcsec for t in loaded], loaded, g_min, prepared_at, rounds
     )
+    resolved = _resolved_pressures(field, u, [results[t] for t in loaded], grid, compliance)
+    pressures = dict(zip(loaded, resolved, strict=True))
     out = []
     for t in torques:
         result = results[t]
@@ -462,7 +468,7 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
                 result,
                 lte_peak_to_peak_arcsec=high
                 - min(lows[loaded.index(t)], float(result.lte_arcsec.min())),
-                max_contact_pressure_mpa=_resolved_pressure(field, u, result, t, grid, compliance),
+                max_contact_pressure_mpa=pressures[t],
             )
         else:
             result = replace(result, lte_peak_to_peak_arcsec=float(tca.te_peak_to_peak_arcsec))
@@ -470,37 +476,47 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
     return out
 
 
-def _resolved_pressure(field, u, result: LoadedContact, torque_nm, grid, compliance) -> float:
-    """The largest contact pressure at ``torque_nm``, resolved across the contact: the
-    position of the largest pressure on the cycle's patch grid (whose patches across the
-    contact line are sized for the whole potential contact zone) evaluated again with patches
-    fitted to the loaded width there (21 across twice its half-width, doubled while the load
-    reaches the grid's side), so that the peak of the semi-elliptic pressure across is
-    sampled, not averaged over a patch."""
-    j = int(np.argmax([max(float(q.max()) for q in pos.pressure_mpa) for pos in result.positions]))
-    load = result.positions[j]
-    half = 0.0
-    for patches, forces in zip(load.patches, load.forces_n, strict=True):
-        loaded = forces > 0.0
-        if loaded.any():
-            half = max(half, float(np.max(np.abs(patches.y_mm[loaded]) + patches.width_mm[loaded])))
-    best = max(float(q.max()) for q in load.pressure_mpa)
-    if half <= 0.0:
-        return best
-    fine = replace(grid, across=21, max_half_width_mm=1.5 * half)
+def _resolved_pressures(field, u, results, grid, compliance) -> list[float]:
+    """Each result's largest contact pressure resolved across the contact: the position of
+    the largest pressure on the cycle's patch grid (whose patches across the contact line are
+    sized for the whole potential contact zone) evaluated again with patches fitted to the
+    loaded width there (21 across 1.5 times its half-width, doubled while the load reaches
+    the grid's side), so that the peak of the semi-elliptic pressure across is sampled, not
+    averaged over a patch. The torques' positions are prepared in one batch per round."""
+    best, pending = [], {}
+    for n, result in enumerate(results):
+        j = int(np.argmax([max(float(q.max()) for q in p.pressure_mpa) for p in result.positions]))
+        load = result.positions[j]
+        half = 0.0
+        for patches, forces in zip(load.patches, load.forces_n, strict=True):
+            loaded = forces > 0.0
+            if loaded.any():
+                edge = np.abs(patches.y_mm[loaded]) + patches.width_mm[loaded]
+                half = max(half, float(np.max(edge)))
+        best.append(max(float(q.max()) for q in load.pressure_mpa))
+        if half > 0.0:
+            pending[n] = (j, load.theta_rad, 1.5 * half)
+    fine = replace(grid, across=21)
     for _ in range(3):
-        (pos,) = _prepare(field, u[j], fine, compliance)
-        per_pair, _ = _solve(pos, torque_nm, theta_rad=load.theta_rad)
-        sides = [
-            bool(((f > 0.0) & (p.open_end | p.boundary))[:, [0, -1]].any())
-            for p, f in zip(pos.patches, per_pair, strict=True)
-        ]
-        best = max(
-            float(np.max(f / p.area_mm2)) for p, f in zip(pos.patches, per_pair, strict=True)
-        )
-        if not any(sides):
+        if not pending:
             break
-        fine = replace(fine, max_half_width_mm=2.0 * fine.max_half_width_mm)
+        keys = list(pending)
+        prepared = _prepare_unique(
+            field,
+            np.array([u[pending[n][0]] for n in keys]),
+            fine,
+            compliance,
+            np.array([pending[n][2] for n in keys]),
+        )
+        for n, pos in zip(keys, prepared, strict=True):
+            j, theta, width = pending.pop(n)
+            per_pair, _ = _solve(pos, results[n].torque_nm, theta_rad=theta)
+            pairs = list(zip(pos.patches, per_pair, strict=True))
+            best[n] = max(float(np.max(f / p.area_mm2)) for p, f in pairs)
+            if any(
+                bool(((f > 0.0) & (p.open_end | p.boundary))[:, [0, -1]].any()) for p, f in pairs
+            ):
+                pending[n] = (j, theta, 2.0 * width)
     return best
 
 

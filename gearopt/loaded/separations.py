@@ -184,11 +184,16 @@ def contact_patches(
 
 
 def position_patches(
-    field: ClearanceField, u_rad, pairs, grid: PatchOptions | None = None
+    field: ClearanceField,
+    u_rad,
+    pairs,
+    grid: PatchOptions | None = None,
+    max_half_width_mm=None,
 ) -> list[list[PairPatches]]:
     """:func:`contact_patches` at several positions ``u_rad`` at once (one array operation for
     all positions and pairs): one list per position. ``pairs``: the same offsets at every
-    position, or one row of offsets per position."""
+    position, or one row of offsets per position. ``max_half_width_mm``: the grid's largest
+    half-width across the contact line, one per position (default the grid's)."""
     grid = grid or PatchOptions()
     pinion, gear = field.pinion, field.gear
     u = np.atleast_1d(np.asarray(u_rad, float))
@@ -221,7 +226,10 @@ def position_patches(
         half_l = np.where(lam[:, 0] > 0.0, np.sqrt(2.0 * reach_mm / lam[:, 0]), longest)
         half_w = np.where(lam[:, 1] > 0.0, np.sqrt(2.0 * reach_mm / lam[:, 1]), np.inf)
     half_l = np.minimum(half_l, longest)
-    half_w = np.minimum(half_w, grid.max_half_width_mm)
+    cap = np.broadcast_to(
+        grid.max_half_width_mm if max_half_width_mm is None else max_half_width_mm, u.shape
+    )
+    half_w = np.minimum(half_w, cap[rows // offsets.shape[1]])
     along, across = grid.along, grid.across
     t = half_l[:, None] * np.linspace(-1.0, 1.0, along)
     w = half_w[:, None] * np.linspace(-1.0, 1.0, across)
