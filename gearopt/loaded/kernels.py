@@ -268,6 +268,40 @@ def table_stencil(u, v, n_f, n_p, points, weights):
                 weights[k, 4 * a + b] = wf[a] * wp[b]
 
 
+@compiled
+def patch_frames(jets, major, minor, reference, normal, area, along, across):
+    """At every point of a patch grid from the flank's jets (``(r, a, w, 3, 3)``: point and
+    its derivatives d/ds, d/dt) and each row's directions along and across the contact line
+    in grid coordinates (``major``, ``minor``: ``(r, 2)``): the tangents along and across,
+    ``p_major = p_s major_s + p_t major_t`` and ``p_minor`` likewise, their lengths (``along``,
+    ``across``: mm per unit of the direction), the unit normal ``p_major x p_minor`` turned as
+    ``reference`` (out of the tooth) and the area element ``|p_major x p_minor|``."""
+    rows, a_n, w_n = area.shape
+    for r in range(rows):
+        ms, mt, ns, nt = major[r, 0], major[r, 1], minor[r, 0], minor[r, 1]
+        for i in range(a_n):
+            for k in range(w_n):
+                j = jets[r, i, k]
+                ux = j[1, 0] * ms + j[2, 0] * mt
+                uy = j[1, 1] * ms + j[2, 1] * mt
+                uz = j[1, 2] * ms + j[2, 2] * mt
+                vx = j[1, 0] * ns + j[2, 0] * nt
+                vy = j[1, 1] * ns + j[2, 1] * nt
+                vz = j[1, 2] * ns + j[2, 2] * nt
+                cx = uy * vz - uz * vy
+                cy = uz * vx - ux * vz
+                cz = ux * vy - uy * vx
+                size = math.sqrt(cx * cx + cy * cy + cz * cz)
+                sign = cx * reference[0] + cy * reference[1] + cz * reference[2]
+                scale = (-1.0 if sign < 0.0 else 1.0) / size if size > 0.0 else 0.0
+                normal[r, i, k, 0] = cx * scale
+                normal[r, i, k, 1] = cy * scale
+                normal[r, i, k, 2] = cz * scale
+                area[r, i, k] = size
+                along[r, i, k] = math.sqrt(ux * ux + uy * uy + uz * uz)
+                across[r, i, k] = math.sqrt(vx * vx + vy * vy + vz * vz)
+
+
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process (on one patch),
     before worker processes start: they then load the cache rather than compile it side by
@@ -279,6 +313,11 @@ def warm() -> None:
     grid = (0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1, 0.0, 1.0, False, 0.0, 0.0, 0.0)
     flank_jets(one, one, grid, np.zeros((1, 16)), np.empty((1, 3, 3)))
     table_stencil(one, one, 2, 2, np.empty((1, 16), np.intp), np.empty((1, 16)))
+    frames = np.empty((1, 1, 1))
+    patch_frames(
+        np.zeros((1, 1, 1, 3, 3)), np.ones((1, 2)), np.ones((1, 2)), np.ones(3),
+        np.empty((1, 1, 1, 3)), frames, frames.copy(), frames.copy(),
+    )  # fmt: skip
     influence_columns(
         np.zeros((1, 1), np.intp),
         np.ones((1, 1)),

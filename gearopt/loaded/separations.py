@@ -267,20 +267,20 @@ def position_patches(
     points = jets[..., 0, :]
     s, h = es[:, 1:-1, 1:-1], eh[:, 1:-1, 1:-1]
     p = points[:, 1:-1, 1:-1]
-    # the tangents along the contact line and across it
-    p_s, p_t = jets[:, 1:-1, 1:-1, 1, :], jets[:, 1:-1, 1:-1, 2, :]
-    p_major = p_s * major[:, None, None, :1] + p_t * major[:, None, None, 1:]
-    p_minor = p_s * minor[:, None, None, :1] + p_t * minor[:, None, None, 1:]
-    normal = np.cross(p_major, p_minor)
-    area = np.linalg.norm(normal, axis=-1)
-    normal = outward(pinion, normal)
-    at = field.clearance_of_points(p, normal, phi[:, None, None])
+    # every point's tangents along and across the contact line, normal and area element
+    normal, area, along_mm, across_mm = (np.empty(es.shape + (3,)), *np.empty((3,) + es.shape))
+    reference = pinion.normals[tuple(np.array(pinion.shape) // 2)]
+    kernels.patch_frames(jets, major, minor, reference, normal, area, along_mm, across_mm)
+    area, along_mm, across_mm = (v[:, 1:-1, 1:-1] for v in (area, along_mm, across_mm))
+    # the points beyond the grid (a ring) for the boundary, in the same call
+    every = field.clearance_of_points(points, normal, phi[:, None, None])
     ring = np.ones(es.shape[1:], dtype=bool)
     ring[1:-1, 1:-1] = False
-    beyond = field.clearance_of_points(points[:, ring], None, phi[:, None]).valid
-    valid = at.valid & np.isfinite(at.clearance_rad) & pinion.inside(s, h)
+    inner = (slice(None), slice(1, -1), slice(1, -1))
+    clearance, factor = every.clearance_rad[inner], every.normal_factor_mm[inner]
+    valid = every.valid[inner] & np.isfinite(clearance) & pinion.inside(s, h)
     ext_valid = np.empty(es.shape, dtype=bool)
-    ext_valid[:, ring] = beyond & pinion.inside(es[:, ring], eh[:, ring])
+    ext_valid[:, ring] = every.valid[:, ring] & pinion.inside(es[:, ring], eh[:, ring])
     ext_valid[:, 1:-1, 1:-1] = valid
     beside = (
         ~ext_valid[:, :-2, 1:-1]
@@ -293,11 +293,10 @@ def position_patches(
     # the gear's grid coordinates of the points (for the gear's compliance)
     q = field.gear_frame_points(p, phi[:, None, None])
     gs, gh = gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
-    length = np.linalg.norm(p_major, axis=-1) * dt[:, None, None]
-    width = np.linalg.norm(p_minor, axis=-1) * dw[:, None, None]
-    centre = (along // 2, across // 2)
-    scale_a = np.linalg.norm(p_major[:, centre[0], centre[1]], axis=-1)
-    scale_w = np.linalg.norm(p_minor[:, centre[0], centre[1]], axis=-1)
+    length = along_mm * dt[:, None, None]
+    width = across_mm * dw[:, None, None]
+    scale_a = along_mm[:, along // 2, across // 2]
+    scale_w = across_mm[:, along // 2, across // 2]
     x = np.broadcast_to((t * scale_a[:, None])[:, :, None], s.shape)
     y = (shift[:, :, None] + w[:, None, :]) * scale_w[:, None, None]
     for j, row in enumerate(rows):
@@ -309,8 +308,8 @@ def position_patches(
                 profile_mm=h[j],
                 gear_face_mm=gs[j],
                 gear_profile_mm=gh[j],
-                clearance_rad=np.where(valid[j], at.clearance_rad[j], np.inf),
-                factor_mm=at.normal_factor_mm[j],
+                clearance_rad=np.where(valid[j], clearance[j], np.inf),
+                factor_mm=factor[j],
                 area_mm2=area[j] * dt[j] * dw[j],
                 length_mm=length[j],
                 width_mm=width[j],
