@@ -371,7 +371,11 @@ class ContactEngine:
             )
             return tuple(None if a is None else a[0] for a in one)
         x, y, z = (np.broadcast_to(a, shape) for a in (x, y, z))
-        rows = self.rows_of(*(np.broadcast_to(a, shape) for a in (side, phi, gear_angle_rad)))
+        # the rows' constants on their own shape (a pinion angle per row of points, say),
+        # broadcast against the points where used
+        side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), gear_angle_rad)
+        lead = (1,) * (len(shape) - phi.ndim)
+        rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
         zt = self.lin_z.reshape((4,) + (1,) * len(shape)) * z
         zt += self.const.reshape((4,) + (1,) * len(shape))
         normals = None

@@ -175,7 +175,7 @@ class ClearanceField:
         comps = (p[..., 0], p[..., 1], p[..., 2])
         n = None if normals is None else np.asarray(normals, float)
         comps_n = None if n is None else (n[..., 0], n[..., 1], n[..., 2])
-        side = np.zeros(np.broadcast(p[..., 0], phi_rad).shape, np.intp)
+        side = np.zeros(np.shape(phi_rad), np.intp)
         delta, factor, radius, valid = self._engine.gap(
             side, comps, comps_n, phi_rad, gear_angle_rad
         )
