@@ -624,14 +624,18 @@ class PatchCompliance:
 
     def bending_mm(self, forces_n) -> np.ndarray:
         """The members' part of ``C F`` at every patch (mm): all of it but the half-spaces'
-        local part, which is positive; one table product per member and group."""
+        local part, which is positive; per member one table product for all groups."""
         f = np.asarray(forces_n, dtype=float)
+        counts = np.diff(self.starts)
+        group = np.repeat(np.arange(counts.size), counts)[:, None]
         out = np.zeros(self.size)
-        for lo, hi in zip(self.starts[:-1], self.starts[1:], strict=True):
-            for table, points, weights in self.members:
-                k, w = points[lo:hi], weights[lo:hi]
-                nodal = np.bincount(k.ravel(), (w * f[lo:hi, None]).ravel(), table.shape[0])
-                out[lo:hi] += (w * (table @ nodal)[k]).sum(axis=1)
+        for table, points, weights in self.members:
+            size = table.shape[0]
+            nodal = np.bincount(
+                (group * size + points).ravel(), (weights * f[:, None]).ravel(), counts.size * size
+            )
+            moved = nodal.reshape(counts.size, size) @ table  # T symmetric
+            out += (weights * moved[group, points]).sum(axis=1)
         return out
 
 
