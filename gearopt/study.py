@@ -58,6 +58,7 @@ from tqdm import tqdm
 from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
 from gearopt.loaded import kernels as loaded_kernels
+from gearopt.loaded import lcp_kernels
 from gearopt.results import ResultsStore
 from gearopt.storage import (
     check_own_tables,
@@ -509,6 +510,7 @@ def run_study(
     # before the workers start: they load the cache rather than compile it side by side
     contact_kernels.warm()
     loaded_kernels.warm()
+    lcp_kernels.warm()
     executor = _executor(jobs, backend, scheduler)
     busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
     try:

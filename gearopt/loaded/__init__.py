@@ -7,7 +7,9 @@
   or columns of them on demand, compiled in :mod:`gearopt.loaded.kernels`);
 - :mod:`gearopt.loaded.lcp`: the load distribution at one mesh position, the linear
   complementarity problem of the patch forces and the rotation lag solved exactly by an
-  active-set method, on a dense compliance or on its columns requested as needed;
+  active-set method, on a dense compliance or on its columns requested as needed, or compiled
+  (:mod:`gearopt.loaded.lcp_kernels`) on the compliance of contact patches
+  (:mod:`gearopt.loaded.patch_compliance`, computed by columns and kept);
 - :mod:`gearopt.loaded.separations`: the initial separations, patches around each tooth pair's
   unloaded contact on the flanks' interpolants;
 - :mod:`gearopt.loaded.ltca`: one side's loaded TCA over the mesh cycle (LTE, load sharing,
@@ -39,13 +41,13 @@ from gearopt.loaded.lcp import (
     ColumnCache,
     ComplementarityResiduals,
     LoadDistribution,
-    PatchCompliance,
     solve_load_columns,
     solve_load_distribution,
     solve_load_patches,
 )
 from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
 from gearopt.loaded.pair import loaded_sides
+from gearopt.loaded.patch_compliance import PatchCompliance
 from gearopt.loaded.separations import PairPatches, contact_patches
 
 __all__ = [

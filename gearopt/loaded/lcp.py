@@ -69,11 +69,10 @@ import scipy.linalg
 
 from gearopt.errors import GearoptError
 from gearopt.loaded import lcp_kernels
-from gearopt.loaded.halfspace import FAR_FIELD_RATIO
+from gearopt.loaded.patch_compliance import PatchCompliance
 
 __all__ = [
     "ColumnCache",
-    "PatchCompliance",
     "ComplementarityResiduals",
     "LoadDistribution",
     "solve_load_columns",
@@ -522,123 +521,6 @@ def solve_load_columns(
     return _result(area, r, t, forces, theta, gaps, support, iterations)
 
 
-class PatchCompliance:
-    """The compliance of contact patches from their data, for the compiled solver
-    (:func:`solve_load_patches`, :mod:`gearopt.loaded.lcp_kernels`), with the columns it has
-    computed (kept across the solves of one set of patches, e.g. the torques of a sweep).
-
-    ``C`` is block-diagonal over groups of patches (the tooth pairs: separate bodies), the
-    groups ``starts[g]:starts[g + 1]``; within a group the half-spaces' local compliance of
-    rectangles centred at ``(x, y)`` with half-sides ``(a, b)`` (mm; ``composite`` in mm^2/N,
-    :func:`gearopt.loaded.halfspace.halfspace_columns_mm_per_n`) plus each member's influence
-    numbers: ``members``, ``((table, points, weights), ...)``, a table (mm/N, symmetric) and
-    the stencils of the patches on it (``(n, 16)``,
-    :meth:`gearopt.loaded.compliance.ToothCompliance.stencil`). One group:
-    ``starts = [0, n]``; :meth:`join` stacks groups.
-    """
-
-    def __init__(self, *, starts, x_mm, y_mm, a_mm, b_mm, composite_mm2_per_n, members) -> None:
-        self.starts = np.ascontiguousarray(starts, dtype=np.intp)
-        self.x, self.y, self.a, self.b = (
-            np.ascontiguousarray(v, dtype=float) for v in (x_mm, y_mm, a_mm, b_mm)
-        )
-        self.composite = float(composite_mm2_per_n)
-        self.members = tuple(
-            (
-                np.ascontiguousarray(table, dtype=float),
-                np.ascontiguousarray(points, dtype=np.intp),
-                np.ascontiguousarray(weights, dtype=float),
-            )
-            for table, points, weights in members
-        )
-        n = self.x.size
-        self.slot = np.full(n, -1, dtype=np.intp)
-        self.rows = np.empty((min(max(n, 1), 32), n))
-        self.count = 0
-
-    @property
-    def size(self) -> int:
-        """The number of patches."""
-        return int(self.x.size)
-
-    @classmethod
-    def join(cls, parts) -> PatchCompliance:
-        """One compliance of the groups of ``parts`` (the same composite and tables)."""
-        parts = list(parts)
-        sizes = [p.size for p in parts]
-        starts = np.concatenate([[0], np.cumsum(sizes)])
-        ends = zip(parts, starts[:-1], strict=True)
-        blocks = np.concatenate([p.starts[1:] - p.starts[0] + s0 for p, s0 in ends])
-        first = parts[0]
-        return cls(
-            starts=np.concatenate([[0], blocks]),
-            x_mm=np.concatenate([p.x for p in parts]),
-            y_mm=np.concatenate([p.y for p in parts]),
-            a_mm=np.concatenate([p.a for p in parts]),
-            b_mm=np.concatenate([p.b for p in parts]),
-            composite_mm2_per_n=first.composite,
-            members=tuple(
-                (
-                    table,
-                    np.concatenate([p.members[k][1] for p in parts]),
-                    np.concatenate([p.members[k][2] for p in parts]),
-                )
-                for k, (table, _, _) in enumerate(first.members)
-            ),
-        )
-
-    def subset(self, rows) -> PatchCompliance:
-        """The compliance of the patches ``rows`` (ascending) among themselves."""
-        rows = np.asarray(rows, dtype=np.intp)
-        group = np.searchsorted(self.starts, rows, side="right") - 1
-        counts = np.bincount(group, minlength=self.starts.size - 1)
-        return PatchCompliance(
-            starts=np.concatenate([[0], np.cumsum(counts)]),
-            x_mm=self.x[rows],
-            y_mm=self.y[rows],
-            a_mm=self.a[rows],
-            b_mm=self.b[rows],
-            composite_mm2_per_n=self.composite,
-            members=tuple((t, k[rows], w[rows]) for t, k, w in self.members),
-        )
-
-    def _kernel_args(self):
-        return (
-            self.starts,
-            self.x,
-            self.y,
-            self.a,
-            self.b,
-            self.composite / np.pi,
-            FAR_FIELD_RATIO,
-            self.members,
-        )
-
-    def __call__(self, idx) -> np.ndarray:
-        """``C[:, idx]`` (``(n, len(idx))``), computed where not held."""
-        idx = np.asarray(idx, dtype=np.intp)
-        self.rows, self.count = lcp_kernels.fetch(
-            idx, *self._kernel_args(), self.rows, self.slot, self.count
-        )
-        return self.rows[self.slot[idx]].T
-
-    def bending_mm(self, forces_n) -> np.ndarray:
-        """The members' part of ``C F`` at every patch (mm): all of it but the half-spaces'
-        local part, which is positive; per member one table product for all groups."""
-        f = np.asarray(forces_n, dtype=float)
-        counts = np.diff(self.starts)
-        group = np.repeat(np.arange(counts.size), counts)[:, None]
-        out = np.zeros(self.size)
-        for table, points, weights in self.members:
-            size = table.shape[0]
-            nodal = np.bincount(
-                (group * size + points).ravel(), (weights * f[:, None]).ravel(), counts.size * size
-            )
-            moved = nodal.reshape(counts.size, size) @ table  # T symmetric
-            out += (weights * moved[group, points]).sum(axis=1)
-        return out
-
-
 def solve_load_patches(
     *,
     separation_mm,
@@ -673,20 +555,23 @@ def solve_load_patches(
             separation_mm=s, area_mm2=area, lever_arm_mm=r, torque_n_mm=t, columns=compliance
         )
     cap = 2 * n + 10 if max_iterations is None else int(max_iterations)
-    status, forces, theta, gaps, active, iterations, rows, count = lcp_kernels.solve_patches(
-        s,
-        r,
-        t,
-        np.zeros(n) if start is None else start,
-        float(tolerance_mm),
-        cap,
-        SINGULAR_RTOL,
-        *compliance._kernel_args(),
-        compliance.rows,
-        compliance.slot,
-        compliance.count,
-    )
-    compliance.rows, compliance.count = rows, count
+    forces, iterations = np.zeros(n) if start is None else start, 0
+    while True:  # the kernel stops where it needs columns not held: computed, it goes on
+        status, forces, theta, gaps, active, iterations, need = lcp_kernels.solve_patches(
+            s,
+            r,
+            t,
+            forces,
+            float(tolerance_mm),
+            cap,
+            iterations,
+            SINGULAR_RTOL,
+            compliance.rows,
+            compliance.slot,
+        )
+        if status != 3:
+            break
+        compliance.fetch(need)
     if status == 1:
         return solve_load_columns(
             separation_mm=s,

@@ -1,17 +1,15 @@
 """Compiled load distribution (numba): the active-set method of :mod:`gearopt.loaded.lcp` on
-contact patches whose compliance columns the kernel computes itself.
+compliance columns held in a cache.
 
-The compliance ``C`` of the patches is block-diagonal over the tooth pairs (``starts``: the
-first patch of each pair, and the end): within a pair, the half-spaces' local compliance
-(Love's rectangles, :func:`gearopt.loaded.kernels.halfspace_columns`) plus both teeth's
-influence numbers (:func:`gearopt.loaded.kernels.influence_columns`, each member's table and
-its stencils at the patches). Columns are computed when the method first needs them and kept
-in ``rows`` (row ``slot[j]`` holds column ``j``), which the caller keeps across the torques of a
-sweep. The method is :func:`gearopt.loaded.lcp.solve_load_columns`'s, step for step, for a
-positive definite ``C``; where a block ``C_PP`` is singular (a Cholesky pivot below
-``singular_rtol`` of its largest diagonal entry) the kernel stops with status 1 and the caller
-solves with the Python method (its null-space branch); status 2: no convergence within ``cap``
-outer iterations.
+The method is :func:`gearopt.loaded.lcp.solve_load_columns`'s, step for step, for a positive
+definite ``C``, on the columns held in ``rows`` (row ``slot[j]`` holds column ``j``; ``slot[j] <
+0``: not held). Where it needs columns the cache does not hold it stops with status 3, the
+columns in ``need`` and its feasible forces (``>= 0``, ``r^T F = t``) as the start of the next
+call once the caller has computed them (the columns are the caller's: no kernel is linked
+into this one, which keeps its compilation short). Status 1: a block ``C_PP`` is singular (a
+Cholesky pivot below ``singular_rtol`` of its largest diagonal entry), the caller solves with
+the Python method (its null-space branch); status 2: no convergence within ``cap`` outer
+iterations; status 0: solved.
 
 As every kernel: plain Python where numba is missing or ``GEAROPT_JIT=0``
 (:mod:`gearopt.jit`).
@@ -22,43 +20,11 @@ from __future__ import annotations
 import numpy as np
 
 from gearopt.jit import compiled
-from gearopt.loaded.kernels import halfspace_columns, influence_columns
 
-__all__ = ["fetch", "solve_patches"]
+__all__ = ["solve_patches", "warm"]
 
 #: the block addition takes at most ``max(_BLOCK_LEAST, |P| / 2)`` patches at a time
 _BLOCK_LEAST = 32
-
-
-@compiled
-def fetch(idx, starts, x, y, a, b, factor, far, members, rows, slot, count):
-    """Columns ``idx`` into ``rows`` where not held; returns ``(rows, count)`` (``rows``
-    reallocated twice as large when full)."""
-    n = slot.size
-    missing = idx[slot[idx] < 0]
-    m = missing.size
-    if m == 0:
-        return rows, count
-    if count + m > rows.shape[0]:
-        grown = np.empty((min(n, max(2 * rows.shape[0], count + m)), n))
-        grown[:count] = rows[:count]
-        rows = grown
-    block = np.searchsorted(starts, missing, side="right") - 1
-    for blk in np.unique(block):
-        lo, hi = starts[blk], starts[blk + 1]
-        mine = missing[block == blk]
-        local = mine - lo
-        part = np.empty((mine.size, hi - lo))
-        halfspace_columns(x[lo:hi], y[lo:hi], a[lo:hi], b[lo:hi], local, factor, far, part)
-        for table, points, weights in members:
-            influence_columns(points[lo:hi], weights[lo:hi], local, table, part)
-        for k in range(mine.size):
-            row = rows[count]
-            row[:] = 0.0
-            row[lo:hi] = part[k]
-            slot[mine[k]] = count
-            count += 1
-    return rows, count
 
 
 @compiled
@@ -113,93 +79,181 @@ def _on_support(support, s, r, t, rows, slot, singular_rtol):
 
 
 @compiled
-def solve_patches(
-    s, r, t, start, tol, cap, singular_rtol, starts, x, y, a, b, factor, far, members,
-    rows, slot, count,
-):  # fmt: skip
+def _support(mask):
+    """The indices where ``mask`` holds, ascending."""
+    count = 0
+    for i in range(mask.size):
+        if mask[i]:
+            count += 1
+    out = np.empty(count, dtype=np.intp)
+    count = 0
+    for i in range(mask.size):
+        if mask[i]:
+            out[count] = i
+            count += 1
+    return out
+
+
+@compiled
+def _missing(idx, slot):
+    """The indices of ``idx`` whose columns are not held."""
+    mask = np.zeros(slot.size, dtype=np.bool_)
+    for j in idx:
+        if slot[j] < 0:
+            mask[j] = True
+    return _support(mask)
+
+
+@compiled
+def _most_negative(new, gaps, limit):
+    """The ``limit`` patches of ``new`` with the least gaps (ties: the lower index), in
+    ascending order of index."""
+    if new.size <= limit:
+        return new
+    taken = np.zeros(new.size, dtype=np.bool_)
+    for _ in range(limit):
+        best = -1
+        for k in range(new.size):
+            if not taken[k] and (best < 0 or gaps[new[k]] < gaps[new[best]]):
+                best = k
+        taken[best] = True
+    out = np.empty(limit, dtype=np.intp)
+    count = 0
+    for k in range(new.size):
+        if taken[k]:
+            out[count] = new[k]
+            count += 1
+    return out
+
+
+@compiled
+def solve_patches(s, r, t, start, tol, cap, done, singular_rtol, rows, slot):
     """The load distribution (module docstring) from ``start`` (feasible forces, ``r^T F =
-    t``; all zero: the patch that closes first). Returns ``(status, forces, theta, gaps,
-    active, iterations, rows, count)``."""
+    t``; all zero: the patch that closes first), ``done`` outer iterations made before.
+    Returns ``(status, forces, theta, gaps, active, iterations, need)``."""
     n = s.size
-    forces = np.zeros(n)
-    in_p = np.zeros(n, dtype=np.bool_)
+    forces = start.copy()
+    in_p = forces > 0.0
     gaps = np.zeros(n)
     theta = 0.0
-    iterations = 0
-    if start.any():
-        forces[:] = start
-        in_p[:] = start > 0.0
-        while True:
-            support = np.flatnonzero(in_p)
-            rows, count = fetch(
-                support, starts, x, y, a, b, factor, far, members, rows, slot, count
-            )
-            ok, z, z_theta = _on_support(support, s, r, t, rows, slot, singular_rtol)
-            if not ok:
-                return 1, forces, theta, gaps, in_p, iterations, rows, count
-            if (z[support] > 0.0).all():
-                break
-            forces = np.where(in_p & (z > 0.0), z, 0.0)
-            forces *= t / np.sum(r * forces)
-            in_p = forces > 0.0
-    else:
-        first = np.argmin(s / r)
-        in_p[first] = True
+    iterations = done
+    none = np.zeros(0, dtype=np.intp)
+    support = _support(in_p)
+    if support.size == 0:  # cold: the patch that closes first
+        first = 0
+        for i in range(1, n):
+            if s[i] / r[i] < s[first] / r[first]:
+                first = i
         forces[first] = t / r[first]
-        support = np.flatnonzero(in_p)
-        rows, count = fetch(support, starts, x, y, a, b, factor, far, members, rows, slot, count)
+        in_p[first] = True
+        return 3, forces, theta, gaps, in_p, iterations, np.array([first])
+    while True:  # a warm start: its tensile forces dropped at once while there are some
+        need = _missing(support, slot)
+        if need.size:
+            return 3, forces, theta, gaps, in_p, iterations, need
         ok, z, z_theta = _on_support(support, s, r, t, rows, slot, singular_rtol)
         if not ok:
-            return 1, forces, theta, gaps, in_p, iterations, rows, count
+            return 1, forces, theta, gaps, in_p, iterations, none
+        tensile = False
+        for j in support:
+            tensile = tensile or z[j] <= 0.0
+        if not tensile:
+            break
+        moment = 0.0
+        for j in support:
+            forces[j] = z[j] if z[j] > 0.0 else 0.0
+            moment += r[j] * forces[j]
+        for j in support:
+            forces[j] *= t / moment
+            in_p[j] = forces[j] > 0.0
+        support = _support(in_p)
     stuck = np.zeros(n, dtype=np.bool_)
     while True:
         # Lawson-Hanson's inner loop: step towards z as far as the forces stay >= 0
         while True:
-            support = np.flatnonzero(in_p)
-            neg = support[z[support] <= 0.0]
-            if neg.size == 0:
+            alpha = np.inf
+            for j in support:
+                if z[j] <= 0.0:
+                    alpha = min(alpha, forces[j] / (forces[j] - z[j]))
+            if alpha == np.inf:
                 forces, theta = z, z_theta
                 break
-            step = z - forces
-            ratio = forces[neg] / -step[neg]
-            alpha = ratio.min()
-            forces = forces + alpha * step
-            forces[neg[ratio <= alpha]] = 0.0
-            in_p = in_p & (forces > 0.0)
-            forces[~in_p] = 0.0
-            support = np.flatnonzero(in_p)
+            for j in support:
+                if z[j] <= 0.0 and forces[j] / (forces[j] - z[j]) <= alpha:
+                    forces[j] = 0.0  # (those reaching 0 exactly)
+                    in_p[j] = False
+                else:
+                    forces[j] += alpha * (z[j] - forces[j])
+                    if not forces[j] > 0.0:
+                        forces[j] = 0.0
+                        in_p[j] = False
+            support = _support(in_p)
             ok, z, z_theta = _on_support(support, s, r, t, rows, slot, singular_rtol)
             if not ok:
-                return 1, forces, theta, gaps, in_p, iterations, rows, count
-        support = np.flatnonzero(in_p)
-        gaps = s - r * theta
+                return 1, forces, theta, gaps, in_p, iterations, none
+        for i in range(n):
+            gaps[i] = s[i] - r[i] * theta
         for j in support:
-            gaps += forces[j] * rows[slot[j]]
-        candidates = ~in_p & ~stuck & (gaps < -tol)
-        if not candidates.any():
-            return 0, forces, theta, gaps, in_p, iterations, rows, count
+            column = rows[slot[j]]
+            f = forces[j]
+            for i in range(n):
+                gaps[i] += f * column[i]
+        candidates = np.zeros(n, dtype=np.bool_)
+        for i in range(n):
+            candidates[i] = not in_p[i] and not stuck[i] and gaps[i] < -tol
+        new = _support(candidates)
+        if new.size == 0:
+            return 0, forces, theta, gaps, in_p, iterations, none
         if iterations >= cap:
-            return 2, forces, theta, gaps, in_p, iterations, rows, count
+            return 2, forces, theta, gaps, in_p, iterations, none
+        best = 0
+        for k in range(1, new.size):
+            if gaps[new[k]] < gaps[new[best]]:
+                best = k
+        single = new[best : best + 1]
+        new = _most_negative(new, gaps, max(_BLOCK_LEAST, int(0.5 * support.size)))
+        need = _missing(new, slot)
+        if need.size:  # the columns first: this state is the next call's start
+            return 3, forces, theta, gaps, in_p, iterations, need
         iterations += 1
-        new = np.flatnonzero(candidates)
-        single = new[np.argmin(gaps[new]) : np.argmin(gaps[new]) + 1]
-        limit = max(_BLOCK_LEAST, int(0.5 * support.size))
-        if new.size > limit:
-            new = np.sort(new[np.argsort(gaps[new], kind="mergesort")[:limit]])
         while True:  # block addition: the new patches that would carry tension out again
             joined = in_p.copy()
-            joined[new] = True
-            union = np.flatnonzero(joined)
-            rows, count = fetch(union, starts, x, y, a, b, factor, far, members, rows, slot, count)
-            ok, z, z_theta = _on_support(union, s, r, t, rows, slot, singular_rtol)
+            for j in new:
+                joined[j] = True
+            ok, z, z_theta = _on_support(_support(joined), s, r, t, rows, slot, singular_rtol)
             if not ok:
-                return 1, forces, theta, gaps, in_p, iterations, rows, count
-            keep = z[new] > 0.0
-            if keep.all() or (new.size == 1 and not keep.any()):
+                return 1, forces, theta, gaps, in_p, iterations, none
+            kept = 0
+            for j in new:
+                if z[j] > 0.0:
+                    kept += 1
+            if kept == new.size or (new.size == 1 and kept == 0):
                 break
-            new = new[keep] if keep.any() else single
+            if kept == 0:
+                new = single
+            else:
+                keep = np.empty(kept, dtype=np.intp)
+                kept = 0
+                for j in new:
+                    if z[j] > 0.0:
+                        keep[kept] = j
+                        kept += 1
+                new = keep
         if z[new[0]] <= 0.0:  # a single patch, unloaded: round-off at the tolerance
             stuck[new[0]] = True
             z, z_theta = forces.copy(), theta  # the inner loop keeps the solution
             continue
-        in_p[new] = True
+        for j in new:
+            in_p[j] = True
+        support = _support(in_p)
+
+
+def warm() -> None:
+    """Compile the kernel, or load it from the disk cache, in this process (on two patches),
+    before worker processes start (as :func:`gearopt.loaded.kernels.warm`)."""
+    n = 2
+    rows = np.array([[2.0, 1.0], [1.0, 2.0]])
+    solve_patches(
+        np.zeros(n), np.ones(n), 1.0, np.array([0.5, 0.5]), 1e-11, 10, 0, 1e-10, rows,
+        np.arange(n),
+    )  # fmt: skip

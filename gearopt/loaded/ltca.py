@@ -35,7 +35,8 @@ from threadpoolctl import threadpool_limits
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
 from gearopt.load_options import PatchOptions, check_torques
-from gearopt.loaded.lcp import PatchCompliance, solve_load_patches
+from gearopt.loaded.lcp import solve_load_patches
+from gearopt.loaded.patch_compliance import PatchCompliance
 from gearopt.loaded.separations import PairPatches, position_patches
 
 __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]

@@ -17,8 +17,8 @@ import numpy as np
 from gearopt.load_options import LoadOptions
 from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
 from gearopt.loaded.halfspace import composite_compliance_mm2_per_n
-from gearopt.loaded.lcp import PatchCompliance
 from gearopt.loaded.ltca import LoadedContact, loaded_contact
+from gearopt.loaded.patch_compliance import PatchCompliance
 from gearopt.loaded.separations import PairPatches
 
 __all__ = ["loaded_sides", "member_flanks"]
