@@ -195,7 +195,7 @@ def influence_columns(points, weights, columns, table, out):
     ``(len(columns), n)``. In chunks of columns: the table's row combinations ``v_k = sum_q
     w_jq T_q`` side by side (``(N, chunk)``), then per point its stencil's sum over them, the
     innermost loop along the chunk."""
-    n, width = points.shape
+    n = points.shape[0]
     size = table.shape[0]
     chunk = 32
     v = np.empty((size, chunk))
@@ -204,26 +204,26 @@ def influence_columns(points, weights, columns, table, out):
     for k0 in range(0, columns.size, chunk):
         kc = min(chunk, columns.size - k0)
         for c in range(kc):
-            j = columns[k0 + c]
             row_v[:] = 0.0
-            for q in range(width):
-                wq = weights[j, q]
-                if wq != 0.0:
-                    row = table[points[j, q]]
-                    for m in range(size):
-                        row_v[m] += wq * row[m]
+            _gather(row_v, weights[columns[k0 + c]], points[columns[k0 + c]], table, size)
             for m in range(size):
                 v[m, c] = row_v[m]
         for i in range(n):
             acc[:kc] = 0.0
-            for p in range(width):
-                wp = weights[i, p]
-                if wp != 0.0:
-                    vp = v[points[i, p]]
-                    for c in range(kc):
-                        acc[c] += wp * vp[c]
+            _gather(acc, weights[i], points[i], v, kc)
             for c in range(kc):
                 out[k0 + c, i] += acc[c]
+
+
+@compiled(inline=True)
+def _gather(acc, weights, points, source, count):
+    """``acc[:count] += sum_p weights[p] source[points[p], :count]``: a stencil's sum of rows."""
+    for p in range(weights.size):
+        w = weights[p]
+        if w != 0.0:
+            row = source[points[p]]
+            for c in range(count):
+                acc[c] += w * row[c]
 
 
 @compiled(inline=True)
