@@ -215,6 +215,38 @@ def influence_columns(points, weights, columns, table, out):
                 out[k0 + c, i] += acc[c]
 
 
+@compiled
+def influence_times(points, weights, starts, table, forces, out):
+    """``out += W T W^T f`` within each group ``starts[g]:starts[g + 1]`` (separate bodies): a
+    tooth's displacements at flank points under forces at the same points (their stencils
+    ``points``, ``weights`` on the table ``T``, symmetric; as :func:`influence_columns`)."""
+    size = table.shape[0]
+    nodal = np.empty(size)
+    moved = np.empty(size)
+    for g in range(starts.size - 1):
+        lo, hi = starts[g], starts[g + 1]
+        nodal[:] = 0.0
+        loaded = False
+        for j in range(lo, hi):
+            if forces[j] != 0.0:
+                loaded = True
+                for q in range(points.shape[1]):
+                    nodal[points[j, q]] += weights[j, q] * forces[j]
+        if not loaded:
+            continue
+        for m in range(size):
+            acc = 0.0
+            row = table[m]
+            for k in range(size):
+                acc += row[k] * nodal[k]
+            moved[m] = acc
+        for i in range(lo, hi):
+            acc = 0.0
+            for q in range(points.shape[1]):
+                acc += weights[i, q] * moved[points[i, q]]
+            out[i] += acc
+
+
 @compiled(inline=True)
 def _gather(acc, weights, points, source, count):
     """``acc[:count] += sum_p weights[p] source[points[p], :count]``: a stencil's sum of rows."""
@@ -313,6 +345,10 @@ def warm() -> None:
     grid = (0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1, 0.0, 1.0, False, 0.0, 0.0, 0.0)
     flank_jets(one, one, grid, np.zeros((1, 16)), np.empty((1, 3, 3)))
     table_stencil(one, one, 2, 2, np.empty((1, 16), np.intp), np.empty((1, 16)))
+    influence_times(
+        np.zeros((1, 1), np.intp), np.ones((1, 1)), np.array([0, 1], np.intp), np.ones((1, 1)),
+        np.ones(1), np.zeros(1),
+    )  # fmt: skip
     frames = np.empty((1, 1, 1))
     patch_frames(
         np.zeros((1, 1, 1, 3, 3)), np.ones((1, 2)), np.ones((1, 2)), np.ones(3),

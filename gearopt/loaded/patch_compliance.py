@@ -136,16 +136,9 @@ class PatchCompliance:
 
     def bending_mm(self, forces_n) -> np.ndarray:
         """The members' part of ``C F`` at every patch (mm): all of it but the half-spaces'
-        local part, which is positive; per member one table product for all groups."""
-        f = np.asarray(forces_n, dtype=float)
-        counts = np.diff(self.starts)
-        group = np.repeat(np.arange(counts.size), counts)[:, None]
+        local part, which is positive (:func:`gearopt.loaded.kernels.influence_times`)."""
+        f = np.ascontiguousarray(forces_n, dtype=float)
         out = np.zeros(self.size)
         for table, points, weights in self.members:
-            size = table.shape[0]
-            nodal = np.bincount(
-                (group * size + points).ravel(), (weights * f[:, None]).ravel(), counts.size * size
-            )
-            moved = nodal.reshape(counts.size, size) @ table  # T symmetric
-            out += (weights * moved[group, points]).sum(axis=1)
+            kernels.influence_times(points, weights, self.starts, table, f, out)
         return out
