@@ -1,4 +1,5 @@
-"""The compiled kernels' switch: numba's ``njit`` (cached on disk), or plain Python.
+"""The compiled kernels' switch: numba's ``njit`` (cached on disk), or plain Python; and the
+BLAS threads of a computation (:func:`blas_threads`).
 
 Where numba cannot be imported, or with the environment variable ``GEAROPT_JIT=0``,
 :data:`ENABLED` is False and :func:`compiled` hands functions back as they are: the same
@@ -7,14 +8,17 @@ kernels run as plain Python (slow: for checks, not for studies).
 
 from __future__ import annotations
 
+import functools
 import os
+
+from threadpoolctl import ThreadpoolController
 
 try:  # pragma: no cover - depends on the installed extras
     import numba
 except ImportError:  # pragma: no cover
     numba = None
 
-__all__ = ["ENABLED", "compiled"]
+__all__ = ["ENABLED", "blas_threads", "compiled"]
 
 ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
 
@@ -29,3 +33,14 @@ def compiled(func=None, *, inline=False):
         return func
     options = {"inline": "always"} if inline else {}
     return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
+
+
+@functools.cache
+def _controller() -> ThreadpoolController:
+    return ThreadpoolController()
+
+
+def blas_threads(limit: int):
+    """A context limiting the BLAS libraries to ``limit`` threads (threadpoolctl's controller,
+    made once: the libraries are scanned at the first call, not at every one)."""
+    return _controller().limit(limits=limit, user_api="blas")

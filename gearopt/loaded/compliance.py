@@ -68,11 +68,11 @@ from numpy.typing import NDArray
 from scipy.linalg import LinAlgError, cholesky, solve_triangular
 from scipy.sparse import coo_matrix, csc_matrix
 from skfem import Basis, ElementHex2, MeshHex
-from threadpoolctl import threadpool_limits
 
 from gearopt.blank import Blank
 from gearopt.errors import GearoptError
 from gearopt.flank import FLANKS, MEMBERS, FlankMap, axial_plane
+from gearopt.jit import blas_threads
 from gearopt.loaded import kernels
 
 __all__ = [
@@ -278,7 +278,7 @@ class Factorised:
         """``L^-1 f`` of ``(3 N, k)`` nodal vectors: blocks ``(n_blocks, nb, k)``. The
         compliance between load cases F and readings R is ``forward(R^T)^T forward(F)``."""
         y = self._blocks(np.asarray(loads_n, float).reshape(self.n_dofs, -1))
-        with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+        with blas_threads(ONE_BLAS_THREAD):
             self._forward(y)
         return y
 
@@ -293,7 +293,7 @@ class Factorised:
         load case (the fixed degrees of freedom stay zero, their loads are ignored)."""
         loads = np.asarray(loads_n, float)
         y = self.forward(loads)
-        with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+        with blas_threads(ONE_BLAS_THREAD):
             for i in range(y.shape[0] - 1, -1, -1):
                 if i < y.shape[0] - 1:
                     y[i] -= self.below[i].T @ y[i + 1]
@@ -309,7 +309,7 @@ def factorise(model: SolidModel, fixed_nodes: NDArray) -> Factorised:
     """Fix the nodes where ``fixed_nodes`` (``model.node_dof.shape``, bool) is True (all three
     displacement components zero) and factorise the remaining stiffness (block Cholesky of the
     banded matrix, :class:`Factorised`; BLAS on one thread, see :data:`ONE_BLAS_THREAD`)."""
-    with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+    with blas_threads(ONE_BLAS_THREAD):
         return _factorise(model, fixed_nodes)
 
 
@@ -711,7 +711,7 @@ def member_compliance(
     if rim_depth_mm is not None and not (math.isfinite(rim_depth_mm) and rim_depth_mm > 0):
         raise GearoptError("rim_depth_mm", rim_depth_mm, "must be positive")
     lower, upper = _same_tooth(flanks["convex"], flanks["concave"])
-    with threadpool_limits(limits=ONE_BLAS_THREAD, user_api="blas"):
+    with blas_threads(ONE_BLAS_THREAD):
         tables = _member_tables(lower, upper, blank, material, mesh, rim_depth_mm)
     return {name: tables[name] for name in FLANKS}
 

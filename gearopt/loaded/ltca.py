@@ -30,10 +30,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
-from threadpoolctl import threadpool_limits
 
 from gearopt.contact import ClearanceField
 from gearopt.errors import GearoptError
+from gearopt.jit import blas_threads
 from gearopt.load_options import PatchOptions, check_torques
 from gearopt.loaded.lcp import solve_load_patches
 from gearopt.loaded.patch_compliance import PatchCompliance
@@ -244,7 +244,7 @@ def _position(lag: float, picked, blocks) -> _Position:
         lever_mm=np.concatenate([p.factor_mm.ravel()[k] for p, k in picked]),
         area_mm2=np.concatenate([p.area_mm2.ravel()[k] for p, k in picked]),
         compliance=PatchCompliance.join(blocks),
-        strip_mm=tuple(np.median(p.length_mm, axis=1) for p in kept),
+        strip_mm=tuple(np.sort(p.length_mm, axis=1)[:, p.length_mm.shape[1] // 2] for p in kept),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
     )
@@ -421,7 +421,7 @@ def loaded_contact(
         1) of its width.
     """
     # many small dense solves: BLAS threads only contend (measured 30x slower on two busy cores)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with blas_threads(1):
         return _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, refine_rounds)
 
 
