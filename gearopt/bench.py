@@ -17,6 +17,7 @@ import sys
 import time
 from collections.abc import Callable, Iterable
 from importlib import import_module
+from importlib.metadata import version as package_version
 from pathlib import Path
 
 import numpy as np
@@ -133,7 +134,7 @@ def _meshed_section53():
 def _tca_info(options) -> dict:
 
     kernels = (
-        f"numba {contact_kernels.numba.__version__}"
+        f"numba {package_version('numba')}"
         if contact_kernels.ENABLED
         else "plain Python (GEAROPT_JIT=0)"
     )

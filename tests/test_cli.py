@@ -79,6 +79,13 @@ def test_bench_json_reports_medians(capsys):
     assert out["threads"] == 1 and out["basic_settings_ms"] > 0.0
 
 
+def test_bench_reports_the_tca_with_its_kernels(capsys):
+    assert main(["bench", "--json", "--repeats", "1", "tca_ms"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["tca_ms"] > 0.0 and out["tca_grid"] == [25, 21]
+    assert out["tca_kernels"].startswith(("numba ", "plain Python"))
+
+
 def test_settings_reports_the_solved_slope_angles(capsys):
     assert main(["settings", str(STUDIES / "seed001_section5_3.toml"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
