@@ -566,6 +566,7 @@ def solve_load_patches(
             cap,
             iterations,
             SINGULAR_RTOL,
+            (float(_BLOCK_LEAST), _BLOCK_SHARE),
             compliance.rows,
             compliance.slot,
         )

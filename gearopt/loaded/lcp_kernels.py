@@ -23,9 +23,6 @@ from gearopt.jit import compiled
 
 __all__ = ["solve_patches", "warm"]
 
-#: the block addition takes at most ``max(_BLOCK_LEAST, |P| / 2)`` patches at a time
-_BLOCK_LEAST = 32
-
 
 @compiled
 def _on_support(support, s, r, t, rows, slot, singular_rtol):
@@ -127,9 +124,10 @@ def _most_negative(new, gaps, limit):
 
 
 @compiled
-def solve_patches(s, r, t, start, tol, cap, done, singular_rtol, rows, slot):
+def solve_patches(s, r, t, start, tol, cap, done, singular_rtol, block, rows, slot):
     """The load distribution (module docstring) from ``start`` (feasible forces, ``r^T F =
-    t``; all zero: the patch that closes first), ``done`` outer iterations made before.
+    t``; all zero: the patch that closes first), ``done`` outer iterations made before; the
+    block addition takes at most ``max(block[0], block[1] |P|)`` patches at a time.
     Returns ``(status, forces, theta, gaps, active, iterations, need)``."""
     n = s.size
     forces = start.copy()
@@ -211,7 +209,7 @@ def solve_patches(s, r, t, start, tol, cap, done, singular_rtol, rows, slot):
             if gaps[new[k]] < gaps[new[best]]:
                 best = k
         single = new[best : best + 1]
-        new = _most_negative(new, gaps, max(_BLOCK_LEAST, int(0.5 * support.size)))
+        new = _most_negative(new, gaps, max(int(block[0]), int(block[1] * support.size)))
         need = _missing(new, slot)
         if need.size:  # the columns first: this state is the next call's start
             return 3, forces, theta, gaps, in_p, iterations, need
@@ -254,6 +252,7 @@ def warm() -> None:
     n = 2
     rows = np.array([[2.0, 1.0], [1.0, 2.0]])
     solve_patches(
-        np.zeros(n), np.ones(n), 1.0, np.array([0.5, 0.5]), 1e-11, 10, 0, 1e-10, rows,
+        np.zeros(n), np.ones(n), 1.0, np.array([0.5, 0.5]), 1e-11, 10, 0, 1e-10, (32.0, 0.5),
+        rows,
         np.arange(n),
     )  # fmt: skip

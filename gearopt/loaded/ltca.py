@@ -187,12 +187,6 @@ class _Position:
     near: list = field(default_factory=list)
 
 
-def _prepare(field: ClearanceField, u_rad, grid: PatchOptions, compliance) -> list[_Position]:
-    """The candidate patches of the pairs near the mesh at the positions ``u_rad`` and their
-    compliance (all positions in one batch, each configuration once: :class:`_Prepared`)."""
-    return _Prepared(field, grid, compliance)(u_rad)
-
-
 def _periodic(pos: _Position, turns: int) -> _Position:
     """``pos`` seen ``turns`` pitches later: the same patches, solution and columns (the
     ``compliance`` object is shared, which marks the copies as one problem), each pair a pitch
@@ -406,8 +400,9 @@ def loaded_contact(
     compliance
         ``compliance(pairs) -> [PatchCompliance, ...]``: for each ``(pair_patches, keep)``
         of ``pairs`` (a pair's patches and the flat indices of its candidates), the
-        :class:`gearopt.loaded.lcp.PatchCompliance` of the candidates: both teeth's bending
-        and the contact's local compliance, a symmetric positive definite matrix whose
+        :class:`gearopt.loaded.patch_compliance.PatchCompliance` of the candidates: both
+        teeth's bending and the contact's local compliance, a symmetric positive definite
+        matrix whose
         columns the load distribution computes as it needs them (those of the patches it
         tries only). One call for all the pairs of a batch of positions.
     frame
@@ -455,9 +450,10 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
         above = solved[t] = _solve_positions(prepared, t, [per_pair for per_pair, _ in above])
     results = {t: _at_torque(t, prepared, solved[t], tca, g_min, frame, side) for t in solved}
     loaded = sorted(t for t in results if t > 0.0)
-    lows = _refined_minima(
+    refined = _refined_minima(
         u, [results[t].lte_arcsec for t in loaded], loaded, g_min, prepared_at, rounds
     )
+    lows = dict(zip(loaded, refined, strict=True))
     resolved = _resolved_pressures(field, u, [results[t] for t in loaded], grid, compliance)
     pressures = dict(zip(loaded, resolved, strict=True))
     out = []
@@ -467,8 +463,7 @@ def _loaded_contact(field, tca, torques_nm, compliance, frame, grid, side, round
             high = _peak(result.lte_arcsec, 1.0)
             result = replace(
                 result,
-                lte_peak_to_peak_arcsec=high
-                - min(lows[loaded.index(t)], float(result.lte_arcsec.min())),
+                lte_peak_to_peak_arcsec=high - min(lows[t], float(result.lte_arcsec.min())),
                 max_contact_pressure_mpa=pressures[t],
             )
         else:
