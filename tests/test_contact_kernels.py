@@ -175,3 +175,51 @@ def test_a_misalignment_that_leaves_no_refinable_node_is_reported_not_raised():
     tca = contact_sides(pair, options)["drive"]
     assert np.all(np.isfinite(tca.te_arcsec))
     assert all(tca.edge)
+
+
+@pytest.mark.parametrize(
+    ("name", "misalignment"),
+    [
+        ("seed001_section5_3.toml", Misalignment()),
+        ("seed001_section5_3.toml", SECTION_5_4),
+        ("face_milling_tapered.toml", Misalignment()),
+    ],
+)
+def test_row_wise_point_kernels_give_the_numpy_paths_results(name, misalignment):
+    """The loaded contact's compiled passes over patch points (the clearance, normal factor,
+    R2 and gear grid coordinates of member-frame points, one pinion angle per row; whether
+    grid coordinates lie on generated cells) against the numpy paths of the engine and the
+    FlankMap, on points inside, across and beyond both flanks (uniform and tapered depth)."""
+    from gearopt.loaded.separations import flank_inside, flank_points
+
+    design = gearopt.load_design(STUDIES / name)
+    options = AnalysisOptions(misalignment=misalignment)
+    pair = mesh_pair(design, generated_flanks(design, options.grid), misalignment=misalignment)
+    field = pair.drive
+    pinion = field.pinion
+    rng = np.random.default_rng(7)
+    span_s = pinion.face_mm[-1] - pinion.face_mm[0]
+    span_h = pinion.profile_mm[-1] - pinion.profile_mm[0]
+    s = rng.uniform(pinion.face_mm[0] - 0.1 * span_s, pinion.face_mm[-1] + 0.1 * span_s, (6, 400))
+    h = rng.uniform(
+        pinion.profile_mm[0] - 0.1 * span_h, pinion.profile_mm[-1] + 0.1 * span_h, (6, 400)
+    )
+    nodes = np.meshgrid(pinion.face_mm[:5], pinion.profile_mm[:5])
+    s[0, :25], h[0, :25] = nodes[0].ravel(), nodes[1].ravel()
+    p, n, _, _ = flank_points(pinion, s, h)
+    phi = rng.uniform(-1.5, 1.5, 6) * pinion.pitch_rad
+    plain = field.clearance_of_points(p, n, phi[:, None])
+    rows = field.clearance_of_rows(p, n, phi)
+    for key in ("clearance_rad", "normal_factor_mm", "radius_mm"):
+        np.testing.assert_allclose(
+            getattr(rows, key), getattr(plain, key), rtol=1e-13, atol=1e-13, err_msg=key
+        )
+    assert np.array_equal(rows.valid, plain.valid)
+    assert 0.2 < plain.valid.mean() < 0.9  # points on and off the gear flank
+    q = field.gear_frame_points(p, phi[:, None])
+    gs, gt = field.gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
+    np.testing.assert_allclose(rows.gear_face_mm, gs, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(rows.gear_profile_mm, gt, rtol=0, atol=1e-11)
+    inside = pinion.inside(s, h)
+    assert np.array_equal(flank_inside(pinion, s, h), inside)
+    assert 0.2 < inside.mean() < 0.95

@@ -205,7 +205,7 @@ class ContactEngine:
         )
         self.rho_coef = np.array([ia * sg, ib * cg])
         self.gear_table = (np.array([gc.last_row, gc.last_column]), gc.columns)
-        self.lin_z, self.const = lin[:, 2], const
+        self.lin_z, self.const = np.ascontiguousarray(lin[:, 2]), const
         # the node tables: x, y and the z terms (with the constants) of every side's nodes;
         # the normals' x, y and z terms of qx, qy (no constants)
         self.node_xy = np.stack([self.points[0], self.points[1]])
@@ -384,6 +384,35 @@ class ContactEngine:
             normals = (np.stack([nx, ny]), self.lin_z[:2].reshape((2,) + (1,) * len(shape)) * nz)
         delta, valid, radius, factor = self.clearance(rows, x, y, zt, normals)
         return delta, factor, radius, valid
+
+    def gap_of_rows(self, side, phi, points, normals, gear_angle_rad=0.0):
+        """:meth:`gap` of row-wise points in one compiled pass
+        (:func:`gearopt.contact.kernels.point_fields`): ``points`` and ``normals``
+        ``(n, ..., 3)`` (member frame, unturned pinion), row r's points at side ``side[r]``,
+        pinion angle ``phi[r]`` and gear angle ``gear_angle_rad[r]`` (each ``(n,)`` or a
+        scalar). Returns ``(delta, normal factor, R2, valid, gear face, gear profile)``, each
+        ``(n, ...)``: :meth:`gap`'s and the points' gear grid coordinates (mm; t on tapered
+        depth)."""
+        points = np.asarray(points, float)
+        shape = points.shape[:-1]
+        n = shape[0] if shape else 1
+        side, phi, angle = (
+            np.broadcast_to(np.asarray(a, dtype), (n,))
+            for a, dtype in ((side, np.intp), (phi, float), (gear_angle_rad, float))
+        )
+        rows = self.rows_of(side, phi, angle).kernel_rows(n)
+        flat = np.ascontiguousarray(points).reshape(n, -1, 3)
+        out = np.empty((5,) + flat.shape[:2])
+        valid = np.empty(flat.shape[:2], bool)
+        normals = np.ascontiguousarray(np.broadcast_to(normals, points.shape), float)
+        gear, _, _ = self.kernel_tables
+        _kernels.point_fields(
+            rows, flat, normals.reshape(flat.shape), self.lin_z, self.const, gear, out, valid
+        )
+        cells = self.gear_grid.cells
+        face = cells.face0_mm + out[3] / cells.face_scale
+        profile = cells.profile0_mm + out[4] / cells.profile_scale
+        return tuple(a.reshape(shape) for a in (*out[:3], valid, face, profile))
 
     def at(self, side, sh, phi, gear_angle_rad):
         """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by

@@ -183,6 +183,22 @@ class ClearanceField:
             clearance_rad=delta, normal_factor_mm=factor, radius_mm=radius, valid=valid
         )
 
+    def clearance_of_rows(self, points_mm, normals, phi_rad) -> PointClearance:
+        """:meth:`clearance_of_points` of rows of points in one compiled pass: ``points_mm``
+        and their unit ``normals`` ``(n, ..., 3)``, row r at the pinion angle ``phi_rad[r]``
+        (``(n,)``, gear at its ideal angle); with the points' gear grid coordinates."""
+        delta, factor, radius, valid, face, profile = self._engine.gap_of_rows(
+            0, phi_rad, points_mm, normals
+        )
+        return PointClearance(
+            clearance_rad=delta,
+            normal_factor_mm=factor,
+            radius_mm=radius,
+            valid=valid,
+            gear_face_mm=face,
+            gear_profile_mm=profile,
+        )
+
     def clearance_at_grid(self, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0):
         """``(clearance_rad, valid)`` at pinion grid coordinates ``(s, h)`` off the nodes, by
         the flanks' local Hermite interpolants (broadcast with ``phi_rad``). The clearance is

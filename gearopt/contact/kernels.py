@@ -7,6 +7,8 @@ time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares t
 - :func:`node_xy`, :func:`node_fields`: the clearance, the normal factor and R2 at every
   generated node of the pinion flank for each row (side, pinion angle, gear angle), off-mask
   nodes +inf / 0 / 0 (the nodes' polar angles between the two by numpy's vectorised arctan2);
+- :func:`point_fields`: the clearance, the normal factor, R2 and the gear's grid coordinates of
+  pinion points given in the member frame (the loaded contact's patches);
 - :func:`clearance_at`: the clearance at pinion grid coordinates by the pinion's local
   interpolant, and whether the point is on both flanks and in a refinable pinion cell;
 - :func:`lowest_nodes`, :func:`refine`: the refinement's candidate nodes and its constrained
@@ -37,6 +39,7 @@ __all__ = [
     "lowest_nodes",
     "node_fields",
     "node_xy",
+    "point_fields",
     "refine",
     "tangency",
     "warm",
@@ -74,18 +77,27 @@ def _corner(x, limit):
 
 
 @compiled(inline=True)
-def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
-    """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``ContactEngine``'s
-    qx, qy and the qz parts of the gear's unit coordinates; ``theta`` = atan2(o1, o0)) on a
-    row: ``(delta, valid, R2)``. ``gear``: rho coefficients, limits, columns, taper (flag and
-    constants), coefficients, valid cells."""
-    rho0, rho1, lim0, lim1, n_cols, tapered, d0, inv_ia, ib, h0, alpha, beta, coef, ok = gear
-    radius = math.sqrt(o0 * o0 + o1 * o1)
+def _gear_unit(o2, o3, radius, gear):
+    """The gear's unit grid coordinates ``(x, y)`` (y of the profile coordinate t on tapered
+    depth) of a point with the qz parts ``o2``, ``o3`` and the radius R2."""
+    rho0, rho1, _, _, _, tapered, d0, inv_ia, ib, h0, alpha, beta, _, _ = gear
     x = o2 + rho0 * radius
     y = o3 + rho1 * radius
     if tapered:
         d = x * inv_ia + d0
         y = (y + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
+    return x, y
+
+
+@compiled(inline=True)
+def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
+    """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``ContactEngine``'s
+    qx, qy and the qz parts of the gear's unit coordinates; ``theta`` = atan2(o1, o0)) on a
+    row: ``(delta, valid, R2)``. ``gear``: rho coefficients, limits, columns, taper (flag and
+    constants), coefficients, valid cells."""
+    _, _, lim0, lim1, n_cols, _, _, _, _, _, _, _, coef, ok = gear
+    radius = math.sqrt(o0 * o0 + o1 * o1)
+    x, y = _gear_unit(o2, o3, radius, gear)
     a = _corner(x, lim0)
     b = _corner(y, lim1)
     cell = int(a * n_cols + b) + offset
@@ -146,6 +158,38 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
                 out[0, r, g] = gap
             out[1, r, g] = abs(m1 * o0 - m0 * o1)
             out[2, r, g] = radius
+
+
+@compiled
+def point_fields(rows, points, normals, lin_z, const, gear, out, valid):
+    """The clearance of pinion points given in the member frame, one row per leading index:
+    ``points`` and ``normals`` ``(n, m, 3)`` (unturned pinion; row r's m points), ``rows`` as
+    :func:`clearance_at`'s, ``lin_z`` and ``const`` the z coefficients and constants of the
+    four linear outputs. Writes the clearance (the smooth extension beyond the flanks), the
+    normal factor, R2 and the gear's unit grid coordinates ``(x, y)`` into ``out``
+    (``(5, n, m)``) and whether the point faces the gear's generated cells into ``valid``: as
+    :meth:`gearopt.contact.engine.ContactEngine.gap`, point by point."""
+    kx, ky, turn, sense, offset, _ = rows
+    n, m = valid.shape
+    for r in range(n):
+        for p in range(m):
+            x, y, z = points[r, p, 0], points[r, p, 1], points[r, p, 2]
+            o0 = kx[0, r] * x + ky[0, r] * y + (lin_z[0] * z + const[0])
+            o1 = kx[1, r] * x + ky[1, r] * y + (lin_z[1] * z + const[1])
+            o2 = kx[2, r] * x + ky[2, r] * y + (lin_z[2] * z + const[2])
+            o3 = kx[3, r] * x + ky[3, r] * y + (lin_z[3] * z + const[3])
+            theta = math.atan2(o1, o0)
+            gap, on, radius = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
+            nx, ny, nz = normals[r, p, 0], normals[r, p, 1], normals[r, p, 2]
+            m0 = kx[0, r] * nx + ky[0, r] * ny + lin_z[0] * nz
+            m1 = kx[1, r] * nx + ky[1, r] * ny + lin_z[1] * nz
+            gx, gy = _gear_unit(o2, o3, radius, gear)
+            out[0, r, p] = gap
+            out[1, r, p] = abs(m1 * o0 - m0 * o1)
+            out[2, r, p] = radius
+            out[3, r, p] = gx
+            out[4, r, p] = gy
+            valid[r, p] = on
 
 
 @compiled
@@ -591,6 +635,16 @@ def warm() -> None:
     )
     clearance_at(
         rows, np.zeros((2, 1, 1)), pinion, gear, np.empty((1, 1)), np.empty((1, 1), np.bool_)
+    )
+    point_fields(
+        rows,
+        np.zeros((1, 1, 3)),
+        np.zeros((1, 1, 3)),
+        np.zeros(4),
+        np.zeros(4),
+        gear,
+        np.empty((5, 1, 1)),
+        np.empty((1, 1), np.bool_),
     )
     cell = np.ones(2)
     refine(

@@ -55,12 +55,16 @@ class PointClearance:
         separation per rad of gear rotation.
     valid
         Whether the point faces the gear flank (its image lies on the gear's generated cells).
+    gear_face_mm, gear_profile_mm
+        The points' gear grid coordinates ``(s, t)`` (None where not asked for).
     """
 
     clearance_rad: NDArray
     normal_factor_mm: NDArray | None
     radius_mm: NDArray
     valid: NDArray
+    gear_face_mm: NDArray | None = None
+    gear_profile_mm: NDArray | None = None
 
     def separation_mm(self, minimum_rad, kind: str = "normal") -> NDArray:
         """The separation above a contact whose clearance is ``minimum_rad``: ``"normal"``

@@ -19,6 +19,7 @@ from gearopt.jit import ENABLED, compiled
 
 __all__ = [
     "ENABLED",
+    "flank_inside",
     "flank_jets",
     "halfspace_columns",
     "influence_columns",
@@ -334,6 +335,29 @@ def patch_frames(jets, major, minor, reference, normal, area, along, across):
                 across[r, i, k] = math.sqrt(vx * vx + vy * vy + vz * vz)
 
 
+@compiled
+def flank_inside(face, profile, mask, s, h, out):
+    """Whether grid coordinates ``(s, h)`` (flat, ``(n,)``) lie within a cell of the grid
+    ``face`` x ``profile`` whose four corners are in ``mask``: point by point as
+    :meth:`gearopt.flank.FlankMap.inside` (the same cells at the nodes: numpy's
+    ``searchsorted``)."""
+    nf, nh = face.size, profile.size
+    for k in range(s.size):
+        a, b = s[k], h[k]
+        i = min(max(np.searchsorted(face, a) - 1, 0), nf - 2)
+        j = min(max(np.searchsorted(profile, b) - 1, 0), nh - 2)
+        out[k] = (
+            mask[i, j]
+            and mask[i + 1, j]
+            and mask[i, j + 1]
+            and mask[i + 1, j + 1]
+            and a >= face[0]
+            and a <= face[nf - 1]
+            and b >= profile[0]
+            and b <= profile[nh - 1]
+        )
+
+
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process (on one patch),
     before worker processes start: they then load the cache rather than compile it side by
@@ -345,6 +369,8 @@ def warm() -> None:
     grid = (0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1, 0.0, 1.0, False, 0.0, 0.0, 0.0)
     flank_jets(one, one, grid, np.zeros((1, 16)), np.empty((1, 3, 3)))
     table_stencil(one, one, 2, 2, np.empty((1, 16), np.intp), np.empty((1, 16)))
+    two = np.array([0.0, 1.0])
+    flank_inside(two, two, np.ones((2, 2), np.bool_), one, one, np.empty(1, np.bool_))
     influence_times(
         np.zeros((1, 1), np.intp), np.ones((1, 1)), np.array([0, 1], np.intp), np.ones((1, 1)),
         np.ones(1), np.zeros(1),

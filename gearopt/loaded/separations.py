@@ -35,6 +35,7 @@ __all__ = [
     "PatchOptions",
     "PairPatches",
     "contact_patches",
+    "flank_inside",
     "flank_jets",
     "flank_points",
     "outward",
@@ -85,6 +86,22 @@ def flank_points(flank: FlankMap, face_mm: NDArray, profile_mm: NDArray):
     jets = flank_jets(flank, face_mm, profile_mm)
     p, p_s, p_t = jets[..., 0, :], jets[..., 1, :], jets[..., 2, :]
     return p, outward(flank, np.cross(p_s, p_t)), p_s, p_t
+
+
+def flank_inside(flank: FlankMap, face_mm: NDArray, profile_mm: NDArray) -> NDArray:
+    """:meth:`gearopt.flank.FlankMap.inside` in one compiled pass
+    (:func:`gearopt.loaded.kernels.flank_inside`)."""
+    s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
+    out = np.empty(s.shape, bool)
+    kernels.flank_inside(
+        np.ascontiguousarray(flank.face_mm, dtype=float),
+        np.ascontiguousarray(flank.profile_mm, dtype=float),
+        np.ascontiguousarray(flank.mask, dtype=np.bool_),
+        np.ascontiguousarray(s).ravel(),
+        np.ascontiguousarray(h).ravel(),
+        out.reshape(-1),
+    )
+    return out
 
 
 def outward(flank: FlankMap, normals: NDArray) -> NDArray:
@@ -195,7 +212,7 @@ def position_patches(
     position, or one row of offsets per position. ``max_half_width_mm``: the grid's largest
     half-width across the contact line, one per position (default the grid's)."""
     grid = grid or PatchOptions()
-    pinion, gear = field.pinion, field.gear
+    pinion = field.pinion
     u = np.atleast_1d(np.asarray(u_rad, float))
     offsets = np.broadcast_to(np.asarray(pairs, np.intp), (len(u), np.shape(pairs)[-1]))
     phis = (field.sense * (u[:, None] + offsets * pinion.pitch_rad)).ravel()
@@ -208,7 +225,7 @@ def position_patches(
     m0 = sample.minimum_rad[rows]
     s0, h0 = sample.contact_face_mm[rows], sample.contact_profile_mm[rows]
     p0, n0, _, _ = flank_points(pinion, s0, h0)
-    f0 = field.clearance_of_points(p0, n0, phi).normal_factor_mm
+    f0 = field.clearance_of_rows(p0, n0, phi).normal_factor_mm
     # a pair whose contact lies far above its position's closest one (twice the reach, in
     # normal separation) has no patch within reach: left out
     least = np.full(len(u), np.inf)
@@ -266,22 +283,19 @@ def position_patches(
     jets = flank_jets(pinion, es, eh)
     points = jets[..., 0, :]
     s, h = es[:, 1:-1, 1:-1], eh[:, 1:-1, 1:-1]
-    p = points[:, 1:-1, 1:-1]
     # every point's tangents along and across the contact line, normal and area element
     normal, area, along_mm, across_mm = (np.empty(es.shape + (3,)), *np.empty((3,) + es.shape))
     reference = pinion.normals[tuple(np.array(pinion.shape) // 2)]
     kernels.patch_frames(jets, major, minor, reference, normal, area, along_mm, across_mm)
     area, along_mm, across_mm = (v[:, 1:-1, 1:-1] for v in (area, along_mm, across_mm))
     # the points beyond the grid (a ring) for the boundary, in the same call
-    every = field.clearance_of_points(points, normal, phi[:, None, None])
-    ring = np.ones(es.shape[1:], dtype=bool)
-    ring[1:-1, 1:-1] = False
+    every = field.clearance_of_rows(points, normal, phi)
     inner = (slice(None), slice(1, -1), slice(1, -1))
     clearance, factor = every.clearance_rad[inner], every.normal_factor_mm[inner]
-    valid = every.valid[inner] & np.isfinite(clearance) & pinion.inside(s, h)
-    ext_valid = np.empty(es.shape, dtype=bool)
-    ext_valid[:, ring] = every.valid[:, ring] & pinion.inside(es[:, ring], eh[:, ring])
-    ext_valid[:, 1:-1, 1:-1] = valid
+    ext_valid = flank_inside(pinion, es, eh)
+    ext_valid &= every.valid
+    valid = ext_valid[inner] & np.isfinite(clearance)
+    ext_valid[inner] = valid
     beside = (
         ~ext_valid[:, :-2, 1:-1]
         | ~ext_valid[:, 2:, 1:-1]
@@ -291,8 +305,7 @@ def position_patches(
     at_end = np.zeros(valid.shape[1:], bool)
     at_end[0, :] = at_end[-1, :] = at_end[:, 0] = at_end[:, -1] = True
     # the gear's grid coordinates of the points (for the gear's compliance)
-    q = field.gear_frame_points(p, phi[:, None, None])
-    gs, gh = gear.to_grid(q[..., 2], np.hypot(q[..., 0], q[..., 1]))
+    gs, gh = every.gear_face_mm[inner], every.gear_profile_mm[inner]
     length = along_mm * dt[:, None, None]
     width = across_mm * dw[:, None, None]
     scale_a = along_mm[:, along // 2, across // 2]
