@@ -218,13 +218,15 @@ def _prepare_unique(
             if keep.size:
                 picked.append((p, keep))
         chosen.append((lag, picked))
-    blocks = iter(compliance([pair for _, picked in chosen for pair in picked]))
-    return [_position(lag, picked, [next(blocks) for _ in picked]) for lag, picked in chosen]
+    blocks = compliance([picked for _, picked in chosen])
+    return [
+        _position(lag, picked, block) for (lag, picked), block in zip(chosen, blocks, strict=True)
+    ]
 
 
-def _position(lag: float, picked, blocks) -> _Position:
+def _position(lag: float, picked, compliance: PatchCompliance) -> _Position:
     """One position from its pairs' candidate patches ``(patches, keep)`` and their
-    compliance columns."""
+    compliance."""
     kept = [p for p, _ in picked]
     keeps = [keep for _, keep in picked]
     best = min(kept, key=lambda p: p.contact_rad)
@@ -237,7 +239,7 @@ def _position(lag: float, picked, blocks) -> _Position:
         ),
         lever_mm=np.concatenate([p.factor_mm.ravel()[k] for p, k in picked]),
         area_mm2=np.concatenate([p.area_mm2.ravel()[k] for p, k in picked]),
-        compliance=PatchCompliance.join(blocks),
+        compliance=compliance,
         strip_mm=tuple(np.sort(p.length_mm, axis=1)[:, p.length_mm.shape[1] // 2] for p in kept),
         lag_rad=lag,
         contact_factor_mm=float(best.factor_mm[centre]),
@@ -398,13 +400,13 @@ def loaded_contact(
     torques_nm
         Output torques on the gear (N m).
     compliance
-        ``compliance(pairs) -> [PatchCompliance, ...]``: for each ``(pair_patches, keep)``
-        of ``pairs`` (a pair's patches and the flat indices of its candidates), the
-        :class:`gearopt.loaded.patch_compliance.PatchCompliance` of the candidates: both
-        teeth's bending and the contact's local compliance, a symmetric positive definite
-        matrix whose
-        columns the load distribution computes as it needs them (those of the patches it
-        tries only). One call for all the pairs of a batch of positions.
+        ``compliance(positions) -> [PatchCompliance, ...]``: for each position of
+        ``positions``, a list of its pairs' ``(pair_patches, keep)`` (a pair's patches and the
+        flat indices of its candidates), the
+        :class:`gearopt.loaded.patch_compliance.PatchCompliance` of its candidates, one group
+        per pair in that order: both teeth's bending and the contact's local compliance, a
+        symmetric positive definite matrix whose columns the load distribution computes as it
+        needs them (those of the patches it tries only). One call for a batch of positions.
     frame
         The pattern coordinates (:class:`gearopt.mesh.ToothFrame`).
     grid

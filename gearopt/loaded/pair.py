@@ -19,7 +19,6 @@ from gearopt.loaded.compliance import DEFAULT_MESH, Material, member_compliance
 from gearopt.loaded.halfspace import composite_compliance_mm2_per_n
 from gearopt.loaded.ltca import LoadedContact, loaded_contact
 from gearopt.loaded.patch_compliance import PatchCompliance
-from gearopt.loaded.separations import PairPatches
 
 __all__ = ["loaded_sides", "member_flanks"]
 
@@ -44,21 +43,6 @@ def _compliance_of(flanks: Mapping, blank, material: Material, mesh) -> dict:
     _MODELS.insert(0, (key, value))
     del _MODELS[4:]
     return value
-
-
-def _pair_compliance(p: PairPatches, keep, pinion, gear, composite) -> PatchCompliance:
-    """The compliance of one pair's candidate patches ``keep``: Love's rectangles between the
-    patches plus both teeth's influence numbers (``(model, (points, weights))`` of each
-    member: its tooth model and its stencils at the patches)."""
-    return PatchCompliance(
-        starts=[0, keep.size],
-        x_mm=p.x_mm.ravel()[keep],
-        y_mm=p.y_mm.ravel()[keep],
-        a_mm=0.5 * p.length_mm.ravel()[keep],
-        b_mm=0.5 * p.width_mm.ravel()[keep],
-        composite_mm2_per_n=composite,
-        members=tuple((model.table_mm_per_n, k, w) for model, (k, w) in (pinion, gear)),
-    )
 
 
 def loaded_sides(
@@ -91,27 +75,40 @@ def loaded_sides(
         pinion = models["pinion"][field.pinion.flank]
         gear = models["gear"][field.gear.flank]
 
-        def compliance(pairs, pinion=pinion, gear=gear) -> list:
-            picked = list(pairs)
-            sizes = np.cumsum([k.size for _, k in picked])[:-1]
+        def compliance(positions, pinion=pinion, gear=gear) -> list:
+            picked = [pair for pairs in positions for pair in pairs]
+            sizes = np.array([k.size for _, k in picked], dtype=np.intp)
 
             def flat(name):
                 return np.concatenate([getattr(p, name).ravel()[k] for p, k in picked])
 
-            # the stencils of all pairs in one call each (numpy's overhead paid once)
+            # all positions' patches in one array each, the stencils in one call each
+            # (numpy's overhead paid once); each position's compliance a slice of them
+            x, y = flat("x_mm"), flat("y_mm")
+            a, b = 0.5 * flat("length_mm"), 0.5 * flat("width_mm")
             k1, w1 = pinion.stencil(flat("face_mm"), flat("profile_mm"))
             k2, w2 = gear.stencil(flat("gear_face_mm"), flat("gear_profile_mm"))
-            return [
-                _pair_compliance(p, k, (pinion, (a, b)), (gear, (c, d)), composite)
-                for (p, k), a, b, c, d in zip(
-                    picked,
-                    np.split(k1, sizes),
-                    np.split(w1, sizes),
-                    np.split(k2, sizes),
-                    np.split(w2, sizes),
-                    strict=True,
+            ends = np.cumsum([len(pairs) for pairs in positions])
+            pair_ends = np.concatenate([[0], np.cumsum(sizes)])
+            out, first = [], 0
+            for last in ends:
+                lo, hi = pair_ends[first], pair_ends[last]
+                out.append(
+                    PatchCompliance(
+                        starts=pair_ends[first : last + 1] - lo,
+                        x_mm=x[lo:hi],
+                        y_mm=y[lo:hi],
+                        a_mm=a[lo:hi],
+                        b_mm=b[lo:hi],
+                        composite_mm2_per_n=composite,
+                        members=(
+                            (pinion.table_mm_per_n, k1[lo:hi], w1[lo:hi]),
+                            (gear.table_mm_per_n, k2[lo:hi], w2[lo:hi]),
+                        ),
+                    )
                 )
-            ]
+                first = last
+            return out
 
         out[side] = loaded_contact(
             field,
