@@ -23,6 +23,7 @@ __all__ = [
     "flank_jets",
     "halfspace_columns",
     "influence_columns",
+    "patch_columns",
     "table_stencil",
     "warm",
 ]
@@ -217,6 +218,29 @@ def influence_columns(points, weights, columns, table, out):
 
 
 @compiled
+def patch_columns(starts, x, y, a, b, missing, factor, far_ratio, members, block):
+    """Columns ``missing`` (ascending) of the compliance of contact patches into the rows of
+    ``block`` (``(len(missing), n)``): within each column's group ``starts[g]:starts[g + 1]``
+    (a tooth pair: separate bodies) the half-space part (:func:`halfspace_columns`) plus each
+    member's influence numbers (:func:`influence_columns`; ``members``: ``(table, points,
+    weights)`` of each), zero outside it. One call for any number of groups."""
+    block[:, :] = 0.0
+    c0 = 0
+    while c0 < missing.size:  # ``missing`` ascending: each group's columns side by side
+        g = np.searchsorted(starts, missing[c0], side="right") - 1
+        lo, hi = starts[g], starts[g + 1]
+        c1 = c0 + 1
+        while c1 < missing.size and missing[c1] < hi:
+            c1 += 1
+        local = missing[c0:c1] - lo
+        part = block[c0:c1, lo:hi]
+        halfspace_columns(x[lo:hi], y[lo:hi], a[lo:hi], b[lo:hi], local, factor, far_ratio, part)
+        for table, points, weights in members:
+            influence_columns(points[lo:hi], weights[lo:hi], local, table, part)
+        c0 = c1
+
+
+@compiled
 def influence_times(points, weights, starts, table, forces, out):
     """``out += W T W^T f`` within each group ``starts[g]:starts[g + 1]`` (separate bodies): a
     tooth's displacements at flank points under forces at the same points (their stencils
@@ -387,3 +411,8 @@ def warm() -> None:
         np.ones((1, 1)),
         np.zeros((1, 1)),
     )
+    member = (np.ones((1, 1)), np.zeros((1, 16), np.intp), np.ones((1, 16)))
+    patch_columns(
+        np.array([0, 1], np.intp), one, one, one, one, np.zeros(1, np.intp), 1.0, 4.0,
+        (member, member), np.empty((1, 1)),
+    )  # fmt: skip

@@ -92,9 +92,8 @@ class PatchCompliance:
         )
 
     def fetch(self, idx) -> None:
-        """Compute the columns ``idx`` not held yet (each group's in one call of each kernel:
-        :func:`gearopt.loaded.kernels.halfspace_columns`, then
-        :func:`gearopt.loaded.kernels.influence_columns` per member)."""
+        """Compute the columns ``idx`` not held yet (in one call of
+        :func:`gearopt.loaded.kernels.patch_columns`)."""
         idx = np.asarray(idx, dtype=np.intp)
         missing = np.unique(idx[self.slot[idx] < 0])
         m, k = missing.size, self.count
@@ -104,27 +103,18 @@ class PatchCompliance:
             grown = np.empty((min(self.size, max(2 * self.rows.shape[0], k + m)), self.size))
             grown[:k] = self.rows[:k]
             self.rows = grown
-        block = self.rows[k : k + m]
-        block[:] = 0.0
-        group = np.searchsorted(self.starts, missing, side="right") - 1
-        for g in np.unique(group):
-            lo, hi = self.starts[g], self.starts[g + 1]
-            mine = np.flatnonzero(group == g)
-            local = missing[mine] - lo
-            part = np.empty((mine.size, hi - lo))
-            kernels.halfspace_columns(
-                self.x[lo:hi],
-                self.y[lo:hi],
-                self.a[lo:hi],
-                self.b[lo:hi],
-                local,
-                self.composite / np.pi,
-                FAR_FIELD_RATIO,
-                part,
-            )
-            for table, points, weights in self.members:
-                kernels.influence_columns(points[lo:hi], weights[lo:hi], local, table, part)
-            block[mine, lo:hi] = part
+        kernels.patch_columns(
+            self.starts,
+            self.x,
+            self.y,
+            self.a,
+            self.b,
+            missing,
+            self.composite / np.pi,
+            FAR_FIELD_RATIO,
+            self.members,
+            self.rows[k : k + m],
+        )
         self.slot[missing] = np.arange(k, k + m)
         self.count = k + m
 
