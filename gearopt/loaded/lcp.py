@@ -69,7 +69,7 @@ import scipy.linalg
 
 from gearopt.errors import GearoptError
 from gearopt.loaded import lcp_kernels
-from gearopt.loaded.patch_compliance import PatchCompliance
+from gearopt.loaded.patch_compliance import PatchCompliance, with_room
 
 __all__ = [
     "ColumnCache",
@@ -285,10 +285,7 @@ class ColumnCache:
                     f"max |C - C^T| = {asym:.3g}",
                     f"must be symmetric (relative tolerance {COMPLIANCE_RTOL:g})",
                 )
-        if k + m > self.rows.shape[0]:
-            grown = np.empty((min(self.n, max(2 * self.rows.shape[0], k + m)), self.n))
-            grown[:k] = self.rows[:k]
-            self.rows = grown
+        self.rows = with_room(self.rows, k, m)
         self.rows[k : k + m] = block.T
         self.slot[missing] = np.arange(k, k + m)
         self.requested = k + m

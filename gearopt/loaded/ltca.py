@@ -305,8 +305,7 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
             first = None
     s, r = pos.separation_mm, pos.lever_mm
     if not pos.near and theta_rad is not None and theta_rad > pos.lag_rad:
-        bound = pos.lag_rad + 2.0 * (theta_rad - pos.lag_rad)
-        _narrow(pos, np.flatnonzero(s <= r * bound))
+        _narrow(pos, np.flatnonzero(s <= r * _reach_rad(pos, theta_rad)))
     while True:
         rows, compliance = pos.near if pos.near else (slice(None), pos.compliance)
         solved = solve_load_patches(
@@ -328,8 +327,7 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
         closed = out & (gap < -_OPEN_MM)
         if not closed.any():
             break
-        bound = pos.lag_rad + 2.0 * (theta - pos.lag_rad)
-        _narrow(pos, np.flatnonzero(~out | closed | (s <= r * bound)))
+        _narrow(pos, np.flatnonzero(~out | closed | (s <= r * _reach_rad(pos, theta))))
         first = forces
     per_pair, at = [], 0
     for p, keep in zip(pos.patches, pos.keep, strict=True):
@@ -338,6 +336,12 @@ def _solve(pos: _Position, torque_nm: float, start=None, theta_rad: float | None
         at += keep.size
         per_pair.append(f.reshape(p.valid.shape))
     return per_pair, theta
+
+
+def _reach_rad(pos: _Position, theta_rad: float) -> float:
+    """The lag within which a solve considers the patches: twice the approach ``theta_rad``
+    makes beyond the unloaded lag (``s_i <= r_i`` times it)."""
+    return pos.lag_rad + 2.0 * (theta_rad - pos.lag_rad)
 
 
 def _narrow(pos: _Position, rows: NDArray) -> None:

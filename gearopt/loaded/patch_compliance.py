@@ -8,7 +8,19 @@ import numpy as np
 from gearopt.loaded import kernels
 from gearopt.loaded.halfspace import FAR_FIELD_RATIO
 
-__all__ = ["PatchCompliance"]
+__all__ = ["PatchCompliance", "with_room"]
+
+
+def with_room(rows: np.ndarray, held: int, more: int) -> np.ndarray:
+    """``rows`` (a column cache's ``(capacity, n)`` rows, the first ``held`` in use) with room
+    for ``more`` rows: itself, or grown to twice its capacity (at least to ``held + more``, at
+    most ``n``) with the rows in use copied."""
+    if held + more <= rows.shape[0]:
+        return rows
+    n = rows.shape[1]
+    grown = np.empty((min(n, max(2 * rows.shape[0], held + more)), n))
+    grown[:held] = rows[:held]
+    return grown
 
 
 class PatchCompliance:
@@ -99,10 +111,7 @@ class PatchCompliance:
         m, k = missing.size, self.count
         if m == 0:
             return
-        if k + m > self.rows.shape[0]:
-            grown = np.empty((min(self.size, max(2 * self.rows.shape[0], k + m)), self.size))
-            grown[:k] = self.rows[:k]
-            self.rows = grown
+        self.rows = with_room(self.rows, k, m)
         kernels.patch_columns(
             self.starts,
             self.x,
