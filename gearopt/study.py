@@ -73,6 +73,7 @@ from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 
 __all__ = [
+    "ANNOUNCE_AFTER_S",
     "STALE_AFTER_S",
     "RunSummary",
     "default_storage_url",
@@ -82,6 +83,7 @@ __all__ = [
     "run_study",
     "save_design",
     "trial_objective",
+    "warm_kernels",
 ]
 
 #: a coordinator on another host whose heartbeat is older than this is taken for dead
@@ -192,6 +194,7 @@ class RunSummary:
     evaluated_this_run: int
     wall_s: float
     worker_s: float
+    kernels_s: float = 0.0  # the compiled kernels' compilation or loading, before the trials
     coordinator_s: float  # asking, telling, writing the tables, recovering: waits excluded
     jobs: int
     best: optuna.trial.FrozenTrial | None = None
@@ -199,18 +202,62 @@ class RunSummary:
     recovered: list[int] = field(default_factory=list)
 
     @property
+    def trials_s(self) -> float:
+        """The run's time less the kernels' (:attr:`kernels_s`): the trials' time."""
+        return max(self.wall_s - self.kernels_s, 0.0)
+
+    @property
     def trials_per_s(self) -> float:
-        return self.evaluated_this_run / self.wall_s if self.wall_s > 0 else 0.0
+        return self.evaluated_this_run / self.trials_s if self.trials_s > 0 else 0.0
 
     @property
     def worker_efficiency(self) -> float:
-        """Time the workers spent evaluating over the time they were there (wall x jobs)."""
-        return self.worker_s / (self.wall_s * self.jobs) if self.wall_s > 0 else 0.0
+        """Time the workers spent evaluating over the time they were there (the trials' time x
+        jobs)."""
+        return self.worker_s / (self.trials_s * self.jobs) if self.trials_s > 0 else 0.0
 
     @property
     def coordinator_ms_per_trial(self) -> float:
         n = max(self.evaluated_this_run, 1)
         return 1e3 * self.coordinator_s / n
+
+
+#: seconds after which :func:`warm_kernels` says on stderr that it compiles
+ANNOUNCE_AFTER_S = 1.0
+
+
+def warm_kernels(*, announce: bool = True) -> float:
+    """Compile every compiled kernel (contact engine, loaded contact) in this process, or load
+    it from numba's disk cache, and return the seconds it took. A first use after an install
+    compiles them (about half a minute); ``announce``: said on stderr when it takes longer than
+    :data:`ANNOUNCE_AFTER_S` (a cached load takes well under a second)."""
+    start = time.perf_counter()
+    said = threading.Event()
+
+    def say() -> None:
+        said.set()
+        print(
+            "gearopt: compiling the numerical kernels (once after an install; later runs load "
+            "them from the cache) ...",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    timer = threading.Timer(ANNOUNCE_AFTER_S, say) if announce else None
+    if timer is not None:
+        timer.daemon = True
+        timer.start()
+    try:
+        contact_kernels.warm()
+        loaded_kernels.warm()
+        lcp_kernels.warm()
+    finally:
+        if timer is not None:
+            timer.cancel()
+    seconds = time.perf_counter() - start
+    if said.is_set():
+        print(f"gearopt: kernels compiled in {seconds:.1f} s", file=sys.stderr, flush=True)
+    return seconds
 
 
 def _alive(pid: int) -> bool:
@@ -397,6 +444,9 @@ def run_study(
     pending: dict[int, tuple[Any, cf.Future, dict, int]] = {}
     failed = evaluated = 0
     worker_s = 0.0
+    # the compiled kernels compiled (or loaded) here once, before the workers start (they load
+    # the cache rather than compile it side by side) and before the clock of the trials
+    kernels_s = warm_kernels(announce=progress)
     bar = _progress(progress, trials, spec)
     shown = [0.0]  # when the bar last showed the best value
     last_beat = time.monotonic()
@@ -506,11 +556,6 @@ def run_study(
         for _ in range(min(jobs - busy, max(free, 0))):
             ask()
 
-    # the compiled kernels (contact engine, loaded contact) compiled (or loaded) here once,
-    # before the workers start: they load the cache rather than compile it side by side
-    contact_kernels.warm()
-    loaded_kernels.warm()
-    lcp_kernels.warm()
     executor = _executor(jobs, backend, scheduler)
     busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
     try:
@@ -605,6 +650,7 @@ def run_study(
         failed_this_run=failed,
         evaluated_this_run=evaluated,
         wall_s=wall,
+        kernels_s=kernels_s,
         worker_s=worker_s,
         coordinator_s=busy_s,
         jobs=jobs,

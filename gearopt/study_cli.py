@@ -60,6 +60,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "failed_this_run": summary.failed_this_run,
         "recovered": summary.recovered,
         "wall_s": round(summary.wall_s, 3),
+        "kernels_s": round(summary.kernels_s, 3),
         "trials_per_s": round(summary.trials_per_s, 4),
         "worker_efficiency": round(summary.worker_efficiency, 4),
         "coordinator_ms_per_trial": round(summary.coordinator_ms_per_trial, 2),
@@ -79,7 +80,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(
         f"study {summary.study}: {summary.complete} complete trials in {summary.storage}\n"
         f"this run: {summary.evaluated_this_run} evaluated ({summary.failed_this_run} failed) "
-        f"in {summary.wall_s:.1f} s, {summary.trials_per_s:.2f} trials/s on {summary.jobs} "
+        f"in {summary.wall_s:.1f} s ({summary.kernels_s:.1f} s of it the compiled kernels), "
+        f"{summary.trials_per_s:.2f} trials/s on {summary.jobs} "
         f"jobs, worker efficiency {summary.worker_efficiency:.0%}, coordinator "
         f"{summary.coordinator_ms_per_trial:.0f} ms/trial"
     )

@@ -317,6 +317,10 @@ def test_run_reaches_n_complete_trials_and_the_same_command_is_a_no_op(tmp_path,
     args = ["study", "run", study, "--trials", 7, "--jobs", 2, "--json", "--no-progress"]
     first = json.loads(_gearopt(args, toy_site).stdout)
     assert first["complete"] == 7 and first["evaluated_this_run"] == 7
+    # the kernels' compilation (or cache load) is timed apart from the trials'
+    assert 0.0 < first["kernels_s"] < first["wall_s"]
+    trials_s = first["wall_s"] - first["kernels_s"]
+    assert first["trials_per_s"] == pytest.approx(7 / trials_s, rel=1e-3)
     again = json.loads(_gearopt(args, toy_site).stdout)
     assert again["complete"] == 7 and again["evaluated_this_run"] == 0
     more = json.loads(_gearopt([*args[:3], "--trials", 9, *args[5:]], toy_site).stdout)
@@ -795,3 +799,24 @@ def test_a_database_of_someone_elses_is_refused_unless_shared(tmp_path, toy_site
         assert con.execute(sa.text("SELECT COUNT(*) FROM parts")).scalar() == 0
     engine.dispose()
     assert _states(_trials(own))["COMPLETE"] == 2
+
+
+def test_a_slow_kernel_warm_up_is_announced_and_a_quick_one_is_not(monkeypatch, capsys):
+    """The first use after an install compiles the kernels (half a minute): said on stderr
+    before and after; a cached load (well under a second) says nothing."""
+    import gearopt.study as study_module
+
+    calls = []
+    monkeypatch.setattr(study_module.contact_kernels, "warm", lambda: calls.append("contact"))
+    monkeypatch.setattr(study_module.lcp_kernels, "warm", lambda: calls.append("lcp"))
+    monkeypatch.setattr(
+        study_module.loaded_kernels, "warm", lambda: (calls.append("loaded"), time.sleep(0.5))
+    )
+    monkeypatch.setattr(study_module, "ANNOUNCE_AFTER_S", 0.1)
+    seconds = study_module.warm_kernels()
+    assert calls == ["contact", "loaded", "lcp"] and seconds >= 0.5
+    said = capsys.readouterr().err
+    assert "compiling the numerical kernels" in said and "kernels compiled in" in said
+    monkeypatch.setattr(study_module, "ANNOUNCE_AFTER_S", 5.0)
+    study_module.warm_kernels()
+    assert capsys.readouterr().err == ""
