@@ -29,9 +29,10 @@ M pi/2 - psi_m + nu_k). The line O_m O_ck is the disk's datum on the machine: th
 setting q_2k turns the disk's carrier, and with it the disk, about the cradle axis, and the
 disk's roll circle (rho', the same for both systems, eq 37) rolls on its base circle about O_m
 at the instantaneous centre C_k on that line (eqs 28-29, Fig. 4), so the angle from it is the
-blade's phase on its extended epicycloid. The tool spaces its blade groups by half a group
-pitch, pi / N_b, from each disk's datum: when the inner blade is at M (at eps_i from O_ci O_m)
-the outer blade is at eps_i + pi / N_b from O_co O_m; it passed M (at eps_o) a rotation
+blade's phase on its extended epicycloid. Reading adopted: the tool spaces its blade groups by
+half a group pitch, pi / N_b, from each disk's datum: when the inner blade is at M (at eps_i
+from O_ci O_m) the outer blade is at eps_i + pi / N_b from O_co O_m; it passed M (at eps_o) a
+rotation
 
     lambda = pi / N_b + eps_i - eps_o = pi / N_b + (q'_2o - q'_2i) - (nu'_i - nu'_o)
 
@@ -52,7 +53,7 @@ other datums one might read into Fig. 3, each giving lambda = pi / N_b + (datum_
   change the thickness, 0.0005 mm;
 - one datum fixed in the head for both disks (the eccentricity's direction, parallel to the
   slope line: lambda = pi / N_b - gamma'): 0.153 deg less, the pinion 0.022 mm thicker than
-  conjugate, and the drive interferes;
+  conjugate, and the pair interferes (backlash -32 um);
 - the inner blade pi / N_b behind the outer one as seen from O_co (this module's earlier
   reading, 0.779 deg): 0.114 mm, 0.77 of Table 3's; as seen from O_ci: 0.12 mm thicker.
 
