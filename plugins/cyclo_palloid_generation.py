@@ -5,23 +5,57 @@ outer blades: concave flank) solved by :func:`gearopt.envelope.solve_envelope`; 
 supplies the generating family (:class:`CycloPalloidFamily`), the blade systems from the basic
 settings, and the relative angular position of the two flanks, which sets the tooth thickness.
 
-Phase of the outer blades (seed 001 does not state it). The inner and outer disks turn at the same
-rate. A tooth space is cut between the passages of one blade group's outer and inner blades
-through it, so its width at M is the work's rotation between them: m_gb times the outer disk's
-lead over the inner one (eq 23). The outer blade leads by half a blade-group pitch, pi / N_b,
-measured about the outer disk's axis a_o: when the outer reference point P_o is at the pitch point
-M (theta_o = 0, P'_o of Fig. 3), the group's inner reference point lies pi / N_b behind it as
-seen from O_co, on its own circle (radius r_ci about O_ci); :func:`outer_phase_rad` turns that into
-the inner disk's rotation until P_i reaches M. With r_ci = r_co and dnu = 0 the tooth space is
-exactly half a pitch (pi / N); the additional slope angle widens it through m'_gb (eq 37);
-unequal radii change it through the phase.
+Phase of the outer blades, derived from the machine's kinematics (seed 001 states none of it).
+Seed 001 writes each blade system with its own cutter rotation theta_k (eqs 15-19) and the work's
+rotation psi_g = m_gc psi_cr - m_gb theta_k (eq 23), theta_k = 0 where the system's reference
+point P_k passes the pitch point M (Figs 3-4: P_i = P'_o at M); it does not say where the outer
+blades are while an inner blade is at M. On the machine both disks turn together (one spindle;
+eq 37 gives both systems one m'_gb), so theta_o = theta_i + lambda with a constant lead lambda of
+the outer blade. A tooth space is cut between the passages of one group's outer and inner blades
+through it, so by eq 23 its width at M is the work's rotation m'_gb lambda between them: the
+concave flank of tooth 0 is the outer system's envelope turned by 2 pi / N - m'_gb lambda
+(:func:`tooth_turn_rad`).
 
-Why the outer disk's axis: measured about the inner axis instead, r_co = 76.8 mm (section 5.2)
-thickens the pinion by 0.12 mm and the drive would interfere; measured as each disk's own
-rotation (the blades' x_b axes of Fig. 3), unequal radii would not change the thickness at all.
-Seed 001 says r_co = 76.8 mm provides backlash similar to Table 3's drive: about the outer axis
-it thins the pinion by 0.114 mm at the mean chordal addendum, against 0.147 mm for Table 3's two
-additional slope angles together (the tests measure both on the generated flanks).
+lambda is fixed by the tool and by how each disk is set on the cradle. Eq 19 (with eqs 13-14,
+or 34-35 under dnu) sets disk k in the cradle frame S_d in two steps: its centre O_ck at the
+machine distance M_dk and cradle angle q_2k, and its frame turned so that at theta_k = 0 the
+blade points from O_ck to M, at psi_m - nu_k - pi/2 from x_d. Measured about the disk's axis from
+its own radial line O_ck O_m, the blade through M therefore stands at
+
+    eps_k = (psi_m - nu_k - pi/2) - (q_2k + pi) = pi/2 + psi_m - nu_k - q_2k   (mod 2 pi),
+
+the angle at O_ck of the triangle O_m O_ck M that eqs 13-14 solve (its angle at O_m is q_2k, at
+M pi/2 - psi_m + nu_k). The line O_m O_ck is the disk's datum on the machine: the cradle-angle
+setting q_2k turns the disk's carrier, and with it the disk, about the cradle axis, and the
+disk's roll circle (rho', the same for both systems, eq 37) rolls on its base circle about O_m
+at the instantaneous centre C_k on that line (eqs 28-29, Fig. 4), so the angle from it is the
+blade's phase on its extended epicycloid. Reading adopted: the tool spaces its blade groups by
+half a group pitch, pi / N_b, from each disk's datum: when the inner blade is at M (at eps_i
+from O_ci O_m) the outer blade is at eps_i + pi / N_b from O_co O_m; it passed M (at eps_o) a
+rotation
+
+    lambda = pi / N_b + eps_i - eps_o = pi / N_b + (q'_2o - q'_2i) - (nu'_i - nu'_o)
+
+earlier (:func:`outer_phase_rad`; primes: the settings under dnu, eqs 33-38). With equal radii
+the two disks coincide (e = 0, gamma = 0: nu_o = nu_i, q_2o = q_2i) and lambda = pi / N_b: with
+dnu = 0 and m_b = m_mn tooth and space are exactly half a pitch (pi / N); the additional slope
+angle widens the space through m'_gb (eq 37); unequal radii change it through the correction
+(q'_2o - q'_2i) - (nu'_i - nu'_o).
+
+Which datum is the paper's, seed 001 section 5.2 decides: r_co = 76.8 mm on the pinion, "instead
+of" Table 3's additional slope angles, provides "backlash similar" to Table 3's. Measured on the
+generated flanks (normal chordal thickness at the mean point, against the conjugate pair), Table
+3's two slope angles thin the pair by 0.1472 mm; with r_co = 76.8 mm (correction 1.158 - 0.153 =
+1.005 deg) this reading thins the pinion by 0.1468 mm (a test holds the two within 1 %). The
+other datums one might read into Fig. 3, each giving lambda = pi / N_b + (datum_o - datum_i):
+
+- each disk's own blade axis x_b (no datum: lambda = pi / N_b): unequal radii would hardly
+  change the thickness, 0.0005 mm;
+- one datum fixed in the head for both disks (the eccentricity's direction, parallel to the
+  slope line: lambda = pi / N_b - gamma'): 0.153 deg less, the pinion 0.022 mm thicker than
+  conjugate, and the pair interferes (backlash -32 um);
+- the inner blade pi / N_b behind the outer one as seen from O_co (this module's earlier
+  reading, 0.779 deg): 0.114 mm, 0.77 of Table 3's; as seen from O_ci: 0.12 mm thicker.
 
 Indexing. With dnu = 0 the work turns by m_gb 2 pi / N_b = 2 pi / N per blade group, so the
 next group cuts the next tooth. With dnu != 0 the paper's kinematics (eq 37) does not index
@@ -186,10 +220,7 @@ def tooth_turn_rad(design: Design, member: str, flank: str, systems: dict[str, B
         return 0.0
     teeth = design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth
     phase = outer_phase_rad(
-        blade_groups=design.machine.blade_groups,
-        inner=systems["inner"],
-        outer=systems["outer"],
-        mean_cone_distance_mm=design.blank.mean_cone_distance_mm,
+        blade_groups=design.machine.blade_groups, inner=systems["inner"], outer=systems["outer"]
     )
     return 2.0 * math.pi / teeth - systems["outer"].gear_to_blade_roll * phase
 
@@ -274,55 +305,37 @@ def generate_from_blade_systems(
     return out
 
 
-def outer_phase_rad(
-    *,
-    blade_groups: int,
-    inner: BladeSystem,
-    outer: BladeSystem,
-    mean_cone_distance_mm: float,
-    frame: str = "outer",
-) -> float:
-    """How far (in its own rotation) a group's outer blade leads the inner blade through M.
+def outer_phase_rad(*, blade_groups: int, inner: BladeSystem, outer: BladeSystem) -> float:
+    """The lead lambda of a group's outer blade over its inner blade through M (module
+    docstring), in the disks' common rotation: pi / N_b + eps_i - eps_o.
 
-    Both reference points move in the cradle plane (z_m = 0) on circles about their disks'
-    centres O_ci, O_co (eq 19 at u = 0). The half blade-group pitch pi / N_b is measured about
-    the axis of the ``frame`` disk ("outer": when the outer blade is at M the inner blade lies
-    pi / N_b behind it as seen from O_co; "inner": when the inner blade is at M the outer blade
-    lies pi / N_b ahead as seen from O_ci). Equal radii give exactly pi / N_b either way.
+    eps_k = pi/2 + psi_m - nu_k - q_2k is the angle about O_ck from the disk's radial line
+    O_ck O_m to its blade through M (eq 19 with eqs 13-14 / 34-35; nu_k is the system's assembly
+    angle, eqs 11, 38).
+
+    Raises
+    ------
+    SettingsError
+        When lambda leaves (0, 2 pi / N_b): the outer blade would pass M after the inner blade
+        of its group, or before the inner blade of the group ahead, so no tooth space (or no
+        tooth) would lie between them.
     """
-    m = np.array([mean_cone_distance_mm, 0.0])
 
-    def centre_and_angle(b: BladeSystem):
-        e = b.spiral_angle_rad - b.assembly_angle_rad
-        radial = np.array([math.sin(e), -math.cos(e)])  # eq 19 at u = 0, theta = 0
-        return m - b.cutter_radius_mm * radial, math.atan2(radial[1], radial[0])
+    def eps(b: BladeSystem) -> float:
+        return 0.5 * math.pi + b.spiral_angle_rad - b.assembly_angle_rad - b.cradle_angle_rad
 
-    def meet(centre, angle, other_centre, other_radius):
-        """Point where the ray from ``centre`` at ``angle`` meets the other blade circle."""
-        d = np.array([math.cos(angle), math.sin(angle)])
-        w = centre - other_centre
-        bq = float(d @ w)
-        disc = bq * bq - float(w @ w) + other_radius**2
-        if not disc >= 0.0:
-            raise SettingsError(
-                "machine.inner_cutter_radius_mm, outer_cutter_radius_mm",
-                (inner.cutter_radius_mm, outer.cutter_radius_mm),
-                f"the blade circles must meet half a blade group (180/{blade_groups} deg) away "
-                "from the mean point, where the next blade cuts: these radii are too far apart "
-                "or too small for the cone distance",
-            )
-        return centre + (-bq + math.sqrt(disc)) * d
-
-    o_i, a_i = centre_and_angle(inner)
-    o_o, a_o = centre_and_angle(outer)
-    half = math.pi / blade_groups
-    if frame == "inner":
-        p = meet(o_i, a_i + half, o_o, outer.cutter_radius_mm) - o_o
-        lead = math.atan2(p[1], p[0]) - a_o
-    else:
-        p = meet(o_o, a_o - half, o_i, inner.cutter_radius_mm) - o_i
-        lead = a_i - math.atan2(p[1], p[0])
-    return float(lead % (2.0 * math.pi))
+    pitch = 2.0 * math.pi / blade_groups
+    lead = 0.5 * pitch + eps(inner) - eps(outer)
+    if not 0.0 < lead < pitch:
+        raise SettingsError(
+            "machine.inner_cutter_radius_mm, outer_cutter_radius_mm",
+            (inner.cutter_radius_mm, outer.cutter_radius_mm),
+            f"the outer blades must pass the pitch point between two inner blades (a lead of "
+            f"0 to 360/{blade_groups} deg); these radii give {math.degrees(lead):.3f} deg "
+            f"(180/{blade_groups} deg plus the difference of the two disks' cradle angles less "
+            "that of their slope angles): bring the radii closer together",
+        )
+    return float(lead)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -39,7 +39,7 @@ SPEC = parse_study_spec(
         "search": {
             PINION + "inner_cutter_radius_mm": [74.0, 76.0],
             PINION + "outer_cutter_radius_mm": [74.5, 77.0],
-            PINION + "additional_slope_angle_deg": [-0.05, 0.2],
+            PINION + "additional_slope_angle_deg": [-0.2, 0.15],
             PINION + "blade_parabola_coefficient_per_mm": [0.0005, 0.003],
         },
         "evaluations": {
@@ -73,7 +73,7 @@ SPEC = parse_study_spec(
             {
                 PINION + "inner_cutter_radius_mm": 75.0,
                 PINION + "outer_cutter_radius_mm": 75.5,
-                PINION + "additional_slope_angle_deg": 0.0638,
+                PINION + "additional_slope_angle_deg": 0.0523,
                 PINION + "blade_parabola_coefficient_per_mm": 0.0015,
             }
         ],
