@@ -57,11 +57,14 @@ class ToothContact:
     face_mm, profile_mm
         ``(n_f,)``, ``(n_p,)`` the nodes' pattern coordinates.
     width_mm, bias_mm, center_offset_mm, mean_point_mm
-        Pattern width (the whole pattern's extent across the path at M), bias, M - C, and M,
-        in pattern coordinates.
+        Pattern width (the extent across the path at M of the union of the positions'
+        zones), bias, M - C, and M (the middle of the major chord), in pattern coordinates.
     ellipse_major_axis_mm
-        Length of the instantaneous contact zone at M along its principal (long) axis: the
-        major axis of seed 003's contact ellipse, whatever its angle to the path.
+        The instantaneous contact zone's chord at M's position through the contact point along
+        the least curvature of the separation's quadratic form: the major axis of seed 003's
+        contact ellipse, whatever its angle to the path (:mod:`gearopt.mesh.zone`).
+    ellipse_minor_axis_mm
+        The zone's chord across the major axis through M.
     path_angle_deg
         Direction of the path of contact at M on the gear flank, from the gear's root line
         (:func:`gearopt.mesh.frame.path_angle`; the contact points of two positions either

@@ -433,14 +433,16 @@ class SideCycle:
     # -- the result -------------------------------------------------------------------------
 
     def assemble(self, name: str, frame: ToothFrame, compound_um: float, separation: str):
-        """The side's :class:`~gearopt.mesh.cycle.ToothContact` but for its two widths.
+        """The side's :class:`~gearopt.mesh.cycle.ToothContact` but for the figures of its
+        zones (:meth:`gearopt.mesh.cycle.MeshCycle.contacts` measures every side's at once).
 
         Returns
         -------
         tuple
-            ``(lines, fields)``: ``lines`` = ``(pattern, zone at M, M, path direction, minor
-            axis)`` for the widths (:meth:`gearopt.mesh.cycle.MeshCycle.contacts` measures
-            every side's at once), ``fields`` the ToothContact's other fields.
+            ``(lines, fields)``: ``lines`` the rows of the zones to measure (``mean_*``: M's
+            position and its neighbours a quarter step either side; ``pattern_*``: the
+            positions' pairs whose zones are not empty), each with its pinion angle, lag, node
+            factors and contact point; ``fields`` the ToothContact's other fields.
         """
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
