@@ -394,28 +394,37 @@ class MeshCycle:
         path = np.where(norm[:, None] > 1e-9, path / np.maximum(norm, 1e-300)[:, None], [1.0, 0.0])
         across = np.stack([-path[:, 1], path[:, 0]], 1)
         minor_dir = np.stack([-major_dir[:, 0, 1], major_dir[:, 0, 0]], 1)
-        # one batch: the minor chord at M (zone M only) and the pattern across the path at M
-        # (the zones of the positions' pairs that reach the line through M, and M's own)
-        ray, ray_rows, origins, directions = [], [], [], []
+        # one batch: the minor chord at M (zone M's reach either side of M) and the pattern
+        # across the path at M: how far the positions' zones reach either side along the line
+        # through M (the zones of the pairs whose contact points lie within a major axis of M
+        # along the path, and M's own), the farthest of them refined through the same pair's
+        # neighbouring positions (a parabola, as the TE peak)
+        ray, ray_rows, origins, directions, owners = [], [], [], [], []
         for k, x in enumerate(lines):
             m = middle[k, 0]
             offset = np.abs((x["pattern_contact_mm"] - m) @ path[k])
-            near = first[k] + 3 + np.flatnonzero(offset <= major[k, 0] + 1.0)
-            base = 4 * k
-            for sign in (1.0, -1.0):
-                ray.append(np.array([base + (sign < 0)]))
-                ray_rows.append(np.array([first[k]]))
-                ray.append(np.full(len(near) + 1, base + 2 + (sign < 0)))
-                ray_rows.append(np.concatenate([[first[k]], near]))
+            near = np.flatnonzero(offset <= major[k, 0] + 1.0)
+            for slot in range(4):
+                rows_here = [first[k]] if slot < 2 else [first[k], *(first[k] + 3 + near)]
+                ray.append(np.full(len(rows_here), 4 * k + slot))
+                ray_rows.append(np.array(rows_here, np.intp))
+                owners.append(near if slot >= 2 else None)
             origins += [m, m, m, m]
             directions += [minor_dir[k], -minor_dir[k], across[k], -across[k]]
-        ends = zones.exits(
+        reach_all = zones.farthest(
             np.concatenate(ray),
             np.concatenate(ray_rows),
             np.array(origins),
             np.array(directions),
             np.full(4 * n_sides, reach),
-        ).reshape(n_sides, 4)
+        )
+        parts_at = np.cumsum([0] + [len(r) for r in ray])
+        ends = np.zeros((n_sides, 4))
+        for q in range(4 * n_sides):
+            values = reach_all[parts_at[q] : parts_at[q + 1]]
+            k = q // 4
+            x = lines[k]
+            ends[k, q % 4] = _farthest(values, owners[q], x["pattern_position"], x["pattern_pair"])
         out = []
         for k, (_, kw) in enumerate(parts):
             mean = (
@@ -523,3 +532,24 @@ def tooth_contacts(
         compound_um=compound_um,
         separation=separation,
     ).run()
+
+
+def _farthest(values, near, position, pair) -> float:
+    """The farthest reach of the zones along one ray: ``values[0]`` M's zone's, ``values[1:]``
+    those of the pattern rows ``near`` (their positions and pair ids in ``position``,
+    ``pair``); the largest refined by the parabola through the same pair's neighbouring
+    positions where both are among them and it bends down. 0 where no zone meets the ray."""
+    best = float(np.max(values)) if len(values) else 0.0
+    if near is None or len(values) < 2:
+        return max(best, 0.0)
+    own = values[1:]
+    j = int(np.argmax(own))
+    if np.isfinite(own[j]) and own[j] >= best:
+        k, pid = position[near[j]], pair[near[j]]
+        at = {(position[n], pair[n]): i for i, n in enumerate(near)}
+        lo, hi = at.get((k - 1, pid)), at.get((k + 1, pid))
+        if lo is not None and hi is not None and np.isfinite(own[lo]) and np.isfinite(own[hi]):
+            curv = own[lo] - 2.0 * own[j] + own[hi]
+            if curv < 0.0:
+                best = float(own[j] - 0.125 * (own[hi] - own[lo]) ** 2 / curv)
+    return max(best, 0.0)

@@ -441,8 +441,9 @@ class SideCycle:
         tuple
             ``(lines, fields)``: ``lines`` the rows of the zones to measure (``mean_*``: M's
             position and its neighbours a quarter step either side; ``pattern_*``: the
-            positions' pairs whose zones are not empty), each with its pinion angle, lag, node
-            factors and contact point; ``fields`` the ToothContact's other fields.
+            positions' pairs whose zones are not empty, with their positions and pair ids), each
+            with its pinion angle, lag, node factors and contact point; ``fields`` the
+            ToothContact's other fields.
         """
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
@@ -483,6 +484,8 @@ class SideCycle:
             pattern_lag_rad=np.repeat(lag, pairs)[held],
             pattern_factor_mm=factors[held],
             pattern_contact_mm=np.stack([self.cs.ravel()[held], self.ch.ravel()[held]], 1),
+            pattern_position=held // pairs,
+            pattern_pair=self.ids.ravel()[held],
         )
         # bias: the contact line's extension along the face from the pair's entry into contact
         # to its exit (seed 003 section 6): the contact points at the ends of its contact

@@ -154,7 +154,7 @@ class Zones:
         origins, directions
             ``(K, 2)`` the rays' origins and unit directions in grid coordinates.
         reach
-            ``(K,)`` how far each ray is scanned.
+            ``(K,)`` how far each ray is scanned at most (the grid's edge comes first).
 
         Returns
         -------
@@ -165,7 +165,7 @@ class Zones:
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays, c = len(origins), self.compound_mm
-        tau = np.asarray(reach, float)[:, None] * SCAN[None, :]
+        tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
         f = self.along(ray, r, origins, directions, tau[ray]) - c
         inside = f < 0.0
         held = np.zeros((k_rays, len(SCAN)), bool)
@@ -200,6 +200,70 @@ class Zones:
             )
         np.maximum.at(result, ray[p_on], crossing)
         return np.where(through, tau[:, -1], result)
+
+    def farthest(self, ray, r, origins, directions, reach) -> NDArray:
+        """How far the zones of single rows reach along rays, wherever they meet them.
+
+        Parameters
+        ----------
+        ray, r
+            ``(P,)``: pair p measures the zone of row ``r[p]`` on ray ``ray[p]``.
+        origins, directions, reach
+            As :meth:`exits`.
+
+        Returns
+        -------
+        NDArray
+            ``(P,)`` the distance from the ray's origin to the last exit of each pair's zone
+            (its farthest point on the ray); -inf where the zone does not meet the ray.
+        """
+        ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
+        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
+        c = self.compound_mm
+        tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
+        tau = tau[ray]
+        f = self.along(ray, r, origins, directions, tau) - c
+        inside = f < 0.0
+        n = len(SCAN)
+        last = n - 1 - np.argmax(inside[:, ::-1], axis=1)
+        meets = inside.any(axis=1)
+        result = np.full(len(ray), -np.inf)
+        result[meets & (last == n - 1)] = tau[meets & (last == n - 1), -1]
+        p_on = np.flatnonzero(meets & (last < n - 1))
+        if not p_on.size:
+            return result
+        jj = last[p_on]
+        t1, t2 = tau[p_on, jj], tau[p_on, jj + 1]
+        f1, f2 = f[p_on, jj], f[p_on, jj + 1]
+        t0 = tau[p_on, np.maximum(jj - 1, 0)]
+        f0 = np.where(jj >= 1, f[p_on, np.maximum(jj - 1, 0)], np.nan)
+        crossing = _crossing(t0, f0, t1, f1, t2, f2)
+        edge = ~np.isfinite(f2)
+        if edge.any():
+            pe = p_on[edge]
+            w = np.linspace(0.0, 1.0, ZOOM)
+            tz = t1[edge, None] + (t2[edge] - t1[edge])[:, None] * w[None, :]
+            fz = self.along(ray[pe], r[pe], origins, directions, tz) - c
+            out = ~(fz < 0.0)
+            out[:, -1] = True
+            m = np.maximum(np.argmax(out, axis=1), 1)
+            at = np.arange(len(pe))
+            za, zb, fa, fb = tz[at, m - 1], tz[at, m], fz[at, m - 1], fz[at, m]
+            crossing[edge] = np.where(
+                np.isfinite(fb), _crossing(za, np.nan, za, fa, zb, fb), 0.5 * (za + zb)
+            )
+        result[p_on] = crossing
+        return result
+
+    def to_edge(self, origins, directions) -> NDArray:
+        """``(K,)`` how far rays run from their origins to the grid's edge (off it nothing is
+        on the flanks)."""
+        low = np.array([self.face0, self.profile0])
+        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ends = np.where(directions > 0.0, (high - origins) / directions, np.inf)
+            ends = np.where(directions < 0.0, (low - origins) / directions, ends)
+        return np.maximum(ends.min(axis=1), 0.0)
 
     def along(self, ray, r, origins, directions, tau) -> NDArray:
         """Separations of rows ``r`` at distances ``tau`` ``(P, M)`` along rays ``ray``."""
