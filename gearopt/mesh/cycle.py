@@ -57,8 +57,9 @@ class ToothContact:
     face_mm, profile_mm
         ``(n_f,)``, ``(n_p,)`` the nodes' pattern coordinates.
     width_mm, bias_mm, center_offset_mm, mean_point_mm
-        Pattern width (the extent across the path at M of the union of the positions'
-        zones), bias, M - C, and M (the middle of the major chord), in pattern coordinates.
+        Pattern width (how far the positions' zones reach either side of M along the line
+        across the path), bias, M - C, and M (the middle of the major chord), in pattern
+        coordinates.
     ellipse_major_axis_mm
         The instantaneous contact zone's chord at M's position through the contact point along
         the least curvature of the separation's quadratic form: the major axis of seed 003's

@@ -16,8 +16,9 @@ that they converge with the grid instead of moving with its nodes.
 - Seed 003 section 6 simplifies the contact ellipse to its major axis, "the middle of the
   segment is situated on the contact line": a zone's centre is the middle of its major chord
   through the contact point, and the minor axis is the chord across it through that centre.
-- The pattern across a line is the union of the zones of several positions: a ray's exit is
-  the farthest exit of the zones that hold it up to there.
+- The pattern across a line: how far the zones of several positions reach along a ray
+  (:meth:`Zones.farthest`: each zone's last exit, wherever it meets the ray; the zones of
+  discrete positions leave gaps between them that the motion fills).
 
 The separation at a point is the angular clearance above the row's lag times the node factor
 (normal or circumferential, :func:`gearopt.mesh.pattern.separation_mm`) interpolated
