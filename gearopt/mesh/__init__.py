@@ -29,9 +29,10 @@ Definitions used by the outputs:
   between the carrying pair's hand-overs, the major axis is the zone's chord through the
   contact point along the least curvature of the separation's quadratic form, the mean
   contact point M its middle (seed 003 section 6), the minor axis the chord across it through
-  M; width = how far the positions' zones reach either side of M along the line across the
-  path (the farthest, refined by the parabola through the same pair's neighbouring positions;
-  the path's direction: the zones' middles a quarter step either side of M); bias =
+  M; width = the extent across the path at M of the pattern the zones sweep (at a point the
+  least separation over the motion: over a pair's positions, the parabola through the least
+  and its neighbours; the path's direction: the zones' middles a quarter step either side of
+  M); bias =
   the contact line's extension along the face (seed 003 section 6): the face coordinate of the
   contact point where the pair leaves contact inside the flanks minus where it enters (the ends
   of its contact interval: bracketed by bisection on the engine's edge flag to an eighth of a

@@ -57,9 +57,9 @@ class ToothContact:
     face_mm, profile_mm
         ``(n_f,)``, ``(n_p,)`` the nodes' pattern coordinates.
     width_mm, bias_mm, center_offset_mm, mean_point_mm
-        Pattern width (how far the positions' zones reach either side of M along the line
-        across the path), bias, M - C, and M (the middle of the major chord), in pattern
-        coordinates.
+        Pattern width (the extent across the path at M of the pattern the zones sweep:
+        :meth:`gearopt.mesh.zone.Zones.pattern_exits`), bias, M - C, and M (the middle of the
+        major chord), in pattern coordinates.
     ellipse_major_axis_mm
         The instantaneous contact zone's chord at M's position through the contact point along
         the least curvature of the separation's quadratic form: the major axis of seed 003's
@@ -396,36 +396,35 @@ class MeshCycle:
         across = np.stack([-path[:, 1], path[:, 0]], 1)
         minor_dir = np.stack([-major_dir[:, 0, 1], major_dir[:, 0, 0]], 1)
         # one batch: the minor chord at M (zone M's reach either side of M) and the pattern
-        # across the path at M: how far the positions' zones reach either side along the line
-        # through M (the zones of the pairs whose contact points lie within a major axis of M
-        # along the path, and M's own), the farthest of them refined through the same pair's
-        # neighbouring positions (a parabola, as the TE peak)
-        ray, ray_rows, origins, directions, owners = [], [], [], [], []
+        # across the path at M: how far the pattern the positions' zones sweep runs either
+        # side of M along the line across the path (the pairs whose contact points lie within
+        # a major axis of M along the path)
+        ray, ray_rows, keys, positions, origins, directions = [], [], [], [], [], []
         for k, x in enumerate(lines):
             m = middle[k, 0]
             offset = np.abs((x["pattern_contact_mm"] - m) @ path[k])
             near = np.flatnonzero(offset <= major[k, 0] + 1.0)
             for slot in range(4):
-                rows_here = [first[k]] if slot < 2 else [first[k], *(first[k] + 3 + near)]
+                if slot < 2:
+                    rows_here, key, pos = [first[k]], [-(10**6)], [0]
+                else:
+                    rows_here = first[k] + 3 + near
+                    key, pos = x["pattern_pair"][near], x["pattern_position"][near]
                 ray.append(np.full(len(rows_here), 4 * k + slot))
-                ray_rows.append(np.array(rows_here, np.intp))
-                owners.append(near if slot >= 2 else None)
+                ray_rows.append(np.asarray(rows_here, np.intp))
+                keys.append(np.asarray(key))
+                positions.append(np.asarray(pos))
             origins += [m, m, m, m]
             directions += [minor_dir[k], -minor_dir[k], across[k], -across[k]]
-        reach_all = zones.farthest(
+        ends = zones.pattern_exits(
             np.concatenate(ray),
             np.concatenate(ray_rows),
+            np.concatenate(keys),
+            np.concatenate(positions),
             np.array(origins),
             np.array(directions),
-            np.full(4 * n_sides, reach),
-        )
-        parts_at = np.cumsum([0] + [len(r) for r in ray])
-        ends = np.zeros((n_sides, 4))
-        for q in range(4 * n_sides):
-            values = reach_all[parts_at[q] : parts_at[q + 1]]
-            k = q // 4
-            x = lines[k]
-            ends[k, q % 4] = _farthest(values, owners[q], x["pattern_position"], x["pattern_pair"])
+            np.tile([False, False, True, True], n_sides),
+        ).reshape(n_sides, 4)
         out = []
         for k, (_, kw) in enumerate(parts):
             mean = (
@@ -533,24 +532,3 @@ def tooth_contacts(
         compound_um=compound_um,
         separation=separation,
     ).run()
-
-
-def _farthest(values, near, position, pair) -> float:
-    """The farthest reach of the zones along one ray: ``values[0]`` M's zone's, ``values[1:]``
-    those of the pattern rows ``near`` (their positions and pair ids in ``position``,
-    ``pair``); the largest refined by the parabola through the same pair's neighbouring
-    positions where both are among them and it bends down. 0 where no zone meets the ray."""
-    best = float(np.max(values)) if len(values) else 0.0
-    if near is None or len(values) < 2:
-        return max(best, 0.0)
-    own = values[1:]
-    j = int(np.argmax(own))
-    if np.isfinite(own[j]) and own[j] >= best:
-        k, pid = position[near[j]], pair[near[j]]
-        at = {(position[n], pair[n]): i for i, n in enumerate(near)}
-        lo, hi = at.get((k - 1, pid)), at.get((k + 1, pid))
-        if lo is not None and hi is not None and np.isfinite(own[lo]) and np.isfinite(own[hi]):
-            curv = own[lo] - 2.0 * own[j] + own[hi]
-            if curv < 0.0:
-                best = float(own[j] - 0.125 * (own[hi] - own[lo]) ** 2 / curv)
-    return max(best, 0.0)

@@ -16,9 +16,10 @@ that they converge with the grid instead of moving with its nodes.
 - Seed 003 section 6 simplifies the contact ellipse to its major axis, "the middle of the
   segment is situated on the contact line": a zone's centre is the middle of its major chord
   through the contact point, and the minor axis is the chord across it through that centre.
-- The pattern across a line: how far the zones of several positions reach along a ray
-  (:meth:`Zones.farthest`: each zone's last exit, wherever it meets the ray; the zones of
-  discrete positions leave gaps between them that the motion fills).
+- The pattern the motion sweeps (:meth:`Zones.pattern_exits`): at a point, the least
+  separation over the motion (over a tooth pair's positions, the parabola through the least
+  and its neighbours: the zones of discrete positions leave gaps that the motion fills); its
+  extent along a ray, found as a chord's.
 
 The separation at a point is the angular clearance above the row's lag times the node factor
 (normal or circumferential, :func:`gearopt.mesh.pattern.separation_mm`) interpolated
@@ -35,7 +36,7 @@ from numpy.typing import NDArray
 
 from gearopt.contact import JointField
 
-__all__ = ["RING_MM", "SCAN", "ZOOM", "ZoneRows", "Zones"]
+__all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones"]
 
 #: radius of the ring on which the separation's quadratic form is fitted (mm): well inside
 #: the thinnest zone's half-width at the marking compounds in use, and over a patch on which
@@ -46,6 +47,11 @@ RING_MM = 0.1
 SCAN = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 92)])
 #: samples of the finer scan of a bracket through a flank's boundary (0.24 % of its reach)
 ZOOM = 33
+#: the scans of :meth:`Zones.pattern_exits` (fractions of the way to the grid's edge):
+#: geometric steps of 16 % from a thousandth of it, for a zone around the ray's origin; even
+#: steps of 2 %, for the zones the motion sweeps over the ray
+NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 47)])
+SPREAD = np.linspace(0.0, 1.0, 48)
 
 _RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
 _RING = RING_MM * np.stack([np.cos(_RING_ANGLES), np.sin(_RING_ANGLES)], axis=1)
@@ -202,58 +208,97 @@ class Zones:
         np.maximum.at(result, ray[p_on], crossing)
         return np.where(through, tau[:, -1], result)
 
-    def farthest(self, ray, r, origins, directions, reach) -> NDArray:
-        """How far the zones of single rows reach along rays, wherever they meet them.
+    def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
+        """How far rays run from their origins inside the pattern the zones of rows sweep.
+
+        The pattern at a point is its least separation over the motion: over the rows of one
+        tooth pair (``key``) at consecutive positions (``position``), the least of their
+        separations refined by the parabola through it and its neighbours' (as the TE peak:
+        the zones of discrete positions leave gaps that the motion fills), then the least over
+        the pairs. Each ray is scanned at :data:`SPREAD` (``spread``) or :data:`NEAR` fractions
+        of the way to the grid's edge; its first exit, by inverse quadratic interpolation of
+        that field, or through a flank's boundary by two finer scans (:data:`ZOOM`).
 
         Parameters
         ----------
-        ray, r
-            ``(P,)``: pair p measures the zone of row ``r[p]`` on ray ``ray[p]``.
-        origins, directions, reach
-            As :meth:`exits`.
+        ray, r, key, position
+            ``(P,)``: row ``r[p]`` of tooth pair ``key[p]`` at ``position[p]`` on ray
+            ``ray[p]``.
+        origins, directions
+            ``(K, 2)`` the rays' origins and unit directions in grid coordinates.
+        spread
+            ``(K,)`` True to scan a ray evenly, False at geometric steps from its origin.
 
         Returns
         -------
         NDArray
-            ``(P,)`` the distance from the ray's origin to the last exit of each pair's zone
-            (its farthest point on the ray); -inf where the zone does not meet the ray.
+            ``(K,)`` the distance to each ray's first exit (0 where its origin is out).
         """
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
-        c = self.compound_mm
-        tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
-        tau = tau[ray]
-        f = self.along(ray, r, origins, directions, tau) - c
-        inside = f < 0.0
-        n = len(SCAN)
-        last = n - 1 - np.argmax(inside[:, ::-1], axis=1)
-        meets = inside.any(axis=1)
-        result = np.full(len(ray), -np.inf)
-        result[meets & (last == n - 1)] = tau[meets & (last == n - 1), -1]
-        p_on = np.flatnonzero(meets & (last < n - 1))
-        if not p_on.size:
+        k_rays, c = len(origins), self.compound_mm
+        lookup = {
+            (int(a), int(b), int(p)): i
+            for i, (a, b, p) in enumerate(zip(ray, key, position, strict=True))
+        }
+        prev = np.array(
+            [
+                lookup.get((int(a), int(b), int(p) - 1), -1)
+                for a, b, p in zip(ray, key, position, strict=True)
+            ],
+            np.intp,
+        )
+        nxt = np.array(
+            [
+                lookup.get((int(a), int(b), int(p) + 1), -1)
+                for a, b, p in zip(ray, key, position, strict=True)
+            ],
+            np.intp,
+        )
+        fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
+        tau = self.to_edge(origins, directions)[:, None] * fractions
+
+        def field(t, pick=None):  # the pattern's least separation minus the compound at t
+            if pick is None:  # (K, M): every ray
+                f = self.along(ray, r, origins, directions, t[ray])
+                g = _swept(f, prev, nxt)
+            else:  # the pairs ``pick`` (whole rays) only
+                f = np.full((len(ray), t.shape[1]), np.inf)
+                f[pick] = self.along(ray[pick], r[pick], origins, directions, t[ray[pick]])
+                g = _swept(f, prev, nxt)
+            out = np.full(t.shape, np.inf)
+            np.minimum.at(out, ray, g)
+            return out - c
+
+        g = field(tau)
+        inside = g < 0.0
+        first = np.argmax(~inside, axis=1)
+        result = np.where(inside.all(axis=1), tau[:, -1], 0.0)
+        k = np.flatnonzero(inside[:, 0] & ~inside.all(axis=1))
+        if not k.size:
             return result
-        jj = last[p_on]
-        t1, t2 = tau[p_on, jj], tau[p_on, jj + 1]
-        f1, f2 = f[p_on, jj], f[p_on, jj + 1]
-        t0 = tau[p_on, np.maximum(jj - 1, 0)]
-        f0 = np.where(jj >= 1, f[p_on, np.maximum(jj - 1, 0)], np.nan)
-        crossing = _crossing(t0, f0, t1, f1, t2, f2)
-        edge = ~np.isfinite(f2)
-        if edge.any():
-            pe = p_on[edge]
+        j = first[k]
+        t1, t2, f1, f2 = tau[k, j - 1], tau[k, j], g[k, j - 1], g[k, j]
+        t0 = tau[k, np.maximum(j - 2, 0)]
+        f0 = np.where(j >= 2, g[k, np.maximum(j - 2, 0)], np.nan)
+        result[k] = _crossing(t0, f0, t1, f1, t2, f2)
+        edge = k[~np.isfinite(f2)]
+        if edge.size:
+            lo, hi = tau[edge, first[edge] - 1], tau[edge, first[edge]]
             w = np.linspace(0.0, 1.0, ZOOM)
-            tz = t1[edge, None] + (t2[edge] - t1[edge])[:, None] * w[None, :]
-            fz = self.along(ray[pe], r[pe], origins, directions, tz) - c
-            out = ~(fz < 0.0)
-            out[:, -1] = True
-            m = np.maximum(np.argmax(out, axis=1), 1)
-            at = np.arange(len(pe))
-            za, zb, fa, fb = tz[at, m - 1], tz[at, m], fz[at, m - 1], fz[at, m]
-            crossing[edge] = np.where(
-                np.isfinite(fb), _crossing(za, np.nan, za, fa, zb, fb), 0.5 * (za + zb)
+            for _ in range(2):
+                tz = np.zeros((k_rays, ZOOM))
+                tz[edge] = lo[:, None] + (hi - lo)[:, None] * w[None, :]
+                gz = field(tz, np.flatnonzero(np.isin(ray, edge)))[edge]
+                out = ~(gz < 0.0)
+                out[:, -1] = True
+                m = np.maximum(np.argmax(out, axis=1), 1)
+                at = np.arange(len(edge))
+                lo, hi = tz[edge, m - 1], tz[edge, m]
+                fa, fb = gz[at, m - 1], gz[at, m]
+            result[edge] = np.where(
+                np.isfinite(fb), _crossing(lo, np.nan, lo, fa, hi, fb), 0.5 * (lo + hi)
             )
-        result[p_on] = crossing
         return result
 
     def to_edge(self, origins, directions) -> NDArray:
@@ -303,3 +348,21 @@ def _crossing(t0, f0, t1, f1, t2, f2) -> NDArray:
     good = np.isfinite(quad) & (f0 < f1) & (quad >= t1) & (quad <= t2)
     out = np.where(good, quad, linear)
     return np.where(np.isfinite(f2), out, t2)
+
+
+def _swept(f, prev, nxt) -> NDArray:
+    """The separations ``f`` ``(P, M)`` of rows at their least over the motion: where a row's
+    is the least of its pair's neighbouring positions' (``prev``, ``nxt``: their rows, -1
+    without), the vertex of the parabola through the three; else its own."""
+    both = (prev >= 0) & (nxt >= 0)
+    out = f.copy()
+    if not both.any():
+        return out
+    i = np.flatnonzero(both)
+    a, b, d = f[prev[i]], f[i], f[nxt[i]]
+    with np.errstate(invalid="ignore"):
+        curv = a - 2.0 * b + d
+        low = np.isfinite(a) & np.isfinite(b) & np.isfinite(d) & (b <= a) & (b <= d) & (curv > 0)
+        vertex = b - 0.125 * (d - a) ** 2 / np.where(low, curv, 1.0)
+    out[i] = np.where(low, vertex, b)
+    return out
