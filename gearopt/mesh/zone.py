@@ -50,8 +50,8 @@ ZOOM = 33
 #: the scans of :meth:`Zones.pattern_exits` (fractions of the way to the grid's edge):
 #: geometric steps of 16 % from a thousandth of it, for a zone around the ray's origin; even
 #: steps of 2 %, for the zones the motion sweeps over the ray
-NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 47)])
-SPREAD = np.linspace(0.0, 1.0, 48)
+NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 31)])
+SPREAD = np.linspace(0.0, 1.0, 32)
 
 _RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
 _RING = RING_MM * np.stack([np.cos(_RING_ANGLES), np.sin(_RING_ANGLES)], axis=1)
@@ -126,9 +126,11 @@ class Zones:
         j = np.minimum(y.astype(np.intp), self.last[1])
         u, v = x - i, y - j
         f = self.rows.factor_mm
-        rr = np.broadcast_to(np.asarray(r)[:, None], i.shape)
-        return (1.0 - u) * ((1.0 - v) * f[rr, i, j] + v * f[rr, i, j + 1]) + u * (
-            (1.0 - v) * f[rr, i + 1, j] + v * f[rr, i + 1, j + 1]
+        n_p = f.shape[2]
+        at = (np.asarray(r, np.intp) * (f.shape[1] * n_p))[:, None] + i * n_p + j
+        flat = f.reshape(-1)
+        return (1.0 - u) * ((1.0 - v) * flat[at] + v * flat[at + 1]) + u * (
+            (1.0 - v) * flat[at + n_p] + v * flat[at + n_p + 1]
         )
 
     def separation(self, r, s, h) -> NDArray:
@@ -217,7 +219,7 @@ class Zones:
         the zones of discrete positions leave gaps that the motion fills), then the least over
         the pairs. Each ray is scanned at :data:`SPREAD` (``spread``) or :data:`NEAR` fractions
         of the way to the grid's edge; its first exit, by inverse quadratic interpolation of
-        that field, or through a flank's boundary by two finer scans (:data:`ZOOM`).
+        that field, or through a flank's boundary by a finer scan (:data:`ZOOM`).
 
         Parameters
         ----------
@@ -237,24 +239,10 @@ class Zones:
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays, c = len(origins), self.compound_mm
-        lookup = {
-            (int(a), int(b), int(p)): i
-            for i, (a, b, p) in enumerate(zip(ray, key, position, strict=True))
-        }
-        prev = np.array(
-            [
-                lookup.get((int(a), int(b), int(p) - 1), -1)
-                for a, b, p in zip(ray, key, position, strict=True)
-            ],
-            np.intp,
-        )
-        nxt = np.array(
-            [
-                lookup.get((int(a), int(b), int(p) + 1), -1)
-                for a, b, p in zip(ray, key, position, strict=True)
-            ],
-            np.intp,
-        )
+        prev, nxt = _neighbours(ray, np.asarray(key), np.asarray(position))
+        starts = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
+        if np.any(np.diff(ray) < 0) or len(starts) != k_rays:
+            raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
         fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
         tau = self.to_edge(origins, directions)[:, None] * fractions
 
@@ -266,9 +254,7 @@ class Zones:
                 f = np.full((len(ray), t.shape[1]), np.inf)
                 f[pick] = self.along(ray[pick], r[pick], origins, directions, t[ray[pick]])
                 g = _swept(f, prev, nxt)
-            out = np.full(t.shape, np.inf)
-            np.minimum.at(out, ray, g)
-            return out - c
+            return np.minimum.reduceat(g, starts, axis=0) - c
 
         g = field(tau)
         inside = g < 0.0
@@ -286,7 +272,7 @@ class Zones:
         if edge.size:
             lo, hi = tau[edge, first[edge] - 1], tau[edge, first[edge]]
             w = np.linspace(0.0, 1.0, ZOOM)
-            for _ in range(2):
+            for _ in range(1):
                 tz = np.zeros((k_rays, ZOOM))
                 tz[edge] = lo[:, None] + (hi - lo)[:, None] * w[None, :]
                 gz = field(tz, np.flatnonzero(np.isin(ray, edge)))[edge]
@@ -366,3 +352,15 @@ def _swept(f, prev, nxt) -> NDArray:
         vertex = b - 0.125 * (d - a) ** 2 / np.where(low, curv, 1.0)
     out[i] = np.where(low, vertex, b)
     return out
+
+
+def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
+    """The rows of the same ray and tooth pair at the previous and next positions (-1
+    without)."""
+    order = np.lexsort((position, key, ray))
+    same = (np.diff(ray[order]) == 0) & (np.diff(key[order]) == 0)
+    step = same & (np.diff(position[order]) == 1)
+    prev, nxt = np.full(len(ray), -1, np.intp), np.full(len(ray), -1, np.intp)
+    prev[order[1:][step]] = order[:-1][step]
+    nxt[order[:-1][step]] = order[1:][step]
+    return prev, nxt
