@@ -474,9 +474,9 @@ class SideCycle:
             above = flat_g - np.repeat(lag, pairs)
         factors = getattr(self.sample, kind)[self.inv]
         reach = np.where(np.isfinite(above), above, np.inf) * factors.max(axis=(1, 2))
-        # the pairs whose zones reach within ten compounds (held or about to be: the
+        # the pairs whose zones reach within five compounds (held or about to be: the
         # neighbours through which the motion is refined)
-        held = np.flatnonzero(reach < 10.0 * compound_mm)
+        held = np.flatnonzero(reach < 5.0 * compound_mm)
         lines = dict(
             mean_phi_rad=ex.phi_rad[3:6],
             mean_lag_rad=ex.minimum_rad[3:6],
