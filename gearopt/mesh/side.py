@@ -472,8 +472,9 @@ class SideCycle:
         flat_g = g.ravel()
         with np.errstate(invalid="ignore"):  # inf - inf off the flanks
             above = flat_g - np.repeat(lag, pairs)
-        factors = getattr(self.sample, kind)[self.inv]
-        reach = np.where(np.isfinite(above), above, np.inf) * factors.max(axis=(1, 2))
+        node_factor = getattr(self.sample, kind)
+        largest = node_factor.reshape(len(node_factor), -1).max(axis=1)[self.inv]
+        reach = np.where(np.isfinite(above), above, np.inf) * largest
         # the pairs whose zones reach within five compounds (held or about to be: the
         # neighbours through which the motion is refined)
         held = np.flatnonzero(reach < 5.0 * compound_mm)
@@ -484,7 +485,7 @@ class SideCycle:
             mean_contact_mm=np.stack([ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]], 1),
             pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
             pattern_lag_rad=np.repeat(lag, pairs)[held],
-            pattern_factor_mm=factors[held],
+            pattern_factor_mm=node_factor[self.inv[held]],
             pattern_contact_mm=np.stack([self.cs.ravel()[held], self.ch.ravel()[held]], 1),
             pattern_position=held // pairs,
             pattern_pair=self.ids.ravel()[held],
