@@ -520,7 +520,10 @@ def test_hand_over_guessed_from_interpolated_lags_agrees_with_the_iteration(alig
         assert a.handover_phi1_deg == pytest.approx(b.handover_phi1_deg, abs=1e-3)
         assert a.te_peak_to_peak_arcsec == pytest.approx(b.te_peak_to_peak_arcsec, abs=1e-3)
         assert a.te_arcsec == pytest.approx(b.te_arcsec, abs=1e-3)
-        assert a.mean_point_mm == pytest.approx(b.mean_point_mm, abs=1e-3)
+        # M is the middle of the zone's major chord (gearopt.mesh.zone), whose ends move with
+        # the lag and contact point M's position is refined to: 0.012 mm measured on the
+        # coast side between the two (within the pattern's 0.05 mm convergence tolerance)
+        assert a.mean_point_mm == pytest.approx(b.mean_point_mm, abs=0.02)
 
 
 def test_the_engine_finds_where_the_coast_contact_leaves_the_heel(section53):

@@ -30,10 +30,9 @@ from gearopt.analysis import (
 from gearopt.contact import kernels as contact_kernels
 from gearopt.design import Misalignment
 from gearopt.flank import FlankGrid
-from gearopt.mesh import cycle as mesh_cycle
 from gearopt.mesh import mesh_pair
 
-from . import numpy_engine, numpy_reference
+from . import numpy_engine
 from .conftest import STUDIES
 
 pytestmark = pytest.mark.skipif(
@@ -88,11 +87,26 @@ def _fields(result) -> dict:
     return {f.name: getattr(result, f.name) for f in dataclasses.fields(result)}
 
 
+#: the zones' chords (gearopt.mesh.zone) end where the separation crosses the compound; along
+#: a line contact it does so at a grazing slope, and the contact point the chords start from
+#: is any point of the line, so the refinements' 1e-7 mm differences move the chords' ends
+#: further (measured: 5e-5 mm, the coast line contact of the R_b 250 case)
+ZONE_FIGURES = (
+    "width_mm",
+    "ellipse_major_axis_mm",
+    "ellipse_minor_axis_mm",
+    "mean_point_mm",
+    "center_offset_mm",
+)
+
+
 def _tolerance(name: str) -> float:
     if "arcsec" in name:
         return 1e-6
     if name.endswith("_deg"):
         return 1e-5
+    if name in ZONE_FIGURES:
+        return 2e-4
     return 1e-5  # mm, um, contact ratio
 
 
@@ -124,40 +138,6 @@ def test_kernels_give_the_numpy_paths_results(case, monkeypatch):
                 continue
             checked += 1
     assert checked > 40  # (every side's curves, pattern, flags, backlash and ease-off maps)
-
-
-@pytest.mark.parametrize("case", list(CASES))
-def test_zone_widths_kernel_gives_the_numpy_reference(case, monkeypatch):
-    # the pattern widths and contact-ellipse axes of a real TCA (both sides: the whole
-    # pattern across the path at M, the zone at M along its long axis), measured by the
-    # compiled kernel and by the numpy reference on the same inputs: the same samples and
-    # arithmetic, so the same widths to the bit
-    name, overrides, conditions = CASES[case]
-    design = gearopt.with_overrides(gearopt.load_design(STUDIES / name), overrides)
-    options = AnalysisOptions(**conditions)
-    pair = mesh_pair(
-        design, generated_flanks(design, options.grid), misalignment=options.misalignment
-    )
-    calls = []
-    widths = mesh_cycle.widths
-
-    def recorded(*args):
-        calls.append((args, widths(*args)))
-        return calls[-1][1]
-
-    monkeypatch.setattr(mesh_cycle, "widths", recorded)
-    sides = contact_sides(pair, options)
-    assert len(calls) == 1
-    args, compiled = calls[0]
-    assert compiled.shape == (4,) and np.all(compiled > 0.0)
-    reference = numpy_reference.widths(*args)
-    np.testing.assert_array_equal(compiled, reference)
-    got = [
-        getattr(sides[s], k)
-        for s in ("drive", "coast")
-        for k in ("width_mm", "ellipse_major_axis_mm")
-    ]
-    assert got == compiled.tolist()
 
 
 def test_a_misalignment_that_leaves_no_refinable_node_is_reported_not_raised():

@@ -391,8 +391,12 @@ def test_uniform_depth_output_is_mains(conjugate):
     # kernels, gearopt.contact.kernels, choose the refinement's closed-form Newton step row by
     # row rather than for a whole batch: the same step to rounding, refined positions within
     # about 1e-7 mm)
+    # (the pattern's width and M are measured on the refined field since issue 19: not
+    # the reference's node-counted figures, so not compared)
     metrics = gearopt.evaluators()["tca"].evaluate(conjugate, None).metrics
     for name, value in metrics.items():
+        if name.endswith("pattern_width_mm") or "pattern_center_offset" in name:
+            continue
         atol = 1e-6
         if name.endswith("contact_ratio"):
             atol = 1.0 / 80.0 * 3.0 + 1e-9

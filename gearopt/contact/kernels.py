@@ -14,8 +14,7 @@ time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares t
 - :func:`lowest_nodes`, :func:`refine`: the refinement's candidate nodes and its constrained
   Newton steps;
 - :func:`tangency`, :func:`interval_end`: the tangency point (the least clearance over the
-  smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends);
-- :func:`zone_widths`: the pattern's widths along lines.
+  smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends).
 
 A numpy reference of the node fields, the point clearance and the refinement (the engine's
 whole-array paths before these kernels) lives with the tests (``tests/numpy_engine.py``); the
@@ -43,7 +42,6 @@ __all__ = [
     "refine",
     "tangency",
     "warm",
-    "zone_widths",
 ]
 
 
@@ -556,57 +554,6 @@ def lowest_nodes(field, keep, side, pick, values):
             values[r, c] = best
 
 
-@compiled(inline=True)
-def _zone_value(f, k, compound, face, profile, points, perp, tk, big):
-    """The separation on line k at ``tk`` minus the compound (``big`` minus it off the grid),
-    bilinear as :func:`gearopt.mesh.pattern.widths`'s ``value``."""
-    s = points[k, 0] + tk * perp[k, 0]
-    h = points[k, 1] + tk * perp[k, 1]
-    if not (face[0] <= s <= face[-1] and profile[0] <= h <= profile[-1]):
-        return big - compound
-    i = min(max(np.searchsorted(face, s) - 1, 0), face.size - 2)
-    j = min(max(np.searchsorted(profile, h) - 1, 0), profile.size - 2)
-    s0, h0 = face[i], profile[j]
-    u = min(max((s - s0) / (face[i + 1] - s0), 0.0), 1.0)
-    v = min(max((h - h0) / (profile[j + 1] - h0), 0.0), 1.0)
-    val = (
-        (1 - u) * (1 - v) * f[k, i, j]
-        + u * (1 - v) * f[k, i + 1, j]
-        + (1 - u) * v * f[k, i, j + 1]
-        + u * v * f[k, i + 1, j + 1]
-    )
-    return val - compound
-
-
-@compiled
-def zone_widths(f, compound, face, profile, points, perp, tau, big, out):
-    """:func:`gearopt.mesh.pattern.widths` line by line: the extent of {f < compound} (``f``:
-    ``(K, n_f, n_p)`` separations, capped at ``big``, bilinear between the nodes) along each
-    line ``points[k] + tau perp[k]``, from the middle sample outward on each side to the first
-    sample out of the zone (interpolated; the line's end when there is none), into ``out``; 0
-    where the middle sample is out."""
-    centre = tau.size // 2
-    for k in range(f.shape[0]):
-        out[k] = 0.0
-        if _zone_value(f, k, compound, face, profile, points, perp, tau[centre], big) >= 0.0:
-            continue
-        ends = np.empty(2)
-        for side in range(2):
-            step = 1 if side == 0 else -1
-            ends[side] = tau[-1] if side == 0 else tau[0]
-            before = _zone_value(f, k, compound, face, profile, points, perp, tau[centre], big)
-            i = centre + step
-            while 0 <= i < tau.size:
-                v = _zone_value(f, k, compound, face, profile, points, perp, tau[i], big)
-                if v >= 0.0:
-                    a, b = tau[i - step], tau[i]
-                    ends[side] = a + (b - a) * before / (before - v)
-                    break
-                before = v
-                i += step
-        out[k] = ends[0] - ends[1]
-
-
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process, on tables of the
     engine's types (one cell, zero coefficients): done once before worker processes start, so
@@ -614,7 +561,7 @@ def warm() -> None:
     for concurrent writers). Nothing without the kernels."""
     if not ENABLED:
         return
-    f8, ip = np.float64, np.intp
+    ip = np.intp
     coef, ok = np.zeros((1, 16)), np.ones(1, np.bool_)
     gear = (0.0, 0.0, 0.0, 0.0, 1, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, coef, ok)
     lin, const = np.zeros((5, 2)), np.zeros(5)
@@ -665,15 +612,3 @@ def warm() -> None:
     )
     maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
     interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, ok)
-    grid = np.array([0.0, 1.0])
-    zone_widths(
-        np.zeros((1, 2, 2)),
-        1.0,
-        grid,
-        grid,
-        np.zeros((1, 2)),
-        np.ones((1, 2)),
-        np.linspace(-1.0, 1.0, 5),
-        10.0,
-        np.empty(1, f8),
-    )

@@ -25,16 +25,22 @@ Definitions used by the outputs:
 - instantaneous contact zone: the nodes within the marking compound of the mating flank; the
   contact path is the zone's centroid (weights ``compound - separation``, so a paraboloid's
   centroid is its vertex and a line contact's is its middle) along the carrying pair's cycle;
-- mean contact point M: the path point midway between the carrying pair's hand-overs; bias =
+- the zones' chords, on the refined field (:mod:`gearopt.mesh.zone`): at the position midway
+  between the carrying pair's hand-overs, the major axis is the zone's chord through the
+  contact point along the least curvature of the separation's quadratic form, the mean
+  contact point M its middle (seed 003 section 6), the minor axis the chord across it through
+  M; width = the extent across the path at M of the pattern the zones sweep (at a point the
+  least separation over the motion: over a pair's positions, the parabola through the least
+  and its neighbours; the path's direction: the zones' middles a quarter step either side of
+  M); bias =
   the contact line's extension along the face (seed 003 section 6): the face coordinate of the
   contact point where the pair leaves contact inside the flanks minus where it enters (the ends
   of its contact interval: bracketed by bisection on the engine's edge flag to an eighth of a
   position step, the points it can visit evaluated at once, then moved to where the tangency
   point -- the solution of the tangency equations, :mod:`gearopt.newton_tca` -- leaves the
   flanks, but for line contact; the carrying cycle's ends when the contact never leaves the
-  flanks' interior); width = extent of the zone at M perpendicular to the path;
-  ``center_offset_mm`` = M minus the flank centre C (the mean cone distance, mid working
-  depth: h = (a1 - a2) / 2 with a the mean addenda);
+  flanks' interior); ``center_offset_mm`` = M minus the flank centre C (the mean cone
+  distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
 - contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
   at an edge), over the angular pitch (sampled on beyond the analysed range when a pair is
   still in contact at its ends, up to 1.5 pitches more).
@@ -42,7 +48,9 @@ Definitions used by the outputs:
 Modules:
 
 - :mod:`gearopt.mesh.frame`: :class:`ToothFrame` (pattern coordinates), :func:`path_angle`;
-- :mod:`gearopt.mesh.pattern`: separations, zone centroids and minor axis, zone widths;
+- :mod:`gearopt.mesh.pattern`: separations and zone centroids on the nodes;
+- :mod:`gearopt.mesh.zone`: the zones' chords on the refined field
+  (:class:`~gearopt.mesh.zone.Zones`);
 - :mod:`gearopt.mesh.handover`: the hand-over's search (:class:`~gearopt.mesh.handover.HandOver`);
 - :mod:`gearopt.mesh.side`: :class:`SideCycle`, one side's mesh cycle;
 - :mod:`gearopt.mesh.cycle`: :class:`ToothContact`, :class:`MeshCycle` (every side's joint

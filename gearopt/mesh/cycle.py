@@ -14,8 +14,9 @@ from numpy.typing import NDArray
 from gearopt.analysis_options import check_options
 from gearopt.contact import ClearanceField, FieldSample, JointField
 from gearopt.mesh.frame import ARCSEC, ToothFrame, as_list
-from gearopt.mesh.pattern import sample_rows, widths
+from gearopt.mesh.pattern import sample_rows
 from gearopt.mesh.side import FLAT_ARCSEC, SideCycle
+from gearopt.mesh.zone import ZoneRows, Zones
 
 __all__ = ["EXTEND", "MeshCycle", "ToothContact", "tooth_contact", "tooth_contacts"]
 
@@ -56,11 +57,15 @@ class ToothContact:
     face_mm, profile_mm
         ``(n_f,)``, ``(n_p,)`` the nodes' pattern coordinates.
     width_mm, bias_mm, center_offset_mm, mean_point_mm
-        Pattern width (the whole pattern's extent across the path at M), bias, M - C, and M,
-        in pattern coordinates.
+        Pattern width (the extent across the path at M of the pattern the zones sweep:
+        :meth:`gearopt.mesh.zone.Zones.pattern_exits`), bias, M - C, and M (the middle of the
+        major chord), in pattern coordinates.
     ellipse_major_axis_mm
-        Length of the instantaneous contact zone at M along its principal (long) axis: the
-        major axis of seed 003's contact ellipse, whatever its angle to the path.
+        The instantaneous contact zone's chord at M's position through the contact point along
+        the least curvature of the separation's quadratic form: the major axis of seed 003's
+        contact ellipse, whatever its angle to the path (:mod:`gearopt.mesh.zone`).
+    ellipse_minor_axis_mm
+        The zone's chord across the major axis through M.
     path_angle_deg
         Direction of the path of contact at M on the gear flank, from the gear's root line
         (:func:`gearopt.mesh.frame.path_angle`; the contact points of two positions either
@@ -89,6 +94,7 @@ class ToothContact:
     profile_mm: NDArray
     width_mm: float
     ellipse_major_axis_mm: float
+    ellipse_minor_axis_mm: float
     path_angle_deg: float
     bias_mm: float
     center_offset_mm: tuple[float, float]
@@ -119,6 +125,7 @@ class ToothContact:
             "pattern": {
                 "width_mm": float(self.width_mm),
                 "ellipse_major_axis_mm": float(self.ellipse_major_axis_mm),
+                "ellipse_minor_axis_mm": float(self.ellipse_minor_axis_mm),
                 "path_angle_deg": float(self.path_angle_deg),
                 "bias_mm": float(self.bias_mm),
                 "center_offset_mm": [float(v) for v in self.center_offset_mm],
@@ -346,20 +353,96 @@ class MeshCycle:
 
     def contacts(self, parts) -> list[ToothContact]:
         """The ToothContacts of the sides' parts (:meth:`SideCycle.assemble`), every side's
-        pattern width (across the path at M) and contact-ellipse major axis (along the zone's
-        long axis at M) measured at once."""
-        compound_mm = self.compound_um * 1e-3
-        fields = [f for lines, _ in parts for f in lines[:2]]
-        points = [lines[2] for lines, _ in parts for _ in (0, 1)]
-        directions = [d for lines, _ in parts for d in lines[3:]]
-        face, profile = parts[0][1]["face_mm"], parts[0][1]["profile_mm"]
-        both = widths(np.stack(fields), compound_mm, face, profile, points, directions)
-        return [
-            ToothContact(
-                **kw, width_mm=float(both[2 * k]), ellipse_major_axis_mm=float(both[2 * k + 1])
+        zone at M (its major chord: the ellipse's major axis, its middle M; the minor chord
+        through M), the path's direction there (the middles of the zones a quarter step either
+        side) and the pattern's width (across the path at M) measured at once on the refined
+        field (:class:`gearopt.mesh.zone.Zones`)."""
+        n_sides = len(parts)
+        frame = self.frame
+        lines = [lines for lines, _ in parts]
+        pinion = self.fields[0].pinion
+        counts = [len(x["pattern_phi_rad"]) for x in lines]
+        rows = ZoneRows(
+            side=np.concatenate(
+                [
+                    np.full(3 + n, side.index, np.intp)
+                    for side, n in zip(self.sides, counts, strict=True)
+                ]
+            ),
+            phi_rad=np.concatenate(
+                [np.concatenate([x["mean_phi_rad"], x["pattern_phi_rad"]]) for x in lines]
+            ),
+            lag_rad=np.concatenate(
+                [np.concatenate([x["mean_lag_rad"], x["pattern_lag_rad"]]) for x in lines]
+            ),
+            factor_mm=np.concatenate(
+                [np.concatenate([x["mean_factor_mm"], x["pattern_factor_mm"]]) for x in lines]
+            ),
+        )
+        zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
+        first = np.cumsum([0] + [3 + n for n in counts])[:-1]
+        mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
+        contact = np.concatenate([x["mean_contact_mm"] for x in lines])
+        reach = float(np.ptp(pinion.face_mm) + np.ptp(pinion.profile_mm))
+        major_dir = zones.axes(mean_rows, contact[:, 0], contact[:, 1])
+        major, middle = zones.chords(mean_rows, contact, major_dir, np.full(len(contact), reach))
+        major, middle, major_dir = (
+            a.reshape((n_sides, 3) + a.shape[1:]) for a in (major, middle, major_dir)
+        )
+        # the path's direction at M: the zones' middles a quarter step either side
+        path = middle[:, 2] - middle[:, 1]
+        norm = np.hypot(path[:, 0], path[:, 1])
+        path = np.where(norm[:, None] > 1e-9, path / np.maximum(norm, 1e-300)[:, None], [1.0, 0.0])
+        across = np.stack([-path[:, 1], path[:, 0]], 1)
+        minor_dir = np.stack([-major_dir[:, 0, 1], major_dir[:, 0, 0]], 1)
+        # one batch: the minor chord at M (zone M's reach either side of M) and the pattern
+        # across the path at M: how far the pattern the positions' zones sweep runs either
+        # side of M along the line across the path (the pairs whose contact points lie within
+        # a major axis of M along the path)
+        ray, ray_rows, keys, positions, origins, directions = [], [], [], [], [], []
+        for k, x in enumerate(lines):
+            m = middle[k, 0]
+            offset = np.abs((x["pattern_contact_mm"] - m) @ path[k])
+            near = np.flatnonzero(offset <= major[k, 0] + 1.0)
+            for slot in range(4):
+                if slot < 2:
+                    rows_here, key, pos = [first[k]], [-(10**6)], [0]
+                else:
+                    rows_here = first[k] + 3 + near
+                    key, pos = x["pattern_pair"][near], x["pattern_position"][near]
+                ray.append(np.full(len(rows_here), 4 * k + slot))
+                ray_rows.append(np.asarray(rows_here, np.intp))
+                keys.append(np.asarray(key))
+                positions.append(np.asarray(pos))
+            origins += [m, m, m, m]
+            directions += [minor_dir[k], -minor_dir[k], across[k], -across[k]]
+        ends = zones.pattern_exits(
+            np.concatenate(ray),
+            np.concatenate(ray_rows),
+            np.concatenate(keys),
+            np.concatenate(positions),
+            np.array(origins),
+            np.array(directions),
+            np.tile([False, False, True, True], n_sides),
+        ).reshape(n_sides, 4)
+        out = []
+        for k, (_, kw) in enumerate(parts):
+            mean = (
+                float(middle[k, 0, 0] - frame.toe_mm),
+                float(middle[k, 0, 1] - frame.root_mm),
             )
-            for k, (_, kw) in enumerate(parts)
-        ]
+            centre = frame.centre_mm
+            out.append(
+                ToothContact(
+                    **kw,
+                    width_mm=float(ends[k, 2] + ends[k, 3]),
+                    ellipse_major_axis_mm=float(major[k, 0]),
+                    ellipse_minor_axis_mm=float(ends[k, 0] + ends[k, 1]),
+                    mean_point_mm=mean,
+                    center_offset_mm=(mean[0] - centre[0], mean[1] - centre[1]),
+                )
+            )
+        return out
 
 
 def tooth_contact(

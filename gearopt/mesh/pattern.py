@@ -1,5 +1,6 @@
-"""The contact pattern on the pinion flank: separations from the mating flank, the instantaneous
-contact zone's centroid and minor axis, and zone widths along lines.
+"""The contact pattern on the pinion flank at the nodes: separations from the mating flank and
+the instantaneous contact zones' centroids (the contact path); the zones' chords are measured on
+the refined field (:mod:`gearopt.mesh.zone`).
 
 A node is in the instantaneous contact zone when its separation from the mating flank is less
 than the marking compound; grids are the pattern coordinates ``face_mm`` ``(n_f,)`` and
@@ -13,9 +14,9 @@ from dataclasses import fields as dataclass_fields
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt.contact import FieldSample, kernels
+from gearopt.contact import FieldSample
 
-__all__ = ["centroids", "minor_axis", "sample_rows", "separation_mm", "widths"]
+__all__ = ["centroids", "sample_rows", "separation_mm"]
 
 
 def sample_rows(sample: FieldSample, rows) -> FieldSample:
@@ -89,63 +90,3 @@ def centroids(sep_mm: NDArray, compound_mm: float, face_mm, profile_mm):
     cs = np.where(total > 0.0, (w * s).sum(axis=(1, 2)) / safe, s0)
     ch = np.where(total > 0.0, (w * h).sum(axis=(1, 2)) / safe, h0)
     return cs, ch
-
-
-def minor_axis(sep_mm: NDArray, compound_mm, face_mm, profile_mm) -> NDArray:
-    """Unit vector of one zone's minor axis (weighted second moments), in (face, profile).
-
-    Along the face for a zone without extent (no node, or one: its moments are rounding noise,
-    whose eigenvectors would point anywhere). ``sep_mm`` is ``(n_f, n_p)``.
-    """
-    w = np.clip(compound_mm - sep_mm, 0.0, None)  # (finite: separations are never NaN)
-    if np.count_nonzero(w) <= 1:
-        return np.array([1.0, 0.0])
-    s = np.broadcast_to(face_mm[:, None], w.shape)
-    h = np.broadcast_to(profile_mm[None, :], w.shape)
-    ms, mh = (w * s).sum() / w.sum(), (w * h).sum() / w.sum()
-    cov = np.array(
-        [
-            [(w * (s - ms) ** 2).sum(), (w * (s - ms) * (h - mh)).sum()],
-            [(w * (s - ms) * (h - mh)).sum(), (w * (h - mh) ** 2).sum()],
-        ]
-    )
-    vals, vecs = np.linalg.eigh(cov)
-    minor = vecs[:, np.argmin(vals)]
-    return np.array([minor[0], minor[1]])
-
-
-def widths(sep_mm: NDArray, compound_mm, face_mm, profile_mm, points, directions) -> NDArray:
-    """Extent of the zones {separation < compound} along K lines at once.
-
-    Line k passes through ``points[k]`` perpendicular to ``directions[k]`` on the field
-    ``sep_mm[k]``, interpolated bilinearly between the nodes and sampled at 2001 points; from
-    the middle outward, the first sample out of the zone on each side bounds it (interpolated;
-    the line's end when there is none). The compiled kernel
-    :func:`gearopt.contact.kernels.zone_widths` walks each line.
-
-    Parameters
-    ----------
-    sep_mm
-        ``(K, n_f, n_p)`` separations.
-    compound_mm
-        The marking compound.
-    face_mm, profile_mm
-        The grid's pattern coordinates.
-    points, directions
-        ``(K, 2)`` a point of each line and the direction it is perpendicular to.
-
-    Returns
-    -------
-    NDArray
-        ``(K,)`` widths in mm; 0 where the middle sample is out of the zone.
-    """
-    points, directions = np.asarray(points, float), np.asarray(directions, float)
-    perp = np.stack([-directions[:, 1], directions[:, 0]], axis=1)
-    reach = float(face_mm[-1] - face_mm[0] + profile_mm[-1] - profile_mm[0])
-    tau = np.linspace(-reach, reach, 2001)
-    big = 10.0 * compound_mm
-    f = np.where(np.isfinite(sep_mm), np.minimum(sep_mm, big), big)
-    width = np.empty(len(sep_mm))
-    grid = (np.asarray(face_mm, float), np.asarray(profile_mm, float))
-    kernels.zone_widths(f, compound_mm, *grid, points, perp, tau, big, width)
-    return width

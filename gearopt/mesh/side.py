@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from gearopt.contact import ClearanceField, ContactError, FieldSample
 from gearopt.mesh.frame import ARCSEC, ToothFrame, gear_path_angle
 from gearopt.mesh.handover import FIT_TAGS, ITERATION_TAGS, HandOver, Request, lag_crossing
-from gearopt.mesh.pattern import centroids, minor_axis, separation_mm
+from gearopt.mesh.pattern import centroids, separation_mm
 
 __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 
@@ -433,14 +433,17 @@ class SideCycle:
     # -- the result -------------------------------------------------------------------------
 
     def assemble(self, name: str, frame: ToothFrame, compound_um: float, separation: str):
-        """The side's :class:`~gearopt.mesh.cycle.ToothContact` but for its two widths.
+        """The side's :class:`~gearopt.mesh.cycle.ToothContact` but for the figures of its
+        zones (:meth:`gearopt.mesh.cycle.MeshCycle.contacts` measures every side's at once).
 
         Returns
         -------
         tuple
-            ``(lines, fields)``: ``lines`` = ``(pattern, zone at M, M, path direction, minor
-            axis)`` for the widths (:meth:`gearopt.mesh.cycle.MeshCycle.contacts` measures
-            every side's at once), ``fields`` the ToothContact's other fields.
+            ``(lines, fields)``: ``lines`` the rows of the zones to measure (``mean_*``: M's
+            position and its neighbours a quarter step either side; ``pattern_*``: the
+            positions' pairs whose zones are not empty, with their positions and pair ids), each
+            with its pinion angle, lag, node factors and contact point; ``fields`` the
+            ToothContact's other fields.
         """
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
@@ -463,24 +466,42 @@ class SideCycle:
         profile = field.pinion.profile_mm - frame.root_mm
         path_s, path_h = centroids(sep[rows, carrying], compound_mm, face, profile)
 
-        # the mean point M, the path's direction there, and the path's ends (bias)
-        ex_sep = separation_mm(ex, ex.minimum_rad, separation)
-        cs, ch = centroids(ex_sep, compound_mm, face, profile)
-        mean_point = (float(cs[3]), float(ch[3]))
-        direction = np.array([cs[5] - cs[4], ch[5] - ch[4]])
-        norm = float(np.hypot(*direction))
-        direction = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
-        # the pattern's width: the extent of the whole pattern across the path at M
-        # and the contact ellipse's major axis: measured with every side's
-        minor = minor_axis(ex_sep[3], compound_mm, face, profile)
-        lines = (pattern * 1e-3, ex_sep[3], mean_point, direction, minor)
+        # the zones measured on the refined field (gearopt.mesh.zone, every side's at once):
+        # M's position and its neighbours', and the pairs whose zones make the pattern
+        kind = "normal_factor_mm" if separation == "normal" else "radius_mm"
+        flat_g = g.ravel()
+        with np.errstate(invalid="ignore"):  # inf - inf off the flanks
+            above = flat_g - np.repeat(lag, pairs)
+        node_factor = getattr(self.sample, kind)
+        largest = node_factor.reshape(len(node_factor), -1).max(axis=1)[self.inv]
+        reach = np.where(np.isfinite(above), above, np.inf) * largest
+        # the pairs whose zones reach within five compounds (held or about to be: the
+        # neighbours through which the motion is refined)
+        held = np.flatnonzero(reach < 5.0 * compound_mm)
+        lines = dict(
+            mean_phi_rad=ex.phi_rad[3:6],
+            mean_lag_rad=ex.minimum_rad[3:6],
+            mean_factor_mm=getattr(ex, kind)[3:6],
+            mean_contact_mm=np.stack([ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]], 1),
+            pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
+            pattern_lag_rad=np.repeat(lag, pairs)[held],
+            pattern_factor_mm=node_factor[self.inv[held]],
+            pattern_contact_mm=np.stack([self.cs.ravel()[held], self.ch.ravel()[held]], 1),
+            pattern_position=held // pairs,
+            pattern_pair=self.ids.ravel()[held],
+        )
         # bias: the contact line's extension along the face from the pair's entry into contact
         # to its exit (seed 003 section 6): the contact points at the ends of its contact
         # interval
         ends = self.end_face
-        bias = float(ends[1] - ends[0]) if ends is not None else float(cs[0] - cs[1])
+        if ends is not None:
+            bias = float(ends[1] - ends[0])
+        else:
+            cs, _ = centroids(
+                separation_mm(ex, ex.minimum_rad, separation), compound_mm, face, profile
+            )
+            bias = float(cs[0] - cs[1])
         start, end = self.interval
-        centre = frame.centre_mm
         handovers = self.v_star + p1 * np.arange(-12, 13)
         handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
         return lines, dict(
@@ -502,8 +523,6 @@ class SideCycle:
             profile_mm=profile,
             path_angle_deg=gear_path_angle(field, ex, frame),
             bias_mm=bias,
-            center_offset_mm=(mean_point[0] - centre[0], mean_point[1] - centre[1]),
-            mean_point_mm=mean_point,
             contact_ratio=float((end - start) / p1),
             compound_um=float(compound_um),
             separation=separation,

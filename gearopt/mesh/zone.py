@@ -1,0 +1,366 @@
+"""The marking-compound zones measured on the refined field: chords of the region where the
+separation from the mating flank is below the marking compound (seed 003 section 5), found by
+root-finding along rays on the flanks' local Hermite interpolants
+(:meth:`gearopt.contact.JointField.clearance_at_grid`), the field the TE is refined on, so
+that they converge with the grid instead of moving with its nodes.
+
+- The instantaneous zone's axes come from the separation's local quadratic form at the
+  contact point (the tangency point, the clearance minimum; a least-squares fit on a ring of
+  radius :data:`RING_MM`): the major axis along its least curvature (along the line of a line
+  contact), the minor across it.
+- A chord along an axis runs between the first exits from the zone on either side of its
+  origin: the rays are scanned at :data:`SCAN` fractions of their reach, each crossing of the
+  separation through the compound then solved by inverse quadratic interpolation through the
+  last samples, and an exit through a flank's boundary located on a finer scan of its bracket
+  (:data:`ZOOM` samples).
+- Seed 003 section 6 simplifies the contact ellipse to its major axis, "the middle of the
+  segment is situated on the contact line": a zone's centre is the middle of its major chord
+  through the contact point, and the minor axis is the chord across it through that centre.
+- The pattern the motion sweeps (:meth:`Zones.pattern_exits`): at a point, the least
+  separation over the motion (over a tooth pair's positions, the parabola through the least
+  and its neighbours: the zones of discrete positions leave gaps that the motion fills); its
+  extent along a ray, found as a chord's.
+
+The separation at a point is the angular clearance above the row's lag times the node factor
+(normal or circumferential, :func:`gearopt.mesh.pattern.separation_mm`) interpolated
+bilinearly: a smooth geometric factor, exact at the nodes, whose interpolation error is of
+second order in the cell size on a quantity that varies by a few per cent over a zone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.contact import JointField
+
+__all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones"]
+
+#: radius of the ring on which the separation's quadratic form is fitted (mm): well inside
+#: the thinnest zone's half-width at the marking compounds in use, and over a patch on which
+#: the separation is quadratic to rounding
+RING_MM = 0.1
+#: the rays' samples as fractions of their reach: the origin, then geometric steps of 7.7 %
+#: from a thousandth of the reach
+SCAN = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 92)])
+#: samples of the finer scan of a bracket through a flank's boundary (0.24 % of its reach)
+ZOOM = 33
+#: the scans of :meth:`Zones.pattern_exits` (fractions of the way to the grid's edge):
+#: geometric steps of 16 % from a thousandth of it, for a zone around the ray's origin; even
+#: steps of 2 %, for the zones the motion sweeps over the ray
+NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 31)])
+SPREAD = np.linspace(0.0, 1.0, 32)
+
+_RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+_RING = RING_MM * np.stack([np.cos(_RING_ANGLES), np.sin(_RING_ANGLES)], axis=1)
+#: least-squares map from the ring's clearance rises to (g_s, g_h, H_ss, H_sh, H_hh)
+_RING_FIT = np.linalg.pinv(
+    np.stack(
+        [
+            _RING[:, 0],
+            _RING[:, 1],
+            0.5 * _RING[:, 0] ** 2,
+            _RING[:, 0] * _RING[:, 1],
+            0.5 * _RING[:, 1] ** 2,
+        ],
+        axis=1,
+    )
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ZoneRows:
+    """The field's rows the zones are measured on.
+
+    Attributes
+    ----------
+    side
+        ``(R,)`` each row's field in the joint field.
+    phi_rad
+        ``(R,)`` the pinion angle (the field's, as sampled).
+    lag_rad
+        ``(R,)`` the gear's lag: the clearance of the contact, separation zero.
+    factor_mm
+        ``(R, n_f, n_p)`` mm of separation per rad of clearance at the nodes.
+    """
+
+    side: NDArray
+    phi_rad: NDArray
+    lag_rad: NDArray
+    factor_mm: NDArray
+
+
+class Zones:
+    """Chords of the marking-compound zones of several rows on the refined field.
+
+    Parameters
+    ----------
+    joint
+        The joint field of the rows' sides.
+    face_mm, profile_mm
+        The pinion grid's node coordinates (uniform, shared by the sides).
+    rows
+        The rows.
+    compound_mm
+        The marking compound.
+    """
+
+    def __init__(self, joint: JointField, face_mm, profile_mm, rows: ZoneRows, compound_mm):
+        self.joint, self.rows, self.compound_mm = joint, rows, float(compound_mm)
+        self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
+        self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
+        self.last = (len(face_mm) - 2, len(profile_mm) - 2)
+
+    def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
+        """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)``."""
+        rows = self.rows
+        return self.joint.clearance_at_grid(rows.side[r][:, None], s, h, rows.phi_rad[r][:, None])
+
+    def factor(self, r, s, h) -> NDArray:
+        """The node factor of rows ``r`` ``(K,)`` interpolated bilinearly at ``(K, M)``."""
+        x = np.clip((s - self.face0) / self.dface, 0.0, self.last[0] + 1.0)
+        y = np.clip((h - self.profile0) / self.dprofile, 0.0, self.last[1] + 1.0)
+        i = np.minimum(x.astype(np.intp), self.last[0])
+        j = np.minimum(y.astype(np.intp), self.last[1])
+        u, v = x - i, y - j
+        f = self.rows.factor_mm
+        n_p = f.shape[2]
+        at = (np.asarray(r, np.intp) * (f.shape[1] * n_p))[:, None] + i * n_p + j
+        flat = f.reshape(-1)
+        return (1.0 - u) * ((1.0 - v) * flat[at] + v * flat[at + 1]) + u * (
+            (1.0 - v) * flat[at + n_p] + v * flat[at + n_p + 1]
+        )
+
+    def separation(self, r, s, h) -> NDArray:
+        """Separation (mm) of rows ``r`` ``(K,)`` at grid points ``(K, M)``; +inf off the
+        flanks."""
+        delta, valid = self.clearance(r, s, h)
+        sep = (delta - self.rows.lag_rad[r][:, None]) * self.factor(r, s, h)
+        return np.where(valid, sep, np.inf)
+
+    def axes(self, r, face_mm, profile_mm) -> NDArray:
+        """``(K, 2)`` unit vectors (face, profile) of the major axes of the zones of rows
+        ``r`` at their contact points: the direction of least curvature of the clearance's
+        quadratic form fitted on a ring of radius :data:`RING_MM`."""
+        s = np.concatenate([np.asarray(face_mm)[:, None], face_mm[:, None] + _RING[:, 0]], 1)
+        h = np.concatenate([np.asarray(profile_mm)[:, None], profile_mm[:, None] + _RING[:, 1]], 1)
+        delta, _ = self.clearance(np.asarray(r), s, h)
+        c = (delta[:, 1:] - delta[:, :1]) @ _RING_FIT.T
+        # the largest curvature's direction, 0.5 atan2(2 H_sh, H_ss - H_hh); the major axis
+        # across it
+        across = 0.5 * np.arctan2(2.0 * c[:, 3], c[:, 2] - c[:, 4])
+        return np.stack([-np.sin(across), np.cos(across)], axis=1)
+
+    def exits(self, ray, r, origins, directions, reach) -> NDArray:
+        """How far rays leave the union of zones.
+
+        Parameters
+        ----------
+        ray, r
+            ``(P,)``: pair p puts the zone of row ``r[p]`` on ray ``ray[p]``.
+        origins, directions
+            ``(K, 2)`` the rays' origins and unit directions in grid coordinates.
+        reach
+            ``(K,)`` how far each ray is scanned at most (the grid's edge comes first).
+
+        Returns
+        -------
+        NDArray
+            ``(K,)`` the distance from each origin to its first exit from the union of its
+            zones (0 where the origin is out of them; the reach where no exit is found).
+        """
+        ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
+        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
+        k_rays, c = len(origins), self.compound_mm
+        tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
+        f = self.along(ray, r, origins, directions, tau[ray]) - c
+        inside = f < 0.0
+        held = np.zeros((k_rays, len(SCAN)), bool)
+        np.logical_or.at(held, ray, inside)
+        first = np.argmax(~held, axis=1)  # the first sample out of every zone (0: none)
+        through = held.all(axis=1)
+        result = np.where(through, tau[:, -1], 0.0)
+        j = first[ray]
+        p_on = np.flatnonzero((j > 0) & inside[np.arange(len(ray)), np.maximum(j - 1, 0)])
+        if not p_on.size:
+            return result
+        jj = j[p_on]
+        t1, t2 = tau[ray[p_on], jj - 1], tau[ray[p_on], jj]
+        f1, f2 = f[p_on, jj - 1], f[p_on, jj]
+        t0 = tau[ray[p_on], np.maximum(jj - 2, 0)]
+        f0 = np.where(jj >= 2, f[p_on, np.maximum(jj - 2, 0)], np.nan)
+        crossing = _crossing(t0, f0, t1, f1, t2, f2)
+        # an exit through a flank's boundary: the finer scan of its bracket
+        edge = ~np.isfinite(f2)
+        if edge.any():
+            pe = p_on[edge]
+            w = np.linspace(0.0, 1.0, ZOOM)
+            tz = t1[edge, None] + (t2[edge] - t1[edge])[:, None] * w[None, :]
+            fz = self.along(ray[pe], r[pe], origins, directions, tz) - c
+            out = ~(fz < 0.0)
+            out[:, -1] = True
+            m = np.maximum(np.argmax(out, axis=1), 1)
+            at = np.arange(len(pe))
+            za, zb, fa, fb = tz[at, m - 1], tz[at, m], fz[at, m - 1], fz[at, m]
+            crossing[edge] = np.where(
+                np.isfinite(fb), _crossing(za, np.nan, za, fa, zb, fb), 0.5 * (za + zb)
+            )
+        np.maximum.at(result, ray[p_on], crossing)
+        return np.where(through, tau[:, -1], result)
+
+    def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
+        """How far rays run from their origins inside the pattern the zones of rows sweep.
+
+        The pattern at a point is its least separation over the motion: over the rows of one
+        tooth pair (``key``) at consecutive positions (``position``), the least of their
+        separations refined by the parabola through it and its neighbours' (as the TE peak:
+        the zones of discrete positions leave gaps that the motion fills), then the least over
+        the pairs. Each ray is scanned at :data:`SPREAD` (``spread``) or :data:`NEAR` fractions
+        of the way to the grid's edge; its first exit, by inverse quadratic interpolation of
+        that field, or through a flank's boundary by a finer scan (:data:`ZOOM`).
+
+        Parameters
+        ----------
+        ray, r, key, position
+            ``(P,)``: row ``r[p]`` of tooth pair ``key[p]`` at ``position[p]`` on ray
+            ``ray[p]``.
+        origins, directions
+            ``(K, 2)`` the rays' origins and unit directions in grid coordinates.
+        spread
+            ``(K,)`` True to scan a ray evenly, False at geometric steps from its origin.
+
+        Returns
+        -------
+        NDArray
+            ``(K,)`` the distance to each ray's first exit (0 where its origin is out).
+        """
+        ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
+        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
+        k_rays, c = len(origins), self.compound_mm
+        prev, nxt = _neighbours(ray, np.asarray(key), np.asarray(position))
+        starts = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
+        if np.any(np.diff(ray) < 0) or len(starts) != k_rays:
+            raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
+        fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
+        tau = self.to_edge(origins, directions)[:, None] * fractions
+
+        def field(t, pick=None):  # the pattern's least separation minus the compound at t
+            if pick is None:  # (K, M): every ray
+                f = self.along(ray, r, origins, directions, t[ray])
+                g = _swept(f, prev, nxt)
+            else:  # the pairs ``pick`` (whole rays) only
+                f = np.full((len(ray), t.shape[1]), np.inf)
+                f[pick] = self.along(ray[pick], r[pick], origins, directions, t[ray[pick]])
+                g = _swept(f, prev, nxt)
+            return np.minimum.reduceat(g, starts, axis=0) - c
+
+        g = field(tau)
+        inside = g < 0.0
+        first = np.argmax(~inside, axis=1)
+        result = np.where(inside.all(axis=1), tau[:, -1], 0.0)
+        k = np.flatnonzero(inside[:, 0] & ~inside.all(axis=1))
+        if not k.size:
+            return result
+        j = first[k]
+        t1, t2, f1, f2 = tau[k, j - 1], tau[k, j], g[k, j - 1], g[k, j]
+        t0 = tau[k, np.maximum(j - 2, 0)]
+        f0 = np.where(j >= 2, g[k, np.maximum(j - 2, 0)], np.nan)
+        result[k] = _crossing(t0, f0, t1, f1, t2, f2)
+        edge = k[~np.isfinite(f2)]
+        if edge.size:
+            lo, hi = tau[edge, first[edge] - 1], tau[edge, first[edge]]
+            w = np.linspace(0.0, 1.0, ZOOM)
+            for _ in range(1):
+                tz = np.zeros((k_rays, ZOOM))
+                tz[edge] = lo[:, None] + (hi - lo)[:, None] * w[None, :]
+                gz = field(tz, np.flatnonzero(np.isin(ray, edge)))[edge]
+                out = ~(gz < 0.0)
+                out[:, -1] = True
+                m = np.maximum(np.argmax(out, axis=1), 1)
+                at = np.arange(len(edge))
+                lo, hi = tz[edge, m - 1], tz[edge, m]
+                fa, fb = gz[at, m - 1], gz[at, m]
+            result[edge] = np.where(
+                np.isfinite(fb), _crossing(lo, np.nan, lo, fa, hi, fb), 0.5 * (lo + hi)
+            )
+        return result
+
+    def to_edge(self, origins, directions) -> NDArray:
+        """``(K,)`` how far rays run from their origins to the grid's edge (off it nothing is
+        on the flanks)."""
+        low = np.array([self.face0, self.profile0])
+        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ends = np.where(directions > 0.0, (high - origins) / directions, np.inf)
+            ends = np.where(directions < 0.0, (low - origins) / directions, ends)
+        return np.maximum(ends.min(axis=1), 0.0)
+
+    def along(self, ray, r, origins, directions, tau) -> NDArray:
+        """Separations of rows ``r`` at distances ``tau`` ``(P, M)`` along rays ``ray``."""
+        s = origins[ray, 0][:, None] + tau * directions[ray, 0][:, None]
+        h = origins[ray, 1][:, None] + tau * directions[ray, 1][:, None]
+        return self.separation(r, s, h)
+
+    def chords(self, r, origins, axes, reach) -> tuple[NDArray, NDArray]:
+        """Chords of the zones of rows ``r`` through ``origins`` along ``axes`` (``(K, 2)``):
+        ``(length, middle)``, the middle ``(K, 2)``."""
+        k = len(origins)
+        both = np.concatenate([axes, -axes])
+        ends = self.exits(
+            np.arange(2 * k),
+            np.concatenate([r, r]),
+            np.concatenate([origins, origins]),
+            both,
+            np.concatenate([reach, reach]),
+        )
+        forward, back = ends[:k], ends[k:]
+        middle = origins + 0.5 * (forward - back)[:, None] * axes
+        return forward + back, middle
+
+
+def _crossing(t0, f0, t1, f1, t2, f2) -> NDArray:
+    """Where f crosses zero between ``(t1, f1 < 0)`` and ``(t2, f2 >= 0)``: inverse quadratic
+    interpolation through the three samples where f rises through them, else linear;
+    ``t2`` where ``f2`` is not finite (the bracket's far end is off the flanks)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        linear = t1 + (t2 - t1) * f1 / (f1 - f2)
+        quad = (
+            t0 * f1 * f2 / ((f0 - f1) * (f0 - f2))
+            + t1 * f0 * f2 / ((f1 - f0) * (f1 - f2))
+            + t2 * f0 * f1 / ((f2 - f0) * (f2 - f1))
+        )
+    good = np.isfinite(quad) & (f0 < f1) & (quad >= t1) & (quad <= t2)
+    out = np.where(good, quad, linear)
+    return np.where(np.isfinite(f2), out, t2)
+
+
+def _swept(f, prev, nxt) -> NDArray:
+    """The separations ``f`` ``(P, M)`` of rows at their least over the motion: where a row's
+    is the least of its pair's neighbouring positions' (``prev``, ``nxt``: their rows, -1
+    without), the vertex of the parabola through the three; else its own."""
+    both = (prev >= 0) & (nxt >= 0)
+    out = f.copy()
+    if not both.any():
+        return out
+    i = np.flatnonzero(both)
+    a, b, d = f[prev[i]], f[i], f[nxt[i]]
+    with np.errstate(invalid="ignore"):
+        curv = a - 2.0 * b + d
+        low = np.isfinite(a) & np.isfinite(b) & np.isfinite(d) & (b <= a) & (b <= d) & (curv > 0)
+        vertex = b - 0.125 * (d - a) ** 2 / np.where(low, curv, 1.0)
+    out[i] = np.where(low, vertex, b)
+    return out
+
+
+def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
+    """The rows of the same ray and tooth pair at the previous and next positions (-1
+    without)."""
+    order = np.lexsort((position, key, ray))
+    same = (np.diff(ray[order]) == 0) & (np.diff(key[order]) == 0)
+    step = same & (np.diff(position[order]) == 1)
+    prev, nxt = np.full(len(ray), -1, np.intp), np.full(len(ray), -1, np.intp)
+    prev[order[1:][step]] = order[:-1][step]
+    nxt[order[:-1][step]] = order[1:][step]
+    return prev, nxt
