@@ -2,6 +2,8 @@
 needs the plugin registry for its ``[machine]`` table, is :mod:`gearopt.design_files`).
 
 A design file has the tables ``[meta]`` (optional), ``[pair]`` (the blank data of the pair),
+``[blank]`` (optional: ``standard = "iso23509"`` and the standard's data, which then derive the
+pair's addenda, dedenda, face and root angles and chordal thickness, :mod:`gearopt.iso23509`),
 ``[machine]`` (``model = "..."`` plus the machine model's own keys, parsed by that model's plugin),
 ``[misalignment]`` (how the pair is assembled; what the contact engine sees) and
 ``[compensation]`` (alignment errors the machine settings compensate, seed 001 section 4).
@@ -14,7 +16,9 @@ Example (seed 001, Table 2)::
     gear_teeth = 41
     shaft_angle_deg = 90.0
     mean_spiral_angle_deg = 35.0
-    mean_cone_distance_mm = 91.265        # or mean_normal_module_mm = 3.397
+    mean_cone_distance_mm = 91.265        # or mean_normal_module_mm = 3.397, or
+                                          # outer_pitch_diameter_mm (the gear's d_e2), or
+                                          # outer_transverse_module_mm
     face_width_mm = 32.0
     pressure_angle_deg = 20.0
     pinion_hand = "left"
@@ -23,6 +27,17 @@ Example (seed 001, Table 2)::
     # tapered depth (face-milling model only; uniform depth when absent):
     # face_angle_deg = [pinion, gear]      # face (tip) cone angles
     # root_angle_deg = [pinion, gear]      # root cone angles
+
+or, from basic data, no addenda, dedenda or angles in ``[pair]`` but::
+
+    [blank]
+    standard = "iso23509"
+    cutter_radius_mm = 75.0               # r_c0
+    blade_groups = 5                      # face hobbing (uniform depth); absent: face milling
+    # taper = "standard"                  # face milling: standard, uniform, duplex, tilted_root
+    # gear_addendum_angle_deg, gear_dedendum_angle_deg: given angles instead of a taper
+    # mean_addendum_factor or profile_shift_coefficient, depth_factor, clearance_factor,
+    # thickness_factor or thickness_modification_coefficient, outer_normal_backlash_mm
 """
 
 from __future__ import annotations
