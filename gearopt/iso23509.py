@@ -25,7 +25,9 @@ theta_a2 = theta_f1)::
     standard      theta_f = atan(h_fm / R_m)                      (root apex at the pitch apex)
     duplex        Sigma theta_fC = pi m_et / (2 R_e tan alpha_n cos beta_m)
                                    (1 - R_m sin beta_m / r_c0)   (constant slot width)
-    tilted_root   Sigma theta_fM = min(Sigma theta_fC, 1.3 Sigma theta_fS)
+    tilted_root   Sigma theta_fM = min(Sigma theta_fC, 1.3 Sigma theta_fS)   (a reading: the
+                  duplex sum capped at 1.3 times the standard's, the root lines tilted about
+                  the mean point)
     uniform       0      (face hobbing: always)
     duplex and tilted root split the sum as the addenda: theta_f1 = c_ham Sigma, theta_f2 =
     (1 - c_ham) Sigma (the addendum ratio, hence the profile shift, constant along the face)
@@ -130,8 +132,9 @@ class BlankData:
         c_ham or x_hm1 (one of the two; default c_ham = 0.210 + 0.290 / u_a).
     depth_factor, clearance_factor
         k_d (2.0), k_c (0.125).
-    thickness_factor, thickness_modification_coefficient
-        k_t or x_smn = k_t / 2 (one of the two; default 0).
+    thickness_modification_coefficient
+        x_smn (default 0); the table may give the thickness factor k_t instead
+        (``thickness_factor``, read as x_smn = k_t / 2), not both.
     outer_normal_backlash_mm
         j_en (0), taken half from each member.
     """
