@@ -448,3 +448,27 @@ inner_cutter_radius_mm = 75.0
         design.standard_blank.mean_normal_chordal_thickness_mm
     )
     assert not design.pair.tapered
+
+
+@pytest.mark.parametrize("name", ["face_milling_14x39", "cyclo_palloid_17x43", "epicycloid_19x34"])
+def test_studies_from_basic_data_have_usual_blanks(name):
+    """The designs of studies/iso23509 give their blank from basic data alone, inside the
+    usual range (no warning) except the checks their comments name."""
+    from gearopt.design_files import load_standard_blank
+
+    from .conftest import STUDIES
+
+    blank = load_standard_blank(STUDIES / "iso23509" / f"{name}.toml")
+    assert blank.warnings == ()
+    assert blank.total_contact_ratio > 1.5
+
+
+def test_blank_command_needs_the_blank_table(tmp_path, capsys):
+    path = tmp_path / "d.toml"
+    path.write_text(
+        "[pair]\npinion_teeth = 14\ngear_teeth = 39\nmean_spiral_angle_deg = 35.0\n"
+        "face_width_mm = 25.4\nouter_pitch_diameter_mm = 176.893\n",
+        encoding="utf-8",
+    )
+    assert main(["blank", str(path)]) == 2
+    assert "blank: the [blank] table is required" in capsys.readouterr().err
