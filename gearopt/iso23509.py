@@ -398,14 +398,19 @@ def _spiral_angle_rad(data: BlankData, basics: PairBasics, *, r_mm: float, mmn: 
             mean_normal_module_mm=mmn,
             crown_gear_teeth=zp,
         )
-        q = math.sqrt(rc**2 + rho_c**2 - rho_c * (md**2 + rc**2 - r_mm**2) / md)
-        s = (r_mm**2 + q**2 - rho_p**2) / (2.0 * r_mm * q)
+        reach = (md**2 + rc**2 - r_mm**2) / (2.0 * md * rc)
+        q2 = rc**2 + rho_c**2 - 2.0 * rho_c * rc * reach
+        if abs(reach) >= 1.0 or q2 <= 0.0:
+            s = math.inf
+        else:
+            s = (r_mm**2 + q2 - rho_p**2) / (2.0 * r_mm * math.sqrt(q2))
     if not -1.0 < s < 1.0:
         raise DesignError(
             f"{WHERE}.cutter_radius_mm",
             rc,
-            f"gives no tooth trace at cone distance {r_mm:.4f} mm (sin beta = {s:.4f}): the "
-            "cutter radius is too small for the face width",
+            f"gives no tooth trace at cone distance {r_mm:.4f} mm ("
+            + (f"sin beta = {s:.4f}" if math.isfinite(s) else "the cutting point never gets there")
+            + "): the cutter radius does not suit the face width",
         )
     return math.asin(s)
 

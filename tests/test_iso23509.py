@@ -472,3 +472,42 @@ def test_blank_command_needs_the_blank_table(tmp_path, capsys):
     )
     assert main(["blank", str(path)]) == 2
     assert "blank: the [blank] table is required" in capsys.readouterr().err
+
+
+def test_every_blank_is_finite_or_a_named_error():
+    """Over a spread of pairs and blank data the blank is finite everywhere, or a
+    GearoptError naming a [pair] or [blank] key: never NaN, never a bare exception."""
+    rng = np.random.default_rng(24)
+    outcomes = {"blank": 0, "error": 0}
+    for _ in range(300):
+        z1 = int(rng.integers(5, 40))
+        pair = {
+            "pinion_teeth": z1,
+            "gear_teeth": int(rng.integers(z1, 90)),
+            "shaft_angle_deg": float(rng.choice([60.0, 90.0, 100.0])),
+            "mean_spiral_angle_deg": float(rng.uniform(0.0, 45.0)),
+            "pressure_angle_deg": float(rng.uniform(14.0, 25.0)),
+            "mean_normal_module_mm": float(rng.uniform(1.0, 10.0)),
+            "face_width_mm": float(rng.uniform(5.0, 60.0)),
+        }
+        blank = {"standard": "iso23509", "cutter_radius_mm": float(rng.uniform(10.0, 250.0))}
+        kind = int(rng.integers(0, 3))
+        if kind == 0:
+            blank["taper"] = str(rng.choice(["standard", "uniform", "duplex", "tilted_root"]))
+        elif kind == 1:
+            blank["gear_addendum_angle_deg"] = float(rng.uniform(0.0, 5.0))
+            blank["gear_dedendum_angle_deg"] = float(rng.uniform(0.0, 8.0))
+        else:
+            blank["blade_groups"] = int(rng.integers(1, 14))
+        blank["profile_shift_coefficient"] = float(rng.uniform(-0.6, 0.6))
+        try:
+            _, out = pair_from_tables(pair, blank)
+        except DesignError as exc:
+            assert exc.parameter.split(".")[0] in ("pair", "blank"), exc
+            outcomes["error"] += 1
+            continue
+        flat = out.as_flat_dict()
+        numbers = [v for k, v in flat.items() if k not in ("method", "taper", "warnings")]
+        assert np.all(np.isfinite(np.hstack([np.ravel(v) for v in numbers]))), flat
+        outcomes["blank"] += 1
+    assert min(outcomes.values()) > 30, outcomes
