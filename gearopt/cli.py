@@ -30,6 +30,7 @@ import tomli_w
 
 from gearopt.analysis import AnalysisOptions
 from gearopt.bench import run_benchmarks
+from gearopt.blank_cli import add_blank_parser
 from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
 from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError
@@ -571,6 +572,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_change_gears)
     add_flank_parser(sub)
+    add_blank_parser(sub)
     add_study_parser(sub)
     return parser
 

@@ -2,6 +2,8 @@
 needs the plugin registry for its ``[machine]`` table, is :mod:`gearopt.design_files`).
 
 A design file has the tables ``[meta]`` (optional), ``[pair]`` (the blank data of the pair),
+``[blank]`` (optional: ``standard = "iso23509"`` and the standard's data, which then derive the
+pair's addenda, dedenda, face and root angles and chordal thickness, :mod:`gearopt.iso23509`),
 ``[machine]`` (``model = "..."`` plus the machine model's own keys, parsed by that model's plugin),
 ``[misalignment]`` (how the pair is assembled; what the contact engine sees) and
 ``[compensation]`` (alignment errors the machine settings compensate, seed 001 section 4).
@@ -14,7 +16,9 @@ Example (seed 001, Table 2)::
     gear_teeth = 41
     shaft_angle_deg = 90.0
     mean_spiral_angle_deg = 35.0
-    mean_cone_distance_mm = 91.265        # or mean_normal_module_mm = 3.397
+    mean_cone_distance_mm = 91.265        # or mean_normal_module_mm = 3.397, or
+                                          # outer_pitch_diameter_mm (the gear's d_e2), or
+                                          # outer_transverse_module_mm
     face_width_mm = 32.0
     pressure_angle_deg = 20.0
     pinion_hand = "left"
@@ -23,13 +27,24 @@ Example (seed 001, Table 2)::
     # tapered depth (face-milling model only; uniform depth when absent):
     # face_angle_deg = [pinion, gear]      # face (tip) cone angles
     # root_angle_deg = [pinion, gear]      # root cone angles
+
+or, from basic data, no addenda, dedenda or angles in ``[pair]`` but::
+
+    [blank]
+    standard = "iso23509"
+    cutter_radius_mm = 75.0               # r_c0
+    blade_groups = 5                      # face hobbing (uniform depth); absent: face milling
+    # taper = "standard"                  # face milling: standard, uniform, duplex, tilted_root
+    # gear_addendum_angle_deg, gear_dedendum_angle_deg: given angles instead of a taper
+    # mean_addendum_factor or profile_shift_coefficient, depth_factor, clearance_factor,
+    # thickness_factor or thickness_modification_coefficient, outer_normal_backlash_mm
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -37,6 +52,8 @@ from typing import Any
 from gearopt.assembly import Misalignment
 from gearopt.blank import Blank, compute_blank, cone_distance_from_module_mm, pitch_angles_rad
 from gearopt.errors import DesignError, NotAvailableError
+from gearopt.iso23509 import BlankData, PairBasics, StandardBlank
+from gearopt.iso23509 import standard_blank as iso23509_blank
 from gearopt.validate import (
     check_integer,
     check_keys,
@@ -51,12 +68,15 @@ __all__ = [
     "Design",
     "SECTIONS",
     "pair_from_table",
+    "pair_from_tables",
+    "STANDARD_BLANK_KEYS",
 ]
 
 MEMBERS = ("pinion", "gear")
 SECTIONS = (
     "meta",
     "pair",
+    "blank",
     "machine",
     "misalignment",
     "compensation",
@@ -76,6 +96,8 @@ _PAIR_KEYS = (
     "mean_spiral_angle_deg",
     "mean_normal_module_mm",
     "mean_cone_distance_mm",
+    "outer_pitch_diameter_mm",
+    "outer_transverse_module_mm",
     "face_width_mm",
     "pressure_angle_deg",
     "pinion_hand",
@@ -127,6 +149,8 @@ class PairData:
     pinion_hand: str = "left"
     mean_cone_distance_mm: float | None = None
     mean_normal_module_mm: float | None = None
+    outer_pitch_diameter_mm: float | None = None
+    outer_transverse_module_mm: float | None = None
     outer_addendum_mm: tuple[float, float] | None = None
     outer_dedendum_mm: tuple[float, float] | None = None
     face_angle_deg: tuple[float, float] | None = None
@@ -162,31 +186,9 @@ class PairData:
             raise DesignError("pair.pinion_hand", self.pinion_hand, "must be 'left' or 'right'")
         set_(self, "pinion_hand", self.pinion_hand.lower())
 
-        g1, _ = pitch_angles_rad(n1, self.gear_teeth, math.radians(self.shaft_angle_deg))
-        am, module = self.mean_cone_distance_mm, self.mean_normal_module_mm
-        if am is None and module is None:
-            raise DesignError(
-                "pair.mean_cone_distance_mm",
-                rule="give mean_cone_distance_mm or mean_normal_module_mm (the other is derived)",
-            )
-        if module is not None:
-            module = check_number("pair.mean_normal_module_mm", module, gt=0.0, unit="mm")
-        if am is None:
-            am = cone_distance_from_module_mm(
-                pinion_teeth=n1,
-                pinion_pitch_angle_rad=g1,
-                spiral_angle_rad=math.radians(psi),
-                module_mm=module,
-            )
-        am = check_number("pair.mean_cone_distance_mm", am, gt=0.0, unit="mm")
+        g1, g2 = pitch_angles_rad(n1, self.gear_teeth, math.radians(self.shaft_angle_deg))
+        am = self._mean_cone_distance_mm(g1, g2, psi)
         derived = 2.0 * am * math.sin(g1) * math.cos(math.radians(psi)) / n1
-        if module is not None and abs(module - derived) > MODULE_TOLERANCE * derived:
-            raise DesignError(
-                "pair.mean_normal_module_mm",
-                module,
-                f"must agree within 0.1 % with 2 A_m sin(g1) cos(psi_m) / N1 = {derived:.5f} mm "
-                f"from mean_cone_distance_mm = {am:g} (give one of the two, or consistent values)",
-            )
         set_(self, "mean_cone_distance_mm", am)
         set_(self, "mean_normal_module_mm", derived)
 
@@ -241,6 +243,52 @@ class PairData:
                         ca,
                         f"must be < the whole depth {a + d:g} mm",
                     )
+
+    def _mean_cone_distance_mm(self, g1: float, g2: float, psi_deg: float) -> float:
+        """A_m from the one size given (the first of mean cone distance, gear outer pitch
+        diameter d_e2, outer transverse module m_et, mean normal module); every other size
+        given must agree with it within 0.1 %."""
+        face = check_number("pair.face_width_mm", self.face_width_mm, gt=0.0, unit="mm")
+        n1, n2, psi = self.pinion_teeth, self.gear_teeth, math.radians(psi_deg)
+        to_am = {
+            "mean_cone_distance_mm": lambda v: v,
+            "outer_pitch_diameter_mm": lambda v: v / (2.0 * math.sin(g2)) - 0.5 * face,
+            "outer_transverse_module_mm": lambda v: v * n2 / (2.0 * math.sin(g2)) - 0.5 * face,
+            "mean_normal_module_mm": lambda v: cone_distance_from_module_mm(
+                pinion_teeth=n1, pinion_pitch_angle_rad=g1, spiral_angle_rad=psi, module_mm=v
+            ),
+        }
+        given = {
+            k: check_number(f"pair.{k}", getattr(self, k), gt=0.0, unit="mm")
+            for k in to_am
+            if getattr(self, k) is not None
+        }
+        if not given:
+            raise DesignError(
+                "pair.mean_cone_distance_mm",
+                rule="give mean_cone_distance_mm or mean_normal_module_mm or "
+                "outer_pitch_diameter_mm (the gear's d_e2) or outer_transverse_module_mm: one "
+                "size, the others are derived",
+            )
+        first = next(iter(given))
+        am = to_am[first](given[first])
+        if am <= 0.0:
+            raise DesignError(
+                f"pair.{first}",
+                given[first],
+                f"gives an outer cone distance <= face_width_mm / 2 = {0.5 * face:g} mm",
+            )
+        for name, value in given.items():
+            implied = to_am[name](value)
+            if abs(implied - am) > MODULE_TOLERANCE * am:
+                raise DesignError(
+                    f"pair.{name}",
+                    value,
+                    f"must agree within 0.1 % with {first} = {given[first]:g} mm: it gives "
+                    f"A_m = {implied:.5f} mm, {first} gives {am:.5f} mm (give one size, or "
+                    "consistent values)",
+                )
+        return am
 
     def _check_taper(self, g1: float, face: float, add, ded) -> None:
         """Validate ``face_angle_deg`` and ``root_angle_deg`` (tapered depth)."""
@@ -353,8 +401,9 @@ class Design:
     """A complete design: the pair, the machine (parsed by its model's plugin) and conditions.
 
     ``machine`` is the machine model's own frozen settings dataclass; ``model`` names the model.
-    ``source`` keeps the parsed TOML document, so a design can be re-derived with overrides
-    (:func:`with_overrides`) and written back.
+    ``standard_blank`` is the blank the ``[blank]`` table's standard computed (None when the
+    design gives its blank in ``[pair]``). ``source`` keeps the parsed TOML document, so a
+    design can be re-derived with overrides (:func:`with_overrides`) and written back.
     """
 
     pair: PairData
@@ -366,6 +415,7 @@ class Design:
     analysis: Mapping[str, Any] = field(default_factory=dict)
     load: Mapping[str, Any] = field(default_factory=dict)
     te_target: Any = None
+    standard_blank: StandardBlank | None = None
     source: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
     path: str | None = field(default=None, compare=False)
 
@@ -391,3 +441,62 @@ def pair_from_table(table: Mapping[str, Any]) -> PairData:
         if key not in table:
             raise DesignError(f"pair.{key}", rule="required key is missing")
     return PairData(**table)
+
+
+#: the ``[pair]`` keys a ``[blank]`` table's standard derives (a design gives one or the other)
+STANDARD_BLANK_KEYS = (
+    "outer_addendum_mm",
+    "outer_dedendum_mm",
+    "face_angle_deg",
+    "root_angle_deg",
+    "mean_normal_chordal_addendum_mm",
+    "mean_normal_chordal_thickness_mm",
+)
+
+
+def pair_from_tables(
+    pair_table: Mapping[str, Any], blank_table: Mapping[str, Any] | None
+) -> tuple[PairData, StandardBlank | None]:
+    """The ``[pair]`` table, its blank completed by the ``[blank]`` table's standard.
+
+    Without ``[blank]`` the pair is read as :func:`pair_from_table` reads it (the blank as
+    given) and no standard blank is returned. With ``[blank] standard = "iso23509"`` the
+    standard's outer addenda and dedenda, face and root angles (tapered depth) and mean normal
+    chordal thickness and addendum fill the pair, so every machine model cuts that blank; the
+    ``[pair]`` then gives none of :data:`STANDARD_BLANK_KEYS`.
+    """
+    if blank_table is None:
+        return pair_from_table(pair_table), None
+    for key in STANDARD_BLANK_KEYS:
+        if key in pair_table:
+            raise DesignError(
+                f"pair.{key}",
+                pair_table[key],
+                "is derived by [blank] standard = 'iso23509': remove it from [pair] (or remove "
+                "the [blank] table to give the blank by hand)",
+            )
+    data = BlankData.from_table(blank_table)
+    base = pair_from_table(pair_table)
+    blank = iso23509_blank(
+        PairBasics(
+            pinion_teeth=base.pinion_teeth,
+            gear_teeth=base.gear_teeth,
+            shaft_angle_deg=base.shaft_angle_deg,
+            mean_spiral_angle_deg=base.mean_spiral_angle_deg,
+            pressure_angle_deg=base.pressure_angle_deg,
+            face_width_mm=base.face_width_mm,
+            mean_cone_distance_mm=base.mean_cone_distance_mm,
+        ),
+        data,
+    )
+    tapered = any(a != 0.0 for a in (*blank.addendum_angle_deg, *blank.dedendum_angle_deg))
+    pair = replace(
+        base,
+        outer_addendum_mm=blank.outer_addendum_mm,
+        outer_dedendum_mm=blank.outer_dedendum_mm,
+        face_angle_deg=blank.face_angle_deg if tapered else None,
+        root_angle_deg=blank.root_angle_deg if tapered else None,
+        mean_normal_chordal_addendum_mm=blank.mean_chordal_addendum_mm,
+        mean_normal_chordal_thickness_mm=blank.mean_normal_chordal_thickness_mm,
+    )
+    return pair, blank

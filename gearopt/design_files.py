@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from gearopt.analysis_options import AnalysisOptions
 from gearopt.assembly import Misalignment
-from gearopt.design import SECTIONS, Design, Meta, PairData, pair_from_table
+from gearopt.design import SECTIONS, Design, Meta, PairData, pair_from_tables
 from gearopt.errors import DesignError, GearoptError
 from gearopt.load_options import LoadOptions
 from gearopt.plugins import get_machine_model
@@ -25,7 +25,9 @@ from gearopt.validate import check_keys, read_table, read_toml, read_toml_file
 if TYPE_CHECKING:
     import pluggy
 
-__all__ = ["load_design", "loads_design", "parse_design", "with_overrides"]
+    from gearopt.iso23509 import StandardBlank
+
+__all__ = ["load_design", "loads_design", "parse_design", "with_overrides", "load_standard_blank"]
 
 
 def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
@@ -80,7 +82,7 @@ def parse_design(
         raise DesignError("pair", rule="the [pair] table is required")
     if "machine" not in data:
         raise DesignError("machine", rule='the [machine] table is required (model = "...")')
-    pair = pair_from_table(tables["pair"])
+    pair, standard = pair_from_tables(tables["pair"], tables["blank"] if "blank" in data else None)
     machine_table = dict(tables["machine"])
     if "model" not in machine_table:
         raise DesignError("machine.model", rule="required key is missing")
@@ -104,6 +106,7 @@ def parse_design(
         analysis=_analysis_table(tables["analysis"]),
         load=_load_table(tables["load"]),
         te_target=_te_target(tables["te_target"], pair) if "te_target" in data else None,
+        standard_blank=standard,
         source=copy.deepcopy(dict(data)),
         path=path,
     )
@@ -120,6 +123,23 @@ def load_design(path: str | Path, *, plugin_manager: pluggy.PluginManager | None
     path = Path(path)
     data = read_toml_file(path, lambda rule: DesignError("design file", str(path), rule))
     return parse_design(data, plugin_manager=plugin_manager, path=str(path))
+
+
+def load_standard_blank(path: str | Path) -> StandardBlank:
+    """The standard blank of a design file from its ``[pair]`` and ``[blank]`` tables only
+    (a design without ``[machine]`` is valid here; the other tables are not read)."""
+    path = Path(path)
+    data = read_toml_file(path, lambda rule: DesignError("design file", str(path), rule))
+    if "pair" not in data:
+        raise DesignError("pair", rule="the [pair] table is required")
+    if "blank" not in data:
+        raise DesignError(
+            "blank",
+            rule='the [blank] table is required (standard = "iso23509" and its data: '
+            "cutter_radius_mm, taper or the gear's addendum and dedendum angles)",
+        )
+    _, standard = pair_from_tables(read_table(data, "pair", ""), read_table(data, "blank", ""))
+    return standard
 
 
 def with_overrides(

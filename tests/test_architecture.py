@@ -60,6 +60,7 @@ LAYERS = (
             "gearopt.flank_jet",
             "gearopt.envelope",
             "gearopt.blank",
+            "gearopt.iso23509",
             "gearopt.thickness",
             "gearopt.assembly",
             "gearopt.te_target",
@@ -84,7 +85,14 @@ LAYERS = (
     ("study", ("gearopt.results", "gearopt.storage", "gearopt.study", "gearopt.export")),
     (
         "cli",
-        ("gearopt.cli", "gearopt.flank_cli", "gearopt.study_cli", "gearopt.bench", "gearopt"),
+        (
+            "gearopt.cli",
+            "gearopt.flank_cli",
+            "gearopt.blank_cli",
+            "gearopt.study_cli",
+            "gearopt.bench",
+            "gearopt",
+        ),
     ),
 )
 #: Optuna's private attributes the study coordinator still reads (its trial ids and storage);
