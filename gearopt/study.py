@@ -55,10 +55,7 @@ from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from optuna.trial import TrialState
 from tqdm import tqdm
 
-from gearopt.contact import kernels as contact_kernels
 from gearopt.errors import GearoptError, StudyError
-from gearopt.loaded import kernels as loaded_kernels
-from gearopt.loaded import lcp_kernels
 from gearopt.results import ResultsStore
 from gearopt.storage import (
     check_own_tables,
@@ -71,9 +68,9 @@ from gearopt.storage import (
 )
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
+from gearopt.warmup import warm_kernels
 
 __all__ = [
-    "ANNOUNCE_AFTER_S",
     "STALE_AFTER_S",
     "RunSummary",
     "default_storage_url",
@@ -83,7 +80,6 @@ __all__ = [
     "run_study",
     "save_design",
     "trial_objective",
-    "warm_kernels",
 ]
 
 #: a coordinator on another host whose heartbeat is older than this is taken for dead
@@ -220,44 +216,6 @@ class RunSummary:
     def coordinator_ms_per_trial(self) -> float:
         n = max(self.evaluated_this_run, 1)
         return 1e3 * self.coordinator_s / n
-
-
-#: seconds after which :func:`warm_kernels` says on stderr that it compiles
-ANNOUNCE_AFTER_S = 1.0
-
-
-def warm_kernels(*, announce: bool = True) -> float:
-    """Compile every compiled kernel (contact engine, loaded contact) in this process, or load
-    it from numba's disk cache, and return the seconds it took. A first use after an install
-    compiles them (about half a minute); ``announce``: said on stderr when it takes longer than
-    :data:`ANNOUNCE_AFTER_S` (a cached load takes well under a second)."""
-    start = time.perf_counter()
-    said = threading.Event()
-
-    def say() -> None:
-        said.set()
-        print(
-            "gearopt: compiling the numerical kernels (once after an install; later runs load "
-            "them from the cache) ...",
-            file=sys.stderr,
-            flush=True,
-        )
-
-    timer = threading.Timer(ANNOUNCE_AFTER_S, say) if announce else None
-    if timer is not None:
-        timer.daemon = True
-        timer.start()
-    try:
-        contact_kernels.warm()
-        loaded_kernels.warm()
-        lcp_kernels.warm()
-    finally:
-        if timer is not None:
-            timer.cancel()
-    seconds = time.perf_counter() - start
-    if said.is_set():
-        print(f"gearopt: kernels compiled in {seconds:.1f} s", file=sys.stderr, flush=True)
-    return seconds
 
 
 def _alive(pid: int) -> bool:

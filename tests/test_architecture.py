@@ -80,7 +80,7 @@ LAYERS = (
         ),
     ),
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
-    ("analysis", ("gearopt.analysis", "gearopt.plots")),
+    ("analysis", ("gearopt.analysis", "gearopt.plots", "gearopt.warmup")),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
     ("study", ("gearopt.results", "gearopt.storage", "gearopt.study", "gearopt.export")),
     (

@@ -804,7 +804,7 @@ def test_a_database_of_someone_elses_is_refused_unless_shared(tmp_path, toy_site
 def test_a_slow_kernel_warm_up_is_announced_and_a_quick_one_is_not(monkeypatch, capsys):
     """The first use after an install compiles the kernels (half a minute): said on stderr
     before and after; a cached load (well under a second) says nothing."""
-    import gearopt.study as study_module
+    import gearopt.warmup as study_module
 
     calls = []
     monkeypatch.setattr(study_module.contact_kernels, "warm", lambda: calls.append("contact"))
