@@ -84,6 +84,15 @@ class BaseEvaluator(abc.ABC):
     def evaluate(self, design: Design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         """Evaluate ``design`` under ``conditions`` (evaluator-specific, documented by it)."""
 
+    def check_conditions(self, design: Design, conditions: Mapping[str, Any]) -> None:
+        """Raise a :class:`~gearopt.errors.GearoptError` naming a condition ``evaluate`` would
+        refuse (an unknown key, a bad value), without evaluating anything.
+
+        A study calls this once per evaluation when its file is read, so that a typo fails
+        before its database is created and before the first trial. The default accepts
+        anything (an evaluator that does not override it is checked by its first trial).
+        """
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"
 

@@ -261,8 +261,11 @@ def _objective(entry: Any, kind: str, where: str, known: Mapping[str, Evaluation
         raise StudyError(f"{where}.name", name, f"is a {plugin.kind}, listed under {kind}s")
     try:
         reads = plugin.reads(**options)
-    except GearoptError as exc:
-        raise StudyError(where, entry, exc.rule or str(exc)) from None
+    except GearoptError as exc:  # named as the file names it, with the plugin's parameter
+        named = f"{where} ({exc.parameter})"
+        if exc.value is None:
+            raise StudyError(named, rule=exc.rule or str(exc)) from None
+        raise StudyError(named, exc.value, exc.rule or str(exc)) from None
     for label, evaluator in reads.items():
         if label not in known:
             raise StudyError(where, label, f"is not in [evaluations]: {sorted(known)}")
@@ -280,8 +283,10 @@ def _objective(entry: Any, kind: str, where: str, known: Mapping[str, Evaluation
     )
 
 
-def _evaluations(table: Mapping[str, Any]) -> tuple[EvaluationSpec, ...]:
+def _evaluations(table: Mapping[str, Any], design: Design) -> tuple[EvaluationSpec, ...]:
     installed = evaluators()
+    if not isinstance(table, Mapping):
+        raise StudyError("evaluations", table, "must be tables [evaluations.<label>]")
     specs = []
     for label, entry in table.items():
         where = f"evaluations.{label}"
@@ -293,6 +298,10 @@ def _evaluations(table: Mapping[str, Any]) -> tuple[EvaluationSpec, ...]:
         conditions = entry.get("conditions", {})
         if not isinstance(conditions, Mapping):
             raise StudyError(f"{where}.conditions", conditions, "must be a table")
+        try:  # before the database is touched: a typo must not fail every trial
+            installed[name].check_conditions(design, conditions)
+        except GearoptError as exc:
+            raise StudyError(f"{where}.{exc.parameter}", exc.value, exc.rule) from None
         specs.append(EvaluationSpec(label=label, evaluator=name, conditions=dict(conditions)))
     return tuple(specs)
 
@@ -364,7 +373,7 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         raise StudyError("search", search, "must be a table of design keys")
     dims = tuple(_dimension(key, value, design) for key, value in search.items())
     _check_search_keys(design, dims)
-    evals = _evaluations(data.get("evaluations", {}))
+    evals = _evaluations(data.get("evaluations", {}), design)
     if not evals:
         raise StudyError("evaluations", rule="name at least one evaluation")
     known = {e.label: e for e in evals}

@@ -27,6 +27,10 @@ class BacklashEvaluator(BaseEvaluator):
     name = "backlash"
     description = "circumferential backlash along the mesh, interference flagged"
 
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
+        AnalysisOptions.from_conditions(conditions, design=design)
+
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
         result = pair_backlash(meshed_pair(design, options), options)

@@ -68,6 +68,10 @@ class TcaEvaluator(BaseEvaluator):
     name = "tca"
     description = "unloaded TCA of drive and coast sides: TE, contact path, pattern"
 
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
+        AnalysisOptions.from_conditions(conditions, design=design)
+
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
         pair = meshed_pair(design, options)
@@ -108,6 +112,10 @@ class EaseOffEvaluator(BaseEvaluator):
 
     name = "ease-off"
     description = "pinion ease-off of drive and coast flanks against the conjugate surfaces"
+
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
+        AnalysisOptions.from_conditions(conditions, design=design)
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
