@@ -92,6 +92,7 @@ class BaseEvaluator(abc.ABC):
         before its database is created and before the first trial. The default accepts
         anything (an evaluator that does not override it is checked by its first trial).
         """
+        return None
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

@@ -139,8 +139,8 @@ def test_example_study_file_is_valid():
         (("= [74.0, 76.0]", "= [-1e308, 1e308]"), "search.machine.pinion.inner_cutter_radius_mm"),
         # issue 27: caught when the file is read, not after 11 trials have failed
         (("gear_axial_mm = 0.188,", "gear_axial_mm = 0.188, tilt_deg = 1.0,"), "evaluations"),
-        (("[evaluations.tca]", "[evaluations.tca]\nconditions = { compund_um = 5 }"), "evaluations"),
-        (("[evaluations.tca]", "[evaluations.tca]\nconditions = { positions = 0 }"), "evaluations"),
+        (("[evaluations.tca]", "[evaluations.tca]\nconditions = {compund_um = 5}"), "evaluations"),
+        (("[evaluations.tca]", "[evaluations.tca]\nconditions = {positions = 0}"), "evaluations"),
         (
             ('name = "pattern_movement"', 'name = "te_level"\non = "tca"\nlevel_arcsec = nan'),
             "objectives[1] (objective te_level.level_arcsec)",
