@@ -61,6 +61,7 @@ from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
 from gearopt.results import ResultsStore
 from gearopt.storage import (
+    check_integrity,
     check_own_tables,
     check_storage_url,
     default_storage_url,
@@ -131,6 +132,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
 
     url = storage or default_storage_url(spec)
     check_storage_url(url)
+    check_integrity(url)
     if not spec.shared_storage:
         check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)

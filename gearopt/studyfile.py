@@ -293,7 +293,7 @@ def _evaluations(table: Mapping[str, Any], design: Design) -> tuple[EvaluationSp
         if not isinstance(entry, Mapping) or not set(entry) <= {"evaluator", "conditions"}:
             raise StudyError(where, entry, "must be a table with evaluator and conditions")
         name = entry.get("evaluator", label)
-        if name not in installed:
+        if not isinstance(name, str) or name not in installed:
             raise StudyError(f"{where}.evaluator", name, f"unknown; installed: {sorted(installed)}")
         conditions = entry.get("conditions", {})
         if not isinstance(conditions, Mapping):
@@ -335,6 +335,14 @@ def _given(data: Mapping[str, Any]) -> list[dict]:
         for combo in itertools.product(*(grid[k] for k in keys)):
             given.append(dict(zip(keys, combo, strict=True)))
     return given
+
+
+def _entries(data: Mapping[str, Any], table: str) -> list:
+    """The ``[[objectives]]`` or ``[[constraints]]`` entries (a list of tables)."""
+    entries = data.get(table, [])
+    if not isinstance(entries, list):
+        raise StudyError(table, entries, f"must be tables [[{table}]]")
+    return entries
 
 
 def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None) -> StudySpec:
@@ -379,11 +387,11 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
     known = {e.label: e for e in evals}
     objs = tuple(
         _objective(e, "objective", f"objectives[{i}]", known)
-        for i, e in enumerate(data.get("objectives", []))
+        for i, e in enumerate(_entries(data, "objectives"))
     )
     cons = tuple(
         _objective(e, "constraint", f"constraints[{i}]", known)
-        for i, e in enumerate(data.get("constraints", []))
+        for i, e in enumerate(_entries(data, "constraints"))
     )
     seed = study.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):

@@ -29,6 +29,7 @@ from optuna.trial import TrialState
 import gearopt
 from gearopt.errors import StudyError
 from gearopt.evaluation import Evaluation
+from gearopt.storage import check_integrity
 from gearopt.study import pick_best
 from gearopt.studyfile import load_study_spec, parse_study_spec
 from gearopt.trial import pattern_outline
@@ -804,3 +805,34 @@ def test_a_database_of_someone_elses_is_refused_unless_shared(tmp_path, toy_site
         assert con.execute(sa.text("SELECT COUNT(*) FROM parts")).scalar() == 0
     engine.dispose()
     assert _states(_trials(own))["COMPLETE"] == 2
+
+
+def test_a_damaged_sqlite_file_is_refused_and_left_untouched(tmp_path, toy_site):
+    # issue 27: four kinds of mid-file corruption were accepted and written to (the next run
+    # crashed with a 92-line traceback and left 2 RUNNING trials)
+    study = _toy_study(tmp_path)
+    db = tmp_path / "toy_probe.db"
+    _gearopt(["study", "run", study, "--trials", 1, "--no-progress"], toy_site)
+    sound = db.read_bytes()
+    page = int.from_bytes(sound[16:18], "big")
+    for damage in ("header", "not sqlite", "page"):  # the last one through the command line
+        data = bytearray(sound)
+        if damage == "header":
+            data[100:108] = b"\xff" * 8  # the first page's b-tree header
+        elif damage == "page":
+            data[2 * page : 2 * page + 64] = os.urandom(64)  # the third page, a b-tree's
+        else:
+            data = bytearray(b"inventory, not a database\n" * 400)
+        db.write_bytes(bytes(data))
+        with pytest.raises(StudyError, match="damaged SQLite database"):
+            check_integrity(f"sqlite:///{db}")
+    before = db.read_bytes()
+    run = _gearopt(["study", "run", study, "--trials", 3, "--no-progress"], toy_site, check=False)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr[-2000:]
+    assert "damaged SQLite database" in lines[0] and db.read_bytes() == before
+    run = _gearopt(["study", "export", study, "--out", tmp_path / "out"], toy_site, check=False)
+    assert run.returncode == 2 and "damaged SQLite database" in run.stderr
+    assert db.read_bytes() == before and not (tmp_path / "out").exists()
+    db.write_bytes(sound)
+    check_integrity(f"sqlite:///{db}")  # the sound file passes
