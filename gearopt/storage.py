@@ -6,6 +6,7 @@ storage made safe for coordinators starting together, and SQLite tuned for many 
 from __future__ import annotations
 
 import functools
+import hashlib
 import re
 import sqlite3
 import time
@@ -28,6 +29,7 @@ __all__ = [
     "masked_url",
     "rdb_storage",
     "storage_error",
+    "storage_tag",
     "study_exists",
 ]
 
@@ -151,6 +153,20 @@ def default_storage_url(spec: StudySpec) -> str:
     """``sqlite:///<study name>.db`` beside the study file (the name sanitised)."""
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", spec.name)
     return f"sqlite:///{spec.folder / (name + '.db')}"
+
+
+def storage_tag(spec: StudySpec, url: str | None) -> str:
+    """``""`` for the study's default storage, else ``_<tag>`` naming the other one: its
+    SQLite file's stem, or the first 8 hex digits of the SHA-256 of its password-masked URL."""
+    if url is None or url == default_storage_url(spec):
+        return ""
+    try:
+        parsed = sa.engine.make_url(url)
+    except Exception:
+        parsed = None
+    if parsed is not None and parsed.get_backend_name() == "sqlite" and parsed.database:
+        return "_" + re.sub(r"[^A-Za-z0-9_.-]", "_", Path(parsed.database).stem)
+    return "_" + hashlib.sha256(masked_url(url).encode()).hexdigest()[:8]
 
 
 def study_exists(spec: StudySpec, storage: str | None = None) -> bool:

@@ -69,6 +69,7 @@ from gearopt.storage import (
     masked_url,
     rdb_storage,
     storage_error,
+    storage_tag,
 )
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
@@ -598,7 +599,7 @@ def run_study(
         shutil.rmtree(markers, ignore_errors=True)
     complete, _ = counts()
     best = pick_best(study, spec)
-    path = save_design(spec, best) if (save_best and best is not None) else None
+    path = save_design(spec, best, url) if (save_best and best is not None) else None
     wall = time.perf_counter() - start
     return RunSummary(
         study=spec.name,
@@ -735,14 +736,19 @@ def pick_best(study, spec: StudySpec) -> optuna.trial.FrozenTrial | None:
     return done[min(front, key=lambda i: (distance(i), done[i].number))]
 
 
-def save_design(spec: StudySpec, trial: optuna.trial.FrozenTrial) -> str:
-    """Write the trial's design as ``<study name>_best.toml`` beside the study file."""
+def save_design(
+    spec: StudySpec, trial: optuna.trial.FrozenTrial, storage: str | None = None
+) -> str:
+    """Write the trial's design beside the study file as ``<study name>_best.toml`` (the
+    study's default storage) or ``<study name>_best_<storage>.toml`` (another storage: its
+    SQLite file's stem, or a digest of its URL), so that a run on another storage never
+    overwrites the default study's best design."""
 
     data = dict(spec.design_for(trial.params).source)
     meta = data.setdefault("meta", {})
     meta["name"] = f"{spec.name}_best"
     meta["source"] = f"study {spec.name}, trial {trial.number}"
-    path = spec.folder / f"{spec.name}_best.toml"
+    path = spec.folder / f"{spec.name}_best{storage_tag(spec, storage)}.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
     return str(path)
 

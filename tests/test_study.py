@@ -805,6 +805,9 @@ def test_a_database_of_someone_elses_is_refused_unless_shared(tmp_path, toy_site
         assert con.execute(sa.text("SELECT COUNT(*) FROM parts")).scalar() == 0
     engine.dispose()
     assert _states(_trials(own))["COMPLETE"] == 2
+    # issue 19 item 5: a run on another storage wrote over the default study's best design
+    assert (tmp_path / "toy_probe_best_inventory.toml").is_file()
+    assert not (tmp_path / "toy_probe_best.toml").exists()
 
 
 def test_a_damaged_sqlite_file_is_refused_and_left_untouched(tmp_path, toy_site):
