@@ -4,6 +4,7 @@ the modified roll, the spiral angle measured on the generated gear, bad settings
 from __future__ import annotations
 
 import math
+import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -12,6 +13,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
+from gearopt.design_files import parse_design
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank import cone_coordinates
 from gearopt.testing import FlankContract
@@ -753,3 +755,21 @@ def test_family_with_tip_radius_is_complex_step_safe(tip_radius_mm):
     flank = rng.integers(0, 2, 40)
     # (atol: the differences' rounding on L, R of about 100 mm)
     _assert_complex_step_safe(family, q, flank, atol=1e-7)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "named"),
+    [
+        ("ratio_of_roll", 1e308, "ratio_of_roll"),
+        ("ratio_of_roll", 2.5, "ratio_of_roll"),
+        ("roll_c2", 1e18, "roll_c2"),
+        ("roll_c4", -12.0, "roll_c4"),
+    ],
+)
+def test_a_roll_that_generates_no_flank_is_refused(key, value, named):
+    # issue 27: face-milling settings accepted ratio_of_roll = 1e308 and roll_c2 = 1e18
+    data = tomllib.loads((STUDIES / "face_milling_conjugate.toml").read_text())
+    data["machine"]["pinion"][key] = value
+    with pytest.raises(DesignError) as info:
+        parse_design(data)
+    assert info.value.parameter.endswith(named)
