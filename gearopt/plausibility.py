@@ -99,11 +99,23 @@ def flank_findings(
     ]
 
 
-def contact_findings(out: Mapping[str, Any]) -> list[str]:
-    """Warnings on ``gearopt analyze``'s results (``tca``, ``tca_coast``, ``backlash``); a
-    :class:`DesignError` for a result that is not a gear mesh."""
+def contact_findings(out: Mapping[str, Any], *, strict: bool = True) -> list[str]:
+    """Warnings on contact results (the reports' ``tca``, ``tca_coast``, ``backlash``, those
+    present); a result that is not a gear mesh is a :class:`DesignError`, or with ``strict``
+    False a warning too (a study's trial keeps its values: its constraints judge it)."""
+    try:
+        return _contact_findings(out)
+    except DesignError as exc:
+        if strict:
+            raise
+        return [f"not a gear mesh: {exc}"]
+
+
+def _contact_findings(out: Mapping[str, Any]) -> list[str]:
     found = []
     for key in ("tca", "tca_coast"):
+        if key not in out:
+            continue
         side = out[key]
         te = side["te_peak_to_peak_arcsec"]
         if te > MAX_TE_ARCSEC:

@@ -449,6 +449,8 @@ def run_study(
                 _upload(spec, study, trial, outcome.figures)
             for label, value in outcome.constraints.items():
                 trial.set_constraint(label, value)
+            if outcome.warnings:
+                trial.set_user_attr("gearopt_warnings", outcome.warnings[:20])
             study.tell(trial, list(outcome.values))
             if bar is not None:
                 bar.update(1)

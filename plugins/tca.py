@@ -46,6 +46,7 @@ from gearopt.analysis import (
 from gearopt.design import Misalignment
 from gearopt.evaluation import BaseEvaluator, Evaluation
 from gearopt.mesh import ToothContact
+from gearopt.plausibility import contact_findings
 from gearopt.te_target import compare
 
 
@@ -104,6 +105,7 @@ class TcaEvaluator(BaseEvaluator):
             arrays=arrays,
             conditions=options.as_dict(),
             report=report,
+            warnings=tuple(contact_findings(report, strict=False)),
         )
 
 

@@ -73,6 +73,7 @@ LAYERS = (
             "gearopt.hookspecs",
             "gearopt.machine",
             "gearopt.evaluation",
+            "gearopt.plausibility",
             "gearopt.plugins",
             "gearopt.design_files",
             "gearopt.testing",

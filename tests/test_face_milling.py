@@ -296,9 +296,9 @@ def test_missing_key_is_a_design_error():
     ],
 )
 def test_settings_without_an_envelope_raise_never_nan(conjugate, overrides):
-    design = gearopt.with_overrides(conjugate, overrides)
     member = next(iter(overrides)).split(".")[1]
-    try:
+    try:  # refused when read (a ratio of roll of 40, issue 27) or when generated
+        design = gearopt.with_overrides(conjugate, overrides)
         maps = FaceMilling().generate_flanks(design, member=member)
     except GearoptError:
         return

@@ -592,6 +592,10 @@ def test_example_study_runs_and_fills_the_dashboard_tables(tmp_path):
         )
     ]
     assert (tmp_path / "cyclo_palloid_contact_artifacts").is_dir()
+    # issue 19 item 5: the warnings stored per trial, each labelled with its evaluation (the
+    # published section 5.3 design under the section 5.4 errors meets the heel's edge)
+    warned = first.user_attrs.get("gearopt_warnings", [])
+    assert any(w.startswith("misaligned: edge contact: drive side") for w in warned), warned
     # the README's example queries run on it and find rows
     queries = re.findall(r"```sql\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
     assert len(queries) >= 3
