@@ -93,6 +93,10 @@ MAX_ATTEMPTS = 3
 _COORD = "gearopt_coordinator"
 _ATTEMPT = "gearopt_attempt"
 _COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP BY state")
+_AHEAD = sa.text(
+    "SELECT COUNT(*) FROM trials WHERE study_id = :id AND number < :n"
+    " AND state IN ('COMPLETE', 'RUNNING')"
+)
 
 
 #: the prefix of the coordinators' temporary folders (a worker's pid marker per trial)
@@ -420,15 +424,36 @@ def run_study(
             future.set_exception(exc)
         pending[trial.number] = (trial, future, params, attempt)
 
-    def ask():
+    def ask() -> bool:
         with _held_stops():  # asked and in hand at once
             trial = study.ask()
             trial.set_user_attr(_COORD, me)
+            if ahead(trial.number) >= trials:  # another coordinator took the last place
+                surplus(trial)
+                return False
             attempt = int(trial.user_attrs.get(_ATTEMPT, 1))  # retries carry theirs
             params = {
                 d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search
             }
             submit(trial, params, attempt)
+            return True
+
+    def ahead(number: int) -> int:
+        """COMPLETE and RUNNING trials numbered before ``number`` (every coordinator's): the
+        trials that come first when several coordinators ask for the last places at once."""
+        with results.engine.connect() as con:
+            return con.execute(_AHEAD, {"id": study._study_id, "n": number}).scalar_one()
+
+    def surplus(trial) -> None:
+        """Give back a trial asked beyond the study's count: a given design (or a retry) to
+        the queue, uncharged; a sampled one failed before it is suggested anything."""
+        frozen = study._storage.get_trial(trial._trial_id)
+        reason = f"surplus: {trials} trials were complete or running before it"
+        if "fixed_params" in frozen.system_attrs:
+            _retry(study, results, spec, frozen, reason, charge=False)
+        else:
+            trial.set_user_attr("gearopt_error", reason)
+            study.tell(trial, state=TrialState.FAIL)
 
     def tell(number: int, outcome: TrialOutcome) -> None:
         with _held_stops():  # out of hand and told at once
@@ -509,7 +534,8 @@ def run_study(
         if batch and pending and not held:
             return
         for _ in range(min(jobs - busy, max(free, 0))):
-            ask()
+            if not ask():
+                break
 
     # the compiled kernels (contact engine, loaded contact) compiled (or loaded) here once,
     # before the workers start: they load the cache rather than compile it side by side
