@@ -29,6 +29,7 @@ from gearopt.mesh import (
 from gearopt.plugins import get_machine_model
 
 __all__ = [
+    "analysed_flanks",
     "AnalysisOptions",
     "TCA_GRID",
     "contact_sides",
@@ -62,6 +63,16 @@ def generated_flanks(design: Design, grid, *, plugin_manager=None) -> tuple[dict
     return tuple(model.generate_flanks(design, member=m, grid=grid) for m in MEMBERS)
 
 
+def analysed_flanks(design: Design, options: AnalysisOptions) -> tuple[dict, dict]:
+    """``(pinion, gear)`` flanks on the options' grid, the ones the analyses of the same
+    design object used (kept with the last few)."""
+    return _recent(
+        design,
+        ("flanks", options.grid.shape),
+        lambda: generated_flanks(design, options.grid),
+    )
+
+
 def meshed_pair(design: Design, options: AnalysisOptions, *, plugin_manager=None) -> MeshedPair:
     """The design's flanks generated on the options' grid and placed in the housing (the last
     few are kept: the same design object on the same grid is generated once, and placed once
@@ -69,11 +80,7 @@ def meshed_pair(design: Design, options: AnalysisOptions, *, plugin_manager=None
     if plugin_manager is not None:
         flanks = generated_flanks(design, options.grid, plugin_manager=plugin_manager)
         return mesh_pair(design, flanks, misalignment=options.misalignment)
-    flanks = _recent(
-        design,
-        ("flanks", options.grid.shape),
-        lambda: generated_flanks(design, options.grid),
-    )
+    flanks = analysed_flanks(design, options)
     return _recent(
         design,
         ("pair", options.grid.shape, options.misalignment),

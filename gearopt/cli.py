@@ -28,14 +28,15 @@ from typing import Any
 import pandas as pd
 import tomli_w
 
-from gearopt.analysis import AnalysisOptions
+from gearopt.analysis import AnalysisOptions, analysed_flanks
 from gearopt.bench import run_benchmarks
 from gearopt.blank_cli import add_blank_parser
 from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
 from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank import FLANKS, MEMBERS
-from gearopt.flank_cli import add_flank_parser, parse_grid
+from gearopt.flank_cli import add_flank_parser, parse_grid, print_warnings
+from gearopt.plausibility import caught, contact_findings, flank_findings
 from gearopt.plots import plot_analysis
 from gearopt.plugins import evaluators, get_machine_model, list_plugins
 from gearopt.study_cli import add_study_parser
@@ -131,13 +132,15 @@ def _cmd_realise_te(args: argparse.Namespace) -> int:
 
 
 def _cmd_settings(args: argparse.Namespace) -> int:
-    design = load_design(args.design)
-    settings = get_machine_model(design.model).basic_settings(design)
+    with caught() as numerical:
+        design = load_design(args.design)
+        settings = get_machine_model(design.model).basic_settings(design)
     out = settings.as_dict()
-    out = {"design": design.name, **out, "blank": design.blank.as_dict()}
+    out = {"design": design.name, **out, "blank": design.blank.as_dict(), "warnings": numerical}
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
+    print_warnings(out["warnings"])
     print(f"design {design.name!r}, machine model {design.model!r}")
     blank = out["blank"]
     blank_rows = [(k, _format_value(v)) for k, v in blank.items()]
@@ -158,25 +161,31 @@ def _cmd_flanks(args: argparse.Namespace) -> int:
     model = get_machine_model(design.model)
     grid = parse_grid(args.grid)
     out: dict[str, Any] = {"design": design.name, "model": design.model, "grid": list(grid.shape)}
-    for member in MEMBERS:
-        maps = model.generate_flanks(design, member=member, grid=grid)
-        entry: dict[str, Any] = {}
-        for flank in FLANKS:
-            fm = maps[flank]
-            entry[flank] = {
-                **fm.summary(),
-                "tool_penetration_mm": fm.tool_penetration_mm() if fm.surface else None,
-            }
-        if design.pair.mean_normal_chordal_addendum_mm is not None:
-            measured = design_chordal_thickness(design, member, maps)
-            entry["mean_normal_chordal_thickness_mm"] = measured.thickness_mm
-            entry["chordal_addendum_mm"] = design.pair.mean_normal_chordal_addendum_mm[
-                MEMBERS.index(member)
-            ]
-        out[member] = entry
+    found: list[str] = []
+    with caught() as numerical:
+        for member in MEMBERS:
+            maps = model.generate_flanks(design, member=member, grid=grid)
+            entry: dict[str, Any] = {}
+            for flank in FLANKS:
+                fm = maps[flank]
+                entry[flank] = {
+                    **fm.summary(),
+                    "tool_penetration_mm": fm.tool_penetration_mm() if fm.surface else None,
+                }
+                row_mm = _row_mm(fm.profile_mm)
+                found += flank_findings(design, member, flank, entry[flank], row_mm=row_mm)
+            if design.pair.mean_normal_chordal_addendum_mm is not None:
+                measured = design_chordal_thickness(design, member, maps)
+                entry["mean_normal_chordal_thickness_mm"] = measured.thickness_mm
+                entry["chordal_addendum_mm"] = design.pair.mean_normal_chordal_addendum_mm[
+                    MEMBERS.index(member)
+                ]
+            out[member] = entry
+    out["warnings"] = found + numerical
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
+    print_warnings(out["warnings"])
     print(f"design {design.name!r}, machine model {design.model!r}, grid {grid.shape}")
     rows = []
     for member in MEMBERS:
@@ -211,6 +220,11 @@ def _cmd_flanks(args: argparse.Namespace) -> int:
                 f"{out[member]['chordal_addendum_mm']} mm (measured on the generated flanks)"
             )
     return 0
+
+
+def _row_mm(profile_mm) -> float:
+    """The profile spacing of a FlankMap grid (mm)."""
+    return float(profile_mm[1] - profile_mm[0])
 
 
 def _parse_teeth(text: str, option: str, *, count: int | None = None) -> list[int]:
@@ -364,23 +378,35 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     out: dict[str, Any] = {"design": design.name, "model": design.model}
     out["conditions"] = options.as_dict()
     results = {}
-    for name in ("tca", "backlash", "ease-off"):
-        evaluation = registry[name].evaluate(design, conditions)
-        results[name] = evaluation
-        out.update(evaluation.report)
     torques = _torques(args.torque_nm)
-    if torques is not None or design.load.get("torque_nm") is not None:
-        load_conditions = dict(conditions)
-        if torques is not None:
-            load_conditions["torque_nm"] = torques
-        evaluation = registry["ltca"].evaluate(design, load_conditions)
-        results["ltca"] = evaluation
-        out.update(evaluation.report)
+    with caught() as numerical:
+        for name in ("tca", "backlash", "ease-off"):
+            evaluation = registry[name].evaluate(design, conditions)
+            results[name] = evaluation
+            out.update(evaluation.report)
+        found = [
+            text
+            for member, maps in zip(MEMBERS, analysed_flanks(design, options), strict=True)
+            for flank, fm in maps.items()
+            for text in flank_findings(
+                design, member, flank, fm.summary(), row_mm=_row_mm(fm.profile_mm)
+            )
+        ]
+        found += contact_findings(out)
+        if torques is not None or design.load.get("torque_nm") is not None:
+            load_conditions = dict(conditions)
+            if torques is not None:
+                load_conditions["torque_nm"] = torques
+            evaluation = registry["ltca"].evaluate(design, load_conditions)
+            results["ltca"] = evaluation
+            out.update(evaluation.report)
+    out["warnings"] = found + numerical
     if args.plot:
         out["plots"] = [str(p) for p in plot_analysis(design, results, args.plot)]
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
+    print_warnings(out["warnings"])
     print(
         f"design {design.name!r}, machine model {design.model!r}, grid {options.grid.shape}, "
         f"{options.positions} positions, compound {options.compound_um:g} um "

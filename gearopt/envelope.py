@@ -449,6 +449,24 @@ class EnvelopeSurface:
             q_out[todo[conv]], ok[todo[conv]] = q[conv], True
         return q_out, ok
 
+    def generated_at(self, face_mm, profile_mm) -> NDArray:
+        """``(...)`` True where the tool generates the flank point at grid coordinates: the
+        blade reaches it (above its tip, :meth:`GeneratingFamily.within_tool`) and it lies on
+        the envelope's sheet through the pitch line (the meshing Jacobian's sign there), not
+        past the envelope's fold. (The FlankMap's mask keeps 0.3 mm clear of the fold too.)"""
+        q = self.parameters_at(face_mm, profile_mm)
+        shape = q.shape[:-1]
+        s, h = (np.broadcast_to(np.asarray(v, float), shape).ravel() for v in (face_mm, profile_mm))
+        pitch = self.parameters_at(s, np.zeros_like(s)).reshape(-1, 3)
+        flank = np.full(len(s), self.index)
+        q = q.reshape(-1, 3)
+        _, jac = _residual_and_jacobian(self.family, q, flank, *self._axial_plane(s, h))
+        _, jac0 = _residual_and_jacobian(
+            self.family, pitch, flank, *self._axial_plane(s, np.zeros_like(s))
+        )
+        same_sheet = np.sign(np.linalg.det(jac)) == np.sign(np.linalg.det(jac0))
+        return (self.family.within_tool(q, flank) & same_sheet).reshape(shape)
+
     def points_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` exact flank points at grid coordinates, in the FlankMap's frame."""
         return self.geometry_at(face_mm, profile_mm)["point"]

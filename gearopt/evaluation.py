@@ -44,6 +44,10 @@ class Evaluation:
         Named curves for the study's ``curves`` table, ``{curve: {side: (x, y)}}`` (x and y
         of one length, the curve's unit in its name: ``lte_50nm``, ``lte_fluctuation``); a
         study stores them as it stores the TCA's (rows of non-finite points left out).
+    warnings
+        What is legal but unusual in the result, each string naming its rule (edge contact,
+        a contact ratio below one, ...); a study stores them per trial (the user attribute
+        ``gearopt_warnings``).
     """
 
     evaluator: str
@@ -52,6 +56,7 @@ class Evaluation:
     conditions: Mapping[str, Any] = field(default_factory=dict)
     report: Mapping[str, Any] = field(default_factory=dict)
     curves: Mapping[str, Mapping[str, tuple[Any, Any]]] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         for key, value in self.metrics.items():
@@ -83,6 +88,16 @@ class BaseEvaluator(abc.ABC):
     @abc.abstractmethod
     def evaluate(self, design: Design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         """Evaluate ``design`` under ``conditions`` (evaluator-specific, documented by it)."""
+
+    def check_conditions(self, design: Design, conditions: Mapping[str, Any]) -> None:
+        """Raise a :class:`~gearopt.errors.GearoptError` naming a condition ``evaluate`` would
+        refuse (an unknown key, a bad value), without evaluating anything.
+
+        A study calls this once per evaluation when its file is read, so that a typo fails
+        before its database is created and before the first trial. The default accepts
+        anything (an evaluator that does not override it is checked by its first trial).
+        """
+        return None
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

@@ -3,7 +3,9 @@
 The point of a member's generated flank at an axial position (from the pitch-cone apex along the
 member axis, toward the heel) and a radius, solved on the envelope itself (the FlankMap's
 ``surface``), whether or not it lies inside the blank (``inside_blank`` says which): its
-``point_mm``, unit ``normal`` (out of the tooth material) and ``polar_angle_deg`` in the member
+``point_mm``, unit ``normal`` (out of the tooth material), ``generated`` (whether the tool cuts
+it: above the blade's tip and not past the envelope's fold; the envelope beyond is reported with
+a warning) and ``polar_angle_deg`` in the member
 frame of :mod:`gearopt.flank` (origin at the pitch apex, z along the axis toward the heel). The
 flank is tooth 0's of the model (a tooth of the pinion, the flank pair around a space of the
 gear as the model documents it); the polar angle's zero is the model's, tied to its machine
@@ -18,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from typing import Any
 
 from gearopt.design_files import load_design
@@ -25,7 +28,13 @@ from gearopt.errors import DesignError, NotAvailableError
 from gearopt.flank import MEMBERS, FlankGrid, check_member_and_flank
 from gearopt.plugins import get_machine_model
 
-__all__ = ["add_flank_parser", "flank_point"]
+__all__ = ["add_flank_parser", "flank_point", "print_warnings"]
+
+
+def print_warnings(found: list[str]) -> None:
+    """A command's warnings (``--json``'s ``warnings`` list), one line each on stderr."""
+    for text in found:
+        print(f"gearopt: warning: {text}", file=sys.stderr)
 
 
 def flank_point(
@@ -50,6 +59,7 @@ def flank_point(
     face, profile = (float(v) for v in fm.to_grid(axial_mm, radius_mm))
     geo = fm.surface.geometry_at(face, profile)
     point, normal = geo["point"], geo["normal"]
+    generated = bool(fm.surface.generated_at(face, profile))
     # (tapered depth: ``profile`` is the grid coordinate t, which maps the root and face cones
     # to -b_m and a_m at every cone distance; the height is reported)
     inside = (
@@ -69,6 +79,13 @@ def flank_point(
         "normal": [float(v) for v in normal],
         "polar_angle_deg": math.degrees(math.atan2(point[1], point[0])),
         "inside_blank": bool(inside),
+        "generated": generated,
+        "warnings": []
+        if generated
+        else [
+            "not generated: the point lies on the envelope beyond the blade's tip or past the "
+            "envelope's fold, flank the tool never cuts"
+        ],
     }
 
 
@@ -89,10 +106,12 @@ def _cmd_flank(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
+    print_warnings(out["warnings"])
     x, y, z = out["point_mm"]
     print(
         f"{out['member']} {out['flank']} flank of {out['design']!r} at axial {axial:g} mm, "
-        f"radius {radius:g} mm ({'inside' if out['inside_blank'] else 'outside'} the blank):\n"
+        f"radius {radius:g} mm ({'inside' if out['inside_blank'] else 'outside'} the blank, "
+        f"{'generated' if out['generated'] else 'not generated'}):\n"
         f"  point  ({x:.6f}, {y:.6f}, {z:.6f}) mm\n"
         f"  normal ({', '.join(f'{v:.6f}' for v in out['normal'])})\n"
         f"  polar angle {out['polar_angle_deg']:.6f} deg"

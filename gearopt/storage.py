@@ -1,11 +1,14 @@
 """A study's storage: the database URL (its default, its password kept out of every message),
-the checks before a study opens it (not SQLite in memory, no one else's tables), Optuna's RDB
+the checks before a study opens it (not SQLite in memory, a sound SQLite file, no one else's
+tables), Optuna's RDB
 storage made safe for coordinators starting together, and SQLite tuned for many commits."""
 
 from __future__ import annotations
 
 import functools
+import hashlib
 import re
+import sqlite3
 import time
 from pathlib import Path
 
@@ -18,6 +21,7 @@ from gearopt.results import SCHEMA_NAMES
 from gearopt.studyfile import StudySpec
 
 __all__ = [
+    "check_integrity",
     "check_own_tables",
     "check_storage_url",
     "default_storage_url",
@@ -25,6 +29,7 @@ __all__ = [
     "masked_url",
     "rdb_storage",
     "storage_error",
+    "storage_tag",
     "study_exists",
 ]
 
@@ -68,6 +73,38 @@ def check_storage_url(url: str) -> None:
             masked_url(url),
             "must be a database file or server: an in-memory SQLite database vanishes with "
             "the coordinator, and its results with it",
+        )
+
+
+def check_integrity(url: str) -> None:
+    """Refuse a SQLite file that is not a sound database (a damaged page, a file that is not
+    SQLite at all) before anything reads or writes it: SQLite's ``quick_check``, on a
+    read-only connection. An empty (0-byte) file is a sound empty database. Other dialects
+    keep their own consistency."""
+    try:
+        parsed = sa.engine.make_url(url)
+    except Exception:
+        return
+    if parsed.get_backend_name() != "sqlite" or not Path(parsed.database or "").is_file():
+        return
+    path = Path(parsed.database).resolve()
+    try:
+        con = sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, timeout=30.0)
+    except sqlite3.Error as exc:
+        raise storage_error(url, "cannot be opened", exc) from None
+    try:
+        rows = [" ".join(row[0].split()) for row in con.execute("PRAGMA quick_check")]
+    except sqlite3.DatabaseError as exc:
+        rows = [str(exc)]
+    finally:
+        con.close()
+    if rows != ["ok"]:
+        raise StudyError(
+            "storage",
+            masked_url(url),
+            f"is a damaged SQLite database, left untouched (SQLite's check: {rows[0]}"
+            f"{f'; {len(rows) - 1} more problems' if len(rows) > 1 else ''}): restore it from "
+            "a copy, or give another --storage",
         )
 
 
@@ -118,6 +155,20 @@ def default_storage_url(spec: StudySpec) -> str:
     return f"sqlite:///{spec.folder / (name + '.db')}"
 
 
+def storage_tag(spec: StudySpec, url: str | None) -> str:
+    """``""`` for the study's default storage, else ``_<tag>`` naming the other one: its
+    SQLite file's stem, or the first 8 hex digits of the SHA-256 of its password-masked URL."""
+    if url is None or url == default_storage_url(spec):
+        return ""
+    try:
+        parsed = sa.engine.make_url(url)
+    except Exception:
+        parsed = None
+    if parsed is not None and parsed.get_backend_name() == "sqlite" and parsed.database:
+        return "_" + re.sub(r"[^A-Za-z0-9_.-]", "_", Path(parsed.database).stem)
+    return "_" + hashlib.sha256(masked_url(url).encode()).hexdigest()[:8]
+
+
 def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
     """Whether the storage holds the study ``spec.name``, found without creating anything
     (no database file, schema or study where there was none)."""
@@ -126,6 +177,7 @@ def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
     parsed = sa.engine.make_url(url)
     if parsed.get_backend_name() == "sqlite" and not Path(parsed.database).is_file():
         return False
+    check_integrity(url)
     try:
         engine = sa.create_engine(url)
     except Exception as exc:  # an unknown dialect, a missing driver

@@ -39,25 +39,23 @@ import time
 import uuid
 import warnings
 from collections.abc import Callable, Mapping
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import joblib
 import optuna
 import sqlalchemy as sa
 import sqlalchemy.exc
 import tomli_w
-from joblib.externals.loky import get_reusable_executor
-from joblib.externals.loky.process_executor import TerminatedWorkerError
 from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from optuna.trial import TrialState
 from tqdm import tqdm
 
 from gearopt.errors import GearoptError, StudyError
+from gearopt.pools import JoblibBatches, Resubmit, broken_pool, worker_pool
 from gearopt.results import ResultsStore
 from gearopt.storage import (
+    check_integrity,
     check_own_tables,
     check_storage_url,
     default_storage_url,
@@ -65,6 +63,7 @@ from gearopt.storage import (
     masked_url,
     rdb_storage,
     storage_error,
+    storage_tag,
 )
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
@@ -89,6 +88,10 @@ MAX_ATTEMPTS = 3
 _COORD = "gearopt_coordinator"
 _ATTEMPT = "gearopt_attempt"
 _COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP BY state")
+_AHEAD = sa.text(
+    "SELECT COUNT(*) FROM trials WHERE study_id = :id AND number < :n"
+    " AND state IN ('COMPLETE', 'RUNNING')"
+)
 
 
 #: the prefix of the coordinators' temporary folders (a worker's pid marker per trial)
@@ -129,6 +132,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
 
     url = storage or default_storage_url(spec)
     check_storage_url(url)
+    check_integrity(url)
     if not spec.shared_storage:
         check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -283,69 +287,6 @@ def recover(study, results, spec: StudySpec, me: str) -> list[int]:
     return done
 
 
-def _executor(jobs: int, backend: str = "loky", scheduler: str | None = None):
-    if backend == "dask":
-        return _JoblibBatches(jobs, scheduler)
-
-    return get_reusable_executor(max_workers=jobs, timeout=60)
-
-
-class _Resubmit(Exception):
-    """A batch stopped before this task ran: submit it again."""
-
-
-class _JoblibBatches:
-    """Runs submitted calls in batches through joblib's ``dask`` backend on a Dask cluster
-    (``scheduler``: its address; default a local cluster of ``jobs`` workers) and resolves
-    their futures in order. A task that kills Dask workers ends as ``KilledWorker`` (Dask
-    retries it on other workers first); the calls after it in the batch are resubmitted."""
-
-    def __init__(self, jobs: int, scheduler: str | None) -> None:
-        try:
-            from dask.distributed import Client, LocalCluster
-        except ImportError:
-            raise StudyError("--backend", "dask", "needs dask: pip install -e '.[dask]'") from None
-        if scheduler:
-            self.client = Client(scheduler)
-        else:
-            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True)
-            self.client = Client(cluster)
-        self.jobs = jobs
-        self.queue: list[tuple[cf.Future, Callable, tuple]] = []
-
-    def submit(self, fn, *args) -> cf.Future:
-        future: cf.Future = cf.Future()
-        self.queue.append((future, fn, args))
-        return future
-
-    def flush(self) -> None:
-
-        queue, self.queue = self.queue, []
-        if not queue:
-            return
-        done = 0
-        try:
-            with joblib.parallel_config(backend="dask", n_jobs=self.jobs):
-                results = joblib.Parallel(return_as="generator")(
-                    joblib.delayed(fn)(*args) for _, fn, args in queue
-                )
-                for future, _ in zip((q[0] for q in queue), results, strict=False):
-                    future.set_result(_)
-                    done += 1
-        except Exception as exc:  # noqa: BLE001 - the failing task's own error
-            queue[done][0].set_exception(exc)
-            for future, _, _ in queue[done + 1 :]:
-                future.set_exception(_Resubmit())
-
-
-def _broken(exc: BaseException) -> bool:
-    """A worker process died under the trial (loky), or the trial killed Dask workers."""
-
-    return isinstance(exc, TerminatedWorkerError | BrokenProcessPool) or (
-        type(exc).__name__ == "KilledWorker"
-    )
-
-
 def run_study(
     spec: StudySpec,
     *,
@@ -419,21 +360,42 @@ def run_study(
         try:
             future = executor.submit(work, spec, trial.number, params, markers)
         except Exception as exc:  # the pool broke since the last look: sorted out below
-            if not _broken(exc):
+            if not broken_pool(exc):
                 raise
             future = cf.Future()
             future.set_exception(exc)
         pending[trial.number] = (trial, future, params, attempt)
 
-    def ask():
+    def ask() -> bool:
         with _held_stops():  # asked and in hand at once
             trial = study.ask()
             trial.set_user_attr(_COORD, me)
+            if ahead(trial.number) >= trials:  # another coordinator took the last place
+                surplus(trial)
+                return False
             attempt = int(trial.user_attrs.get(_ATTEMPT, 1))  # retries carry theirs
             params = {
                 d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search
             }
             submit(trial, params, attempt)
+            return True
+
+    def ahead(number: int) -> int:
+        """COMPLETE and RUNNING trials numbered before ``number`` (every coordinator's): the
+        trials that come first when several coordinators ask for the last places at once."""
+        with results.engine.connect() as con:
+            return con.execute(_AHEAD, {"id": study._study_id, "n": number}).scalar_one()
+
+    def surplus(trial) -> None:
+        """Give back a trial asked beyond the study's count: a given design (or a retry) to
+        the queue, uncharged; a sampled one failed before it is suggested anything."""
+        frozen = study._storage.get_trial(trial._trial_id)
+        reason = f"surplus: {trials} trials were complete or running before it"
+        if "fixed_params" in frozen.system_attrs:
+            _retry(study, results, spec, frozen, reason, charge=False)
+        else:
+            trial.set_user_attr("gearopt_error", reason)
+            study.tell(trial, state=TrialState.FAIL)
 
     def tell(number: int, outcome: TrialOutcome) -> None:
         with _held_stops():  # out of hand and told at once
@@ -454,6 +416,8 @@ def run_study(
                 _upload(spec, study, trial, outcome.figures)
             for label, value in outcome.constraints.items():
                 trial.set_constraint(label, value)
+            if outcome.warnings:
+                trial.set_user_attr("gearopt_warnings", outcome.warnings[:20])
             study.tell(trial, list(outcome.values))
             if bar is not None:
                 bar.update(1)
@@ -473,13 +437,13 @@ def run_study(
         that breaks the pool alone is guilty."""
         nonlocal executor, failed
         if backend == "loky":
-            executor = _executor(jobs)
+            executor = worker_pool(jobs)
         broken = {
             n: pending.pop(n)
             for n in list(pending)
             if pending[n][1].done()
             and pending[n][1].exception() is not None
-            and _broken(pending[n][1].exception())
+            and broken_pool(pending[n][1].exception())
         }
         started = [n for n in broken if Path(markers, f"{n}.pid").exists()]
         for number, (trial, future, params, attempt) in broken.items():
@@ -512,9 +476,10 @@ def run_study(
         if batch and pending and not held:
             return
         for _ in range(min(jobs - busy, max(free, 0))):
-            ask()
+            if not ask():
+                break
 
-    executor = _executor(jobs, backend, scheduler)
+    executor = worker_pool(jobs, backend, scheduler)
     busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
     try:
         while True:
@@ -564,11 +529,11 @@ def run_study(
                 exc = future.exception()
                 if exc is None:
                     tell(number, future.result())
-                elif isinstance(exc, _Resubmit):
+                elif isinstance(exc, Resubmit):
                     with _held_stops():
                         trial, _, params, attempt = pending.pop(number)
                         held.append((trial, params, attempt))
-                elif _broken(exc):
+                elif broken_pool(exc):
                     broken = True
                     if batch:
                         break
@@ -594,12 +559,12 @@ def run_study(
             if evaluated:
                 _best_postfix(bar, study, spec)
             bar.close()
-        if isinstance(executor, _JoblibBatches):
+        if isinstance(executor, JoblibBatches):
             executor.client.close()
         shutil.rmtree(markers, ignore_errors=True)
     complete, _ = counts()
     best = pick_best(study, spec)
-    path = save_design(spec, best) if (save_best and best is not None) else None
+    path = save_design(spec, best, url) if (save_best and best is not None) else None
     wall = time.perf_counter() - start
     return RunSummary(
         study=spec.name,
@@ -737,14 +702,19 @@ def pick_best(study, spec: StudySpec) -> optuna.trial.FrozenTrial | None:
     return done[min(front, key=lambda i: (distance(i), done[i].number))]
 
 
-def save_design(spec: StudySpec, trial: optuna.trial.FrozenTrial) -> str:
-    """Write the trial's design as ``<study name>_best.toml`` beside the study file."""
+def save_design(
+    spec: StudySpec, trial: optuna.trial.FrozenTrial, storage: str | None = None
+) -> str:
+    """Write the trial's design beside the study file as ``<study name>_best.toml`` (the
+    study's default storage) or ``<study name>_best_<storage>.toml`` (another storage: its
+    SQLite file's stem, or a digest of its URL), so that a run on another storage never
+    overwrites the default study's best design."""
 
     data = dict(spec.design_for(trial.params).source)
     meta = data.setdefault("meta", {})
     meta["name"] = f"{spec.name}_best"
     meta["source"] = f"study {spec.name}, trial {trial.number}"
-    path = spec.folder / f"{spec.name}_best.toml"
+    path = spec.folder / f"{spec.name}_best{storage_tag(spec, storage)}.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
     return str(path)
 

@@ -261,8 +261,11 @@ def _objective(entry: Any, kind: str, where: str, known: Mapping[str, Evaluation
         raise StudyError(f"{where}.name", name, f"is a {plugin.kind}, listed under {kind}s")
     try:
         reads = plugin.reads(**options)
-    except GearoptError as exc:
-        raise StudyError(where, entry, exc.rule or str(exc)) from None
+    except GearoptError as exc:  # named as the file names it, with the plugin's parameter
+        named = f"{where} ({exc.parameter})"
+        if exc.value is None:
+            raise StudyError(named, rule=exc.rule or str(exc)) from None
+        raise StudyError(named, exc.value, exc.rule or str(exc)) from None
     for label, evaluator in reads.items():
         if label not in known:
             raise StudyError(where, label, f"is not in [evaluations]: {sorted(known)}")
@@ -280,19 +283,25 @@ def _objective(entry: Any, kind: str, where: str, known: Mapping[str, Evaluation
     )
 
 
-def _evaluations(table: Mapping[str, Any]) -> tuple[EvaluationSpec, ...]:
+def _evaluations(table: Mapping[str, Any], design: Design) -> tuple[EvaluationSpec, ...]:
     installed = evaluators()
+    if not isinstance(table, Mapping):
+        raise StudyError("evaluations", table, "must be tables [evaluations.<label>]")
     specs = []
     for label, entry in table.items():
         where = f"evaluations.{label}"
         if not isinstance(entry, Mapping) or not set(entry) <= {"evaluator", "conditions"}:
             raise StudyError(where, entry, "must be a table with evaluator and conditions")
         name = entry.get("evaluator", label)
-        if name not in installed:
+        if not isinstance(name, str) or name not in installed:
             raise StudyError(f"{where}.evaluator", name, f"unknown; installed: {sorted(installed)}")
         conditions = entry.get("conditions", {})
         if not isinstance(conditions, Mapping):
             raise StudyError(f"{where}.conditions", conditions, "must be a table")
+        try:  # before the database is touched: a typo must not fail every trial
+            installed[name].check_conditions(design, conditions)
+        except GearoptError as exc:
+            raise StudyError(f"{where}.{exc.parameter}", exc.value, exc.rule) from None
         specs.append(EvaluationSpec(label=label, evaluator=name, conditions=dict(conditions)))
     return tuple(specs)
 
@@ -326,6 +335,14 @@ def _given(data: Mapping[str, Any]) -> list[dict]:
         for combo in itertools.product(*(grid[k] for k in keys)):
             given.append(dict(zip(keys, combo, strict=True)))
     return given
+
+
+def _entries(data: Mapping[str, Any], table: str) -> list:
+    """The ``[[objectives]]`` or ``[[constraints]]`` entries (a list of tables)."""
+    entries = data.get(table, [])
+    if not isinstance(entries, list):
+        raise StudyError(table, entries, f"must be tables [[{table}]]")
+    return entries
 
 
 def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None) -> StudySpec:
@@ -364,17 +381,17 @@ def parse_study_spec(data: Mapping[str, Any], *, path: str | Path | None = None)
         raise StudyError("search", search, "must be a table of design keys")
     dims = tuple(_dimension(key, value, design) for key, value in search.items())
     _check_search_keys(design, dims)
-    evals = _evaluations(data.get("evaluations", {}))
+    evals = _evaluations(data.get("evaluations", {}), design)
     if not evals:
         raise StudyError("evaluations", rule="name at least one evaluation")
     known = {e.label: e for e in evals}
     objs = tuple(
         _objective(e, "objective", f"objectives[{i}]", known)
-        for i, e in enumerate(data.get("objectives", []))
+        for i, e in enumerate(_entries(data, "objectives"))
     )
     cons = tuple(
         _objective(e, "constraint", f"constraints[{i}]", known)
-        for i, e in enumerate(data.get("constraints", []))
+        for i, e in enumerate(_entries(data, "constraints"))
     )
     seed = study.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):

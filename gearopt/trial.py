@@ -21,6 +21,7 @@ import numpy as np
 
 from gearopt.analysis import AnalysisOptions
 from gearopt.errors import GearoptError
+from gearopt.plausibility import caught
 from gearopt.plots import plot_evaluations
 from gearopt.plugins import evaluators, get_machine_model, objectives
 from gearopt.studyfile import StudySpec
@@ -32,12 +33,13 @@ __all__ = ["TrialOutcome", "evaluate_trial", "pattern_outline"]
 class TrialOutcome:
     """What a worker returns for one trial.
 
-    ``values`` are the objectives in the study's order (``None`` when the trial failed),
-    ``constraints`` the constraint values by label (feasible when <= 0). The row lists feed
-    the dashboard tables: ``metrics`` (evaluation, metric, value), ``curves`` (evaluation,
-    curve, side, index, x, y), ``patterns`` (evaluation, side, index, face_mm, profile_mm),
-    ``settings`` (member, key, value); ``figures`` the PNG files (name, bytes) a study with
-    ``artifacts = true`` stores as Optuna artifacts. ``error`` says why a trial failed.
+        ``values`` are the objectives in the study's order (``None`` when the trial failed),
+        ``constraints`` the constraint values by label (feasible when <= 0). The row lists feed
+        the dashboard tables: ``metrics`` (evaluation, metric, value), ``curves`` (evaluation,
+        curve, side, index, x, y), ``patterns`` (evaluation, side, index, face_mm, profile_mm),
+        ``settings`` (member, key, value); ``figures`` the PNG files (name, bytes) a study with
+        ``artifacts = true`` stores as Optuna artifacts; ``warnings`` the evaluations' (each
+    labelled) and the numerical ones raised while evaluating. ``error`` says why it failed.
     """
 
     number: int
@@ -48,6 +50,7 @@ class TrialOutcome:
     patterns: list[tuple[str, str, int, float, float]] = field(default_factory=list)
     settings: list[tuple[str, str, float]] = field(default_factory=list)
     figures: list[tuple[str, bytes]] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
     error: str | None = None
     seconds: float = 0.0
     pid: int = 0
@@ -158,9 +161,12 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
     try:
         design = spec.design_for(params)
         installed = evaluators()
-        evaluations = {
-            e.label: installed[e.evaluator].evaluate(design, e.conditions) for e in spec.evaluations
-        }
+        with caught() as numerical:
+            evaluations = {
+                e.label: installed[e.evaluator].evaluate(design, e.conditions)
+                for e in spec.evaluations
+            }
+        found = [f"{label}: {w}" for label, e in evaluations.items() for w in e.warnings]
         plugins = objectives()
         values = tuple(
             float(plugins[o.name].value(evaluations, **o.options)) for o in spec.objectives
@@ -186,6 +192,7 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
             patterns=patterns,
             settings=_settings(design),
             figures=_figures(spec, design, evaluations) if spec.artifacts else [],
+            warnings=found + numerical,
             seconds=time.perf_counter() - start,
             pid=pid,
         )

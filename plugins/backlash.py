@@ -19,6 +19,7 @@ from typing import Any
 from gearopt import hookimpl
 from gearopt.analysis import AnalysisOptions, meshed_pair, pair_backlash
 from gearopt.evaluation import BaseEvaluator, Evaluation
+from gearopt.plausibility import contact_findings
 
 
 class BacklashEvaluator(BaseEvaluator):
@@ -26,6 +27,10 @@ class BacklashEvaluator(BaseEvaluator):
 
     name = "backlash"
     description = "circumferential backlash along the mesh, interference flagged"
+
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
+        AnalysisOptions.from_conditions(conditions, design=design)
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
@@ -42,6 +47,7 @@ class BacklashEvaluator(BaseEvaluator):
             arrays={"phi1_deg": result.phi1_deg, "circumferential_um": result.circumferential_um},
             conditions=options.as_dict(),
             report={"backlash": report},
+            warnings=tuple(contact_findings({"backlash": report}, strict=False)),
         )
 
 

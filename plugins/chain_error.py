@@ -69,28 +69,39 @@ _FIXED_KEYS = (
 )
 
 
+def _machine_keys(conditions: dict) -> tuple[Any, list[str], str]:
+    """The conditions' machine, its change-gear quadrants and the member, every key checked."""
+    name = conditions.get("machine", DEFAULT_MACHINE)
+    if not isinstance(name, str):
+        raise DesignError("conditions.machine", name, "must be a machine name or file path")
+    machine = load_machine(name)
+    quadrants = [c.name for c in machine.chains if c.change_gear_slots is not None]
+    allowed = (
+        *_FIXED_KEYS,
+        *(f"{c}_gears" for c in quadrants),
+        *(f"{c.name}_input_angle_deg" for c in machine.chains),
+    )
+    check_keys(conditions, allowed, "conditions")
+    member = conditions.get("member", "pinion")
+    if member not in MEMBERS:
+        raise DesignError("conditions.member", member, f"must be one of {list(MEMBERS)}")
+    return machine, quadrants, member
+
+
 class ChainErrorEvaluator(BaseEvaluator):
     """Ratio, angle and pitch errors of a machine's kinematic chains (seed 000)."""
 
     name = "chain-error"
     description = "kinematic-chain (indexing, envelope) ratio and pitch errors, seed 000"
 
+    def check_conditions(self, design: Design, conditions: Mapping[str, Any]) -> None:
+        """The machine, the keys it knows and the member (the values are checked by a
+        trial)."""
+        _machine_keys(dict(conditions))
+
     def evaluate(self, design: Design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         conditions = dict(conditions or {})
-        name = conditions.get("machine", DEFAULT_MACHINE)
-        if not isinstance(name, str):
-            raise DesignError("conditions.machine", name, "must be a machine name or file path")
-        machine = load_machine(name)
-        quadrants = [c.name for c in machine.chains if c.change_gear_slots is not None]
-        allowed = (
-            *_FIXED_KEYS,
-            *(f"{c}_gears" for c in quadrants),
-            *(f"{c.name}_input_angle_deg" for c in machine.chains),
-        )
-        check_keys(conditions, allowed, "conditions")
-        member = conditions.get("member", "pinion")
-        if member not in MEMBERS:
-            raise DesignError("conditions.member", member, f"must be one of {list(MEMBERS)}")
+        machine, quadrants, member = _machine_keys(conditions)
         pair = design.pair
         default_teeth = pair.pinion_teeth if member == "pinion" else pair.gear_teeth
         work = WorkGear(

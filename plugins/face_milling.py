@@ -176,6 +176,29 @@ from gearopt_plugins.face_milling_synthesis import SIDES
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
 
 ROLL_KEYS = ("roll_c2", "roll_c3", "roll_c4", "roll_c5", "roll_c6")
+#: the largest ratio of roll c1 accepted (a crown gear's is at most 1/cos(15 deg) = 1.035)
+MAX_RATIO_OF_ROLL = 2.0
+#: the work's roll (rad from centre roll) over which the modified roll must keep rolling forward
+ROLL_RANGE_RAD = 0.5
+
+
+def _check_roll_rate(c1: float, roll: dict, where: str) -> None:
+    """The roll's rate d phi_c / d phi_p = c1 + 2 c2 phi + ... + 6 c6 phi^5 positive over
+    |phi_p| <= :data:`ROLL_RANGE_RAD`: a cradle that stops or turns back there generates no
+    flank (``roll_c2 = 1e18`` was accepted)."""
+    phi = np.linspace(-ROLL_RANGE_RAD, ROLL_RANGE_RAD, 101)
+    rate = c1 + sum((k + 2) * roll[key] * phi ** (k + 1) for k, key in enumerate(ROLL_KEYS))
+    if not np.all(np.isfinite(rate)) or rate.min() <= 0.0:
+        worst = max(ROLL_KEYS, key=lambda key: abs(roll[key]))
+        raise DesignError(
+            f"{where}.{worst}",
+            roll[worst],
+            f"the modified roll must keep the cradle rolling forward over the work's roll "
+            f"|phi_p| <= {ROLL_RANGE_RAD:g} rad: its rate c1 + 2 c2 phi + ... + 6 c6 phi^5 "
+            f"falls to {float(np.nanmin(rate)):.3g} (c1 = {c1:g}); reduce the roll terms",
+        )
+
+
 FLANK_KEYS = (
     "cutter_point_radius_mm",
     "blade_pressure_angle_deg",
@@ -371,6 +394,16 @@ def _parse_flank(
             "must be > 0: c1 = cradle rotation / work rotation, both in the senses of the "
             "rolling generation (module docstring); a reversed roll generates no flank",
         )
+    if c1 > MAX_RATIO_OF_ROLL:
+        raise DesignError(
+            f"{where}.ratio_of_roll",
+            c1,
+            f"must be at most {MAX_RATIO_OF_ROLL:g}: a generating crown gear turns the cradle "
+            "sin(gamma) / cos(delta) <= 1.04 times the work (delta <= 15 deg); beyond, the roll "
+            "generates no flank of this blank",
+        )
+    roll = {k: read_number(merged, k, where, 0.0) for k in ROLL_KEYS}
+    _check_roll_rate(c1, roll, where)
     values = dict(
         cutter_point_radius_mm=rp,
         blade_pressure_angle_deg=alpha,
@@ -387,7 +420,7 @@ def _parse_flank(
         sliding_base_mm=read_number(merged, "sliding_base_mm", where),
         blank_offset_mm=read_number(merged, "blank_offset_mm", where),
         ratio_of_roll=c1,
-        **{k: read_number(merged, k, where, 0.0) for k in ROLL_KEYS},
+        **roll,
         work_phase_deg=read_number(merged, "work_phase_deg", where, 0.0, gt=-360.0, lt=360.0),
     )
     spec = FaceMillingFlank(**values)

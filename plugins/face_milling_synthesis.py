@@ -221,15 +221,25 @@ def read_synthesis(table: Mapping[str, Any], blank: Blank) -> tuple[dict, dict]:
 
     centre = ToothFrame.from_blank(blank).centre_mm
     common = {k: v for k, v in table.items() if k in TARGET_KEYS}
+    tables = {side: read_table(table, side, "synthesis") for side in SIDES}
+    missing = [
+        f"{key} ({side})"
+        for side in SIDES
+        for key in ("path_angle_deg", "ellipse_major_axis_mm", "te_level_arcsec")
+        if key not in {**common, **tables[side]}
+    ]
+    if missing:  # all of them at once, not one error at a time
+        raise DesignError(
+            "synthesis",
+            rule=f"local synthesis needs {', '.join(missing)}: give each in [synthesis] for "
+            "both sides or in [synthesis.drive] / [synthesis.coast]",
+        )
     out = {}
     for side in SIDES:
-        own = read_table(table, side, "synthesis")
+        own = tables[side]
         check_keys(own, TARGET_KEYS, f"synthesis.{side}")
         merged = {**common, **own}
         where = f"synthesis.{side}" if own else "synthesis"
-        for key in ("path_angle_deg", "ellipse_major_axis_mm", "te_level_arcsec"):
-            if key not in merged:
-                raise DesignError(f"{where}.{key}", rule="required for local synthesis")
         face = read_number(merged, "mean_point_face_mm", where, centre[0])
         if not 0.0 < face < blank.face_width_mm:
             raise DesignError(
@@ -598,10 +608,12 @@ def _mean_point(pair, gear_spec, gear_flank, targets: SideTargets, placement) ->
     )
     if change.size == 0:
         raise SettingsError(
-            "synthesis.mean_point_face_mm",
-            (targets.mean_point_face_mm, targets.mean_point_profile_mm),
+            f"synthesis.{targets.side}: the mean contact point M",
+            _m_text(targets),
             f"no point of the gear's {gear_flank} flank meets M's circle about the pinion axis "
-            "in contact: M is off the gear flank",
+            "in contact: M is off the gear flank; move it with mean_point_face_mm and "
+            "mean_point_profile_mm (pattern coordinates from the toe and the root; default the "
+            "flank centre)",
         )
     k = change[np.argmin(np.abs(grid[change]))]
     omega = brentq(lambda w: float(state(w)[0][0]), grid[k], grid[k + 1], xtol=1e-15)
@@ -950,6 +962,13 @@ def _tip_on_root(spec, flank: str, blank: Blank):
     )
 
 
+def _m_text(targets: SideTargets) -> str:
+    """M as the user gives it: pattern coordinates with units."""
+    return (
+        f"face {targets.mean_point_face_mm:.3f} mm, profile {targets.mean_point_profile_mm:.3f} mm"
+    )
+
+
 def _line_difference_deg(a: float, b: float) -> float:
     """a - b for directions of lines (mod 180 deg), in [-90, 90)."""
     return (a - b + 90.0) % 180.0 - 90.0
@@ -986,13 +1005,18 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
             f"{where}.{key}",
             value,
             f"the pinion cannot realise it with the chosen inputs (the closest solution reaches "
-            f"{reached}, tangency residual {report.first_order_residual:.1e}): ask for less or "
-            f"change the chosen pinion cutter (machine.pinion)",
+            f"{reached}): ask for less, or change the chosen pinion cutter "
+            "(cutter_point_radius_mm, blade_pressure_angle_deg in [machine.pinion])",
         )
     if report.first_order_residual > TOLERANCE["first_order"]:
         raise SettingsError(
-            f"{where}.mean_point_face_mm",
-            (targets.mean_point_face_mm, targets.mean_point_profile_mm),
-            f"the pinion cannot be made tangent to the gear at M (residual "
-            f"{report.first_order_residual:.2e})",
+            f"{where}: the mean contact point M",
+            _m_text(targets),
+            "the pinion cannot be made tangent to the gear there (the meshing equation and the "
+            f"unit normals' match close to {report.first_order_residual:.1e} only, "
+            f"{TOLERANCE['first_order']:g} needed) while meeting ellipse_major_axis_mm = "
+            f"{targets.ellipse_major_axis_mm:g} mm, path_angle_deg = "
+            f"{targets.path_angle_deg:g} deg and te_level_arcsec = {targets.te_level_arcsec:g}: "
+            "ask a shorter ellipse or a lower TE level, or move M (mean_point_face_mm, "
+            "mean_point_profile_mm; default the flank centre)",
         )

@@ -62,6 +62,19 @@ def load_metrics(results, prefix: str = "") -> dict[str, float]:
     }
 
 
+def _load_and_options(design, conditions: Mapping[str, Any] | None):
+    """The load (the design's ``[load]``, the conditions' load keys over it) and the
+    contact analyses' options of an ``ltca`` evaluation."""
+    given = dict(conditions or {})
+    load_keys = {k: given.pop(k) for k in LOAD_KEYS if k in given}
+    load = LoadOptions.from_table({**design.load, **load_keys})
+    if not load.torque_nm:
+        raise GearoptError(
+            "load.torque_nm", rule="the ltca evaluator needs at least one torque (N m)"
+        )
+    return load, AnalysisOptions.from_conditions(given, design=design)
+
+
 class LtcaEvaluator(BaseEvaluator):
     """Loaded TCA of both sides over the load's torques."""
 
@@ -71,15 +84,12 @@ class LtcaEvaluator(BaseEvaluator):
         "contact pressure, mesh stiffness, edge loading"
     )
 
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The load's keys and the contact analyses' options."""
+        _load_and_options(design, conditions)
+
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
-        given = dict(conditions or {})
-        load_keys = {k: given.pop(k) for k in LOAD_KEYS if k in given}
-        load = LoadOptions.from_table({**design.load, **load_keys})
-        if not load.torque_nm:
-            raise GearoptError(
-                "load.torque_nm", rule="the ltca evaluator needs at least one torque (N m)"
-            )
-        options = AnalysisOptions.from_conditions(given, design=design)
+        load, options = _load_and_options(design, conditions)
         pair = meshed_pair(design, options)
         sides = contact_sides(pair, options)
         loaded = pair_loaded_contact(design, pair, sides, load)

@@ -163,8 +163,14 @@ class TeLevel(_ContactObjective):
 
     def reads(self, **options):
         level = options.get("level_arcsec")
-        if isinstance(level, bool) or not isinstance(level, int | float) or level < 0.0:
-            raise StudyError(f"objective {self.name}.level_arcsec", level, "needs a level >= 0")
+        if (
+            isinstance(level, bool)
+            or not isinstance(level, int | float)
+            or not 0.0 <= level < math.inf
+        ):
+            raise StudyError(
+                f"objective {self.name}.level_arcsec", level, "needs a finite level >= 0"
+            )
         return super().reads(**options)
 
     def value(self, evaluations, **options):
@@ -248,8 +254,11 @@ class BacklashWindow(BaseObjective):
     def reads(self, **options):
         _known_options(self, options)
         for key in ("min_um", "max_um"):
-            if not isinstance(options.get(key), int | float):
-                raise StudyError(f"constraint {self.name}.{key}", options.get(key), "is required")
+            value = options.get(key)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise StudyError(f"constraint {self.name}.{key}", value, "is required (um)")
+            if not math.isfinite(value):
+                raise StudyError(f"constraint {self.name}.{key}", value, "must be finite (um)")
         if not options["min_um"] < options["max_um"]:
             raise StudyError(
                 f"constraint {self.name}",

@@ -46,6 +46,7 @@ from gearopt.analysis import (
 from gearopt.design import Misalignment
 from gearopt.evaluation import BaseEvaluator, Evaluation
 from gearopt.mesh import ToothContact
+from gearopt.plausibility import contact_findings
 from gearopt.te_target import compare
 
 
@@ -67,6 +68,10 @@ class TcaEvaluator(BaseEvaluator):
 
     name = "tca"
     description = "unloaded TCA of drive and coast sides: TE, contact path, pattern"
+
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
+        AnalysisOptions.from_conditions(conditions, design=design)
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
@@ -100,6 +105,7 @@ class TcaEvaluator(BaseEvaluator):
             arrays=arrays,
             conditions=options.as_dict(),
             report=report,
+            warnings=tuple(contact_findings(report, strict=False)),
         )
 
 
@@ -108,6 +114,10 @@ class EaseOffEvaluator(BaseEvaluator):
 
     name = "ease-off"
     description = "pinion ease-off of drive and coast flanks against the conjugate surfaces"
+
+    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
+        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
+        AnalysisOptions.from_conditions(conditions, design=design)
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)

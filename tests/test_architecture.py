@@ -74,6 +74,7 @@ LAYERS = (
             "gearopt.hookspecs",
             "gearopt.machine",
             "gearopt.evaluation",
+            "gearopt.plausibility",
             "gearopt.plugins",
             "gearopt.design_files",
             "gearopt.testing",
@@ -82,7 +83,10 @@ LAYERS = (
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
     ("analysis", ("gearopt.analysis", "gearopt.plots", "gearopt.warmup")),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
-    ("study", ("gearopt.results", "gearopt.storage", "gearopt.study", "gearopt.export")),
+    (
+        "study",
+        ("gearopt.results", "gearopt.storage", "gearopt.pools", "gearopt.study", "gearopt.export"),
+    ),
     (
         "cli",
         (

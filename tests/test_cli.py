@@ -210,3 +210,21 @@ def test_a_reader_that_goes_away_gets_no_traceback():
     proc.stderr.close()
     assert proc.wait() == 1
     assert "Traceback" not in err and "BrokenPipeError" not in err
+
+
+def test_bench_thickness_solve_times_the_solve_not_the_memory(monkeypatch):
+    # issue 19 item 5: thickness_solve_ms read 0.018 ms, the remembered settings answering;
+    # every timed call (and the warm-up) must run the solve of seed 001 eqs 39-48
+    from gearopt.bench import bench_thickness_solve
+    from gearopt_plugins import cyclo_palloid
+
+    solve = cyclo_palloid.solve_additional_slope_angle
+    calls = []
+
+    def counted(design, member, settings):
+        calls.append(design.pair.mean_normal_chordal_thickness_mm[0])
+        return solve(design, member, settings)
+
+    monkeypatch.setattr(cyclo_palloid, "solve_additional_slope_angle", counted)
+    bench_thickness_solve()
+    assert len(calls) == 4 and len(set(calls)) == 4

@@ -4,6 +4,7 @@ the modified roll, the spiral angle measured on the generated gear, bad settings
 from __future__ import annotations
 
 import math
+import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -12,6 +13,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
+from gearopt.design_files import parse_design
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank import cone_coordinates
 from gearopt.testing import FlankContract
@@ -294,9 +296,9 @@ def test_missing_key_is_a_design_error():
     ],
 )
 def test_settings_without_an_envelope_raise_never_nan(conjugate, overrides):
-    design = gearopt.with_overrides(conjugate, overrides)
     member = next(iter(overrides)).split(".")[1]
-    try:
+    try:  # refused when read (a ratio of roll of 40, issue 27) or when generated
+        design = gearopt.with_overrides(conjugate, overrides)
         maps = FaceMilling().generate_flanks(design, member=member)
     except GearoptError:
         return
@@ -525,14 +527,22 @@ def test_tapered_face_keeps_the_conjugate_pair_conjugate(conjugate):
 
 
 def test_tapered_design_analyses_and_plots(tapered, tmp_path, capsys):
-    """The tapered design file through the contact engine, the CLI's analysis and its plots,
-    and the flank summary: finite metrics, the figures written."""
+    """The tapered design file through the contact engine, the analyses and their plots, and
+    the flank summary: finite metrics, the figures written. Its teeth interfere (a test case
+    of the tapered domain, not a tuned design): the CLI refuses it as no gear mesh (issue 27),
+    in one line; the evaluators keep it as a warning."""
     from gearopt.cli import main
+    from gearopt.plots import plot_analysis
 
-    metrics = gearopt.evaluators()["tca"].evaluate(tapered, None).metrics
-    assert all(math.isfinite(v) for v in metrics.values())
-    assert main(["analyze", str(TAPERED), "--json", "--plot", str(tmp_path)]) == 0
-    capsys.readouterr()
+    installed = gearopt.evaluators()
+    results = {name: installed[name].evaluate(tapered, None) for name in ("tca", "backlash")}
+    results["ease-off"] = installed["ease-off"].evaluate(tapered, None)
+    assert all(math.isfinite(v) for v in results["tca"].metrics.values())
+    assert any("interference" in w for w in results["backlash"].warnings)
+    assert main(["analyze", str(TAPERED), "--json"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "interference deeper than 5 um" in err[0]
+    plot_analysis(tapered, results, tmp_path)
     for name in ("te", "pattern", "backlash", "ease_off"):
         assert (tmp_path / f"{name}.png").stat().st_size > 0
     summary = gearopt.generate_flanks(tapered, "pinion")["convex"].summary()
@@ -757,3 +767,21 @@ def test_family_with_tip_radius_is_complex_step_safe(tip_radius_mm):
     flank = rng.integers(0, 2, 40)
     # (atol: the differences' rounding on L, R of about 100 mm)
     _assert_complex_step_safe(family, q, flank, atol=1e-7)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "named"),
+    [
+        ("ratio_of_roll", 1e308, "ratio_of_roll"),
+        ("ratio_of_roll", 2.5, "ratio_of_roll"),
+        ("roll_c2", 1e18, "roll_c2"),
+        ("roll_c4", -12.0, "roll_c4"),
+    ],
+)
+def test_a_roll_that_generates_no_flank_is_refused(key, value, named):
+    # issue 27: face-milling settings accepted ratio_of_roll = 1e308 and roll_c2 = 1e18
+    data = tomllib.loads((STUDIES / "face_milling_conjugate.toml").read_text())
+    data["machine"]["pinion"][key] = value
+    with pytest.raises(DesignError) as info:
+        parse_design(data)
+    assert info.value.parameter.endswith(named)

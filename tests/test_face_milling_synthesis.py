@@ -299,6 +299,30 @@ def test_a_path_the_pinion_cannot_realise_is_named():
         parse_design(_with(path_angle_deg=0.0))
 
 
+def test_missing_synthesis_keys_are_named_together():
+    # issue 19 item 5: the required [synthesis] keys came one error at a time
+    data = tomllib.loads(SEED002.read_text())
+    del data["synthesis"]["path_angle_deg"], data["synthesis"]["ellipse_major_axis_mm"]
+    del data["synthesis"]["coast"]
+    with pytest.raises(DesignError) as info:
+        parse_design(data)
+    for key in ("path_angle_deg", "ellipse_major_axis_mm"):
+        for side in ("drive", "coast"):
+            assert f"{key} ({side})" in str(info.value)
+
+
+def test_a_mean_point_off_the_gear_flank_is_named_as_the_user_gave_it():
+    # issue 19 item 5: the error named synthesis.mean_point_face_mm (not the side's table the
+    # user wrote it in) with a bare tuple; now the side, M with units, and what to change
+    data = tomllib.loads(SEED002.read_text())
+    data["synthesis"]["coast"].update(mean_point_face_mm=1.0, mean_point_profile_mm=0.3)
+    with pytest.raises(SettingsError) as info:
+        parse_design(data)
+    text = str(info.value)
+    assert text.startswith("synthesis.coast: the mean contact point M = ")
+    assert "face 1.000 mm, profile 0.300 mm" in text and "move it" in text
+
+
 def test_synthesis_refuses_models_without_one():
     data = tomllib.loads((STUDIES / "seed001_table3.toml").read_text())
     data["synthesis"] = {"path_angle_deg": 80.0}
