@@ -89,6 +89,16 @@ MODULE_TOLERANCE = 1e-3  # module and cone distance, when both are given, agree 
 #: the largest addendum or dedendum angle (face - pitch, pitch - root) of a tapered-depth blank
 MAX_TAPER_ANGLE_DEG = 15.0
 
+#: the ``[pair]`` keys a ``[blank]`` table's standard derives (a design gives one or the other)
+STANDARD_BLANK_KEYS = (
+    "outer_addendum_mm",
+    "outer_dedendum_mm",
+    "face_angle_deg",
+    "root_angle_deg",
+    "mean_normal_chordal_addendum_mm",
+    "mean_normal_chordal_thickness_mm",
+)
+
 _PAIR_KEYS = (
     "pinion_teeth",
     "gear_teeth",
@@ -101,12 +111,7 @@ _PAIR_KEYS = (
     "face_width_mm",
     "pressure_angle_deg",
     "pinion_hand",
-    "outer_addendum_mm",
-    "outer_dedendum_mm",
-    "face_angle_deg",
-    "root_angle_deg",
-    "mean_normal_chordal_addendum_mm",
-    "mean_normal_chordal_thickness_mm",
+    *STANDARD_BLANK_KEYS,
 )
 
 
@@ -441,17 +446,6 @@ def pair_from_table(table: Mapping[str, Any]) -> PairData:
         if key not in table:
             raise DesignError(f"pair.{key}", rule="required key is missing")
     return PairData(**table)
-
-
-#: the ``[pair]`` keys a ``[blank]`` table's standard derives (a design gives one or the other)
-STANDARD_BLANK_KEYS = (
-    "outer_addendum_mm",
-    "outer_dedendum_mm",
-    "face_angle_deg",
-    "root_angle_deg",
-    "mean_normal_chordal_addendum_mm",
-    "mean_normal_chordal_thickness_mm",
-)
 
 
 def pair_from_tables(
