@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 
 import gearopt
 from gearopt import kinematics as k
-from gearopt_plugins.cyclo_palloid_family import BladeSystem, family, pitch_line_start
+from gearopt_plugins.face_hobbing.family import BladeSystem, family, pitch_line_start
 
 from .conftest import STUDIES
 
@@ -119,7 +119,7 @@ def test_pitch_line_start_lies_on_the_pitch_cone_and_meshes(member):
 
 @pytest.mark.parametrize("member", ["pinion", "gear"])
 def test_analytic_jacobian_matches_complex_step(member):
-    from gearopt_plugins.cyclo_palloid_family import components, meshing_jacobian
+    from gearopt_plugins.face_hobbing.family import components, meshing_jacobian
 
     rng = np.random.default_rng(5)
     u, theta, psi = rng.uniform(-4, 3, 30), rng.uniform(-0.4, 0.4, 30), rng.uniform(-0.5, 0.5, 30)

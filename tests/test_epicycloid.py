@@ -264,8 +264,8 @@ def test_arc_blade_crowns_the_profile(case_a):
 
 
 def test_arc_edge_jacobian_matches_complex_step(case_a):
-    from gearopt_plugins.cyclo_palloid_family import components, meshing_jacobian
     from gearopt_plugins.epicycloid import _flank_system
+    from gearopt_plugins.face_hobbing.family import components, meshing_jacobian
 
     crowned = gearopt.with_overrides(
         case_a,
@@ -296,7 +296,7 @@ def test_arc_edge_jacobian_matches_complex_step(case_a):
 
 
 def test_arc_edge_is_a_circle_of_radius_rb():
-    from gearopt_plugins.cyclo_palloid_family import BladeSystem, edge
+    from gearopt_plugins.face_hobbing.family import BladeSystem, edge
 
     b = BladeSystem(
         side=-1,

@@ -18,7 +18,7 @@ from gearopt.errors import DesignError, GearoptError
 from gearopt.flank import cone_coordinates
 from gearopt.testing import FlankContract
 from gearopt_plugins.face_milling import FaceMilling
-from gearopt_plugins.face_milling_family import CutterFlank, FaceMillingFamily, design_family
+from gearopt_plugins.face_milling.family import CutterFlank, FaceMillingFamily, design_family
 
 from .conftest import STUDIES
 
@@ -336,7 +336,7 @@ def test_family_is_complex_step_safe(conjugate):
 def test_profile_arc_is_tangent_at_the_pitch_line_point_and_crowns_both_ways():
     # the same meaning as the epicycloid model's blade_profile_radius_mm: the arc touches the
     # straight blade at its pitch-line point and leaves it toward the material on both sides
-    from gearopt_plugins.face_milling_family import CutterFlank, edge
+    from gearopt_plugins.face_milling.family import CutterFlank, edge
 
     straight = CutterFlank(
         side=1.0,
@@ -631,7 +631,7 @@ def test_tip_fillet_is_a_circle_of_the_tip_radius_on_the_tool(side, curvature_pe
     the material); the fillet touches the tip plane at u = 0 (height 0, horizontal tangent)
     and never crosses it; at its end it joins the edge with the edge's point and tangent, and
     beyond it the edge is the sharp blade's edge (the same line or profile arc)."""
-    from gearopt_plugins.face_milling_family import _fillet, edge
+    from gearopt_plugins.face_milling.family import _fillet, edge
 
     rho = 1.3
     sharp, rounded = _cutter(side, curvature_per_mm, 0.0), _cutter(side, curvature_per_mm, rho)
@@ -685,7 +685,7 @@ def rounded_pairs():
 
 
 def _fillet_length(design, member, flank):
-    from gearopt_plugins.face_milling_family import _fillet
+    from gearopt_plugins.face_milling.family import _fillet
 
     return _fillet(design_family(design, member, (flank,)).cutters[0])[0]
 

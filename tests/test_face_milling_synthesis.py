@@ -25,14 +25,14 @@ from gearopt.design_files import parse_design
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
 from gearopt.flank import FlankGrid
 from gearopt.mesh import mesh_pair
-from gearopt_plugins import face_milling_synthesis as fs
 from gearopt_plugins.face_milling import (
     FaceMilling,
     FaceMillingMachine,
     FaceMillingMember,
     _parse_flank,
 )
-from gearopt_plugins.face_milling_family import design_family
+from gearopt_plugins.face_milling import synthesis as fs
+from gearopt_plugins.face_milling.family import design_family
 
 from .conftest import STUDIES
 

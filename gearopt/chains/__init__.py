@@ -5,9 +5,9 @@ A machine's indexing and envelope (generating) chains are gear trains: shafts jo
 ending at the work spindle, with change gears in quadrant slots (``a b c d``: ratio
 ``a c / (b d)``, ``a`` meshing ``b``, ``b`` and ``c`` on one stud, ``c`` meshing ``d``). This
 package holds the machine-independent data model (frozen dataclasses, validated on
-construction), the loader of machine files (TOML, see ``plugins/data/zftkk250x5.toml``), the
-chain-error method of seed 000 and the change-gear selection. Every public name is importable
-from ``gearopt.chains``; the modules are:
+construction), the loader of machine files (TOML, see
+``plugins/chain_error/data/zftkk250x5.toml``), the chain-error method of seed 000 and the
+change-gear selection. Every public name is importable from ``gearopt.chains``; the modules are:
 
 :mod:`gearopt.chains.model`
     The parts of a chain: :class:`Shaft`, :class:`Element`, :class:`ChangeGearSlot`,

@@ -2,10 +2,10 @@
 
 :class:`Machine` joins the parts of :mod:`gearopt.chains.model` and checks that every chain runs
 from its input shaft through its meshes, shaft by shaft, to the work spindle. A machine file is a
-TOML description of one machine (see ``plugins/data/zftkk250x5.toml``): :func:`parse_machine`
-builds a :class:`Machine` from its parsed tables, :func:`loads_machine` from its text and
-:func:`load_machine` by name (looked up in :func:`machine_dirs`: the folders of
-``GEAROPT_MACHINE_PATH``, then ``gearopt_plugins/data``) or by path.
+TOML description of one machine (see ``plugins/chain_error/data/zftkk250x5.toml``):
+:func:`parse_machine` builds a :class:`Machine` from its parsed tables, :func:`loads_machine`
+from its text and :func:`load_machine` by name (looked up in :func:`machine_dirs`: the folders of
+``GEAROPT_MACHINE_PATH``, then ``gearopt_plugins/chain_error/data``) or by path.
 """
 
 from __future__ import annotations
@@ -250,7 +250,8 @@ def _required(table: Mapping[str, Any], keys: Iterable[str], where: str) -> None
 
 
 def parse_machine(data: Mapping[str, Any], *, path: str | None = None) -> Machine:
-    """Build a :class:`Machine` from a parsed machine file (see ``plugins/data/*.toml``)."""
+    """Build a :class:`Machine` from a parsed machine file (see
+    ``plugins/chain_error/data/*.toml``)."""
     check_keys(data, _TOP_KEYS, "")
     meta = read_table(data, "machine", "")
     check_keys(meta, _MACHINE_KEYS, "machine")
@@ -319,11 +320,12 @@ def machine_dirs() -> list[Path]:
     """Where machine files are looked up by name, in order.
 
     The directories of the environment variable ``GEAROPT_MACHINE_PATH`` (``os.pathsep``
-    separated), then the data folder of the built-in plugins (``gearopt_plugins/data``).
+    separated), then the data folder of the built-in chain-error plugin
+    (``gearopt_plugins/chain_error/data``).
     """
     dirs = [Path(p) for p in os.environ.get(MACHINE_PATH_ENV, "").split(os.pathsep) if p]
     try:
-        builtin = resources.files("gearopt_plugins") / "data"
+        builtin = resources.files("gearopt_plugins.chain_error") / "data"
     except ModuleNotFoundError:  # gearopt without its built-in plugins
         return dirs
     return [*dirs, Path(str(builtin))]

@@ -61,7 +61,7 @@ def _source(number: int, adjusted: dict | None = None) -> dict:
 def adjust(number: int) -> dict:
     """M's height and the drive path direction that centre the contact interval of case
     ``number`` on M with the design contact ratio (exact surfaces, inverse TCA)."""
-    from gearopt_plugins.face_milling_inverse import inverse_tca
+    from gearopt_plugins.face_milling.inverse import inverse_tca
 
     data = _source(number)
     design = parse_design(data)

@@ -46,7 +46,7 @@ from gearopt.validate import (
     read_number,
     read_table,
 )
-from gearopt_plugins.cyclo_palloid_generation import generate_flanks, solve_additional_slope_angle
+from gearopt_plugins.face_hobbing.generation import generate_flanks, solve_additional_slope_angle
 
 __all__ = [
     "CycloPalloid",
@@ -409,7 +409,7 @@ class CycloPalloid(BaseMachineModel):
     ) -> dict[str, FlankMap]:
         """Both flanks (or ``flanks``) of the member's tooth 0, solved in one batch; with
         ``tool_pass`` k, those cut by the k-th blade group. Convex: inner blades; concave: outer
-        blades (see :mod:`gearopt_plugins.cyclo_palloid_generation` for the phase of the outer
+        blades (see :mod:`gearopt_plugins.face_hobbing.generation` for the phase of the outer
         blades, the masks and the tooth numbering)."""
         for flank in flanks:
             check_member_and_flank(member, flank)

@@ -79,7 +79,7 @@ term c2, from six conditions at the mean contact point M:
 M on the gear is where M's circle about the pinion axis (the pinion's polar angle is free)
 meets the gear flank at a point where the meshing equation of the pair (nominal ratio) holds.
 Conditions 4-6 come from a local tooth contact analysis of the two flanks' second-order Taylor
-patches at M (:func:`gearopt_plugins.face_milling_local.local_mesh`), all on the exact
+patches at M (:func:`gearopt_plugins.face_milling.local.local_mesh`), all on the exact
 envelopes. The six equations are solved by Levenberg-Marquardt with finite-difference
 Jacobians, with the targets reached by continuation from the complementary settings (the
 gear's generating surface with the pinion's cutter radius), where the contact is already a
@@ -109,8 +109,8 @@ from gearopt.flank import axial_plane, cone_coordinates
 from gearopt.mesh import ToothFrame
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
-from gearopt_plugins.face_milling_family import flank_family
-from gearopt_plugins.face_milling_local import (
+from gearopt_plugins.face_milling.family import flank_family
+from gearopt_plugins.face_milling.local import (
     TaylorJet,
     envelope_jet,
     hand_sign,

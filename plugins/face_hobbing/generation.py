@@ -85,7 +85,7 @@ from gearopt.errors import SettingsError
 from gearopt.flank import FlankGrid, FlankMap
 from gearopt.solve import newton
 from gearopt.thickness import NormalSection
-from gearopt_plugins.cyclo_palloid_family import (
+from gearopt_plugins.face_hobbing.family import (
     BladeSystem,
     components,
     edge,

@@ -11,7 +11,7 @@ cradle angle... in both flank tables; a fixed-setting or modified-roll pinion di
 The tooth flank is the envelope of the blade's cone in the work frame (Litvin, Gear Geometry and
 Applied Theory, ch. 21 (face milling); Litvin et al., NASA CR-4342), solved on the FlankMap grid
 by the shared solver (:mod:`gearopt.envelope`) with the family of
-:mod:`gearopt_plugins.face_milling_family`.
+:mod:`gearopt_plugins.face_milling.family`.
 
 Frames and sign conventions (every setting of a right-hand member; a left-hand member is cut on
 the mirror image of the machine, so its flanks are the mirror images of the right-hand member's
@@ -141,9 +141,9 @@ arc length ``tangent_mm`` from the pitch-line point, sits about u_p^2 sin(alpha)
 it toward the work: 11 micrometres at R = 400 mm, u_p = 5.2 mm).
 
 Settings from the blank and local synthesis: a design with a ``[synthesis]`` table
-(:meth:`FaceMilling.synthesize`, :mod:`gearopt_plugins.face_milling_synthesis`; the synthesis
+(:meth:`FaceMilling.synthesize`, :mod:`gearopt_plugins.face_milling.synthesis`; the synthesis
 gives the pinion a sharp blade); a designed TE by inverse TCA:
-:meth:`FaceMilling.realise_te_target` (:mod:`gearopt_plugins.face_milling_inverse`). Not yet: a
+:meth:`FaceMilling.realise_te_target` (:mod:`gearopt_plugins.face_milling.inverse`). Not yet: a
 check against a published settings summary (none readable was found).
 """
 
@@ -164,14 +164,14 @@ from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
-from gearopt_plugins import face_milling_synthesis as fs
-from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
-from gearopt_plugins.face_milling_family import (
+from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
+from gearopt_plugins.face_milling import synthesis as fs
+from gearopt_plugins.face_milling.family import (
     CutterFlank,
     design_family,
 )
-from gearopt_plugins.face_milling_inverse import inverse_tca
-from gearopt_plugins.face_milling_synthesis import SIDES
+from gearopt_plugins.face_milling.inverse import inverse_tca
+from gearopt_plugins.face_milling.synthesis import SIDES
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
 
@@ -491,7 +491,7 @@ def machine_table(machine: FaceMillingMachine) -> dict[str, Any]:
 
 _SYNTHESIS_NOTE = (
     "derived: the gear's settings from the blank (unless [machine.gear] gives them), the "
-    "pinion's by local synthesis at M ([synthesis]; gearopt_plugins.face_milling_synthesis)"
+    "pinion's by local synthesis at M ([synthesis]; gearopt_plugins.face_milling.synthesis)"
 )
 
 
@@ -567,13 +567,13 @@ class FaceMilling(BaseMachineModel):
     ) -> FaceMillingMachine:
         """The gear's settings from the blank (unless ``[machine.gear]`` gives them) and the
         pinion's by local synthesis, per flank, from the ``[synthesis]`` table
-        (:mod:`gearopt_plugins.face_milling_synthesis`). ``[machine.pinion]`` and
+        (:mod:`gearopt_plugins.face_milling.synthesis`). ``[machine.pinion]`` and
         ``[machine.pinion.<flank>]`` may hold the chosen inputs only."""
         return _synthesize(table, synthesis, pair)
 
     def realise_te_target(self, design: Design, *, side: str = "drive") -> tuple[dict, dict]:
         """The pinion's roll on ``side`` fitted by inverse TCA to the design's ``[te_target]``
-        (:mod:`gearopt_plugins.face_milling_inverse`): c0 moves the cradle angle, c1 ... c6
+        (:mod:`gearopt_plugins.face_milling.inverse`): c0 moves the cradle angle, c1 ... c6
         replace ``ratio_of_roll`` and ``roll_c2`` ... ``roll_c6``; the gear is unchanged."""
         if design.te_target is None:
             raise DesignError("te_target", rule="the design has no [te_target] table")

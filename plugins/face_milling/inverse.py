@@ -38,9 +38,9 @@ from gearopt.kinematics import rot_z
 from gearopt.mesh import ToothFrame
 from gearopt.solve import complex_step_jacobian, newton
 from gearopt.te_target import ARCSEC, TETarget
-from gearopt_plugins.face_milling_family import design_family
-from gearopt_plugins.face_milling_local import hand_sign, mirrored, solve_nodes
-from gearopt_plugins.face_milling_synthesis import SIDES
+from gearopt_plugins.face_milling.family import design_family
+from gearopt_plugins.face_milling.local import hand_sign, mirrored, solve_nodes
+from gearopt_plugins.face_milling.synthesis import SIDES
 
 __all__ = ["InverseTCA", "inverse_tca"]
 

@@ -2,7 +2,7 @@
 
 Seed 003's generation chain (its eq 3, figures missing) is the cyclo-palloid face hobbing of
 seed 001 with one cutter head radius R_h per flank, so this model reuses that chain
-(:mod:`gearopt_plugins.cyclo_palloid_family`, :func:`~gearopt_plugins.cyclo_palloid_generation.
+(:mod:`gearopt_plugins.face_hobbing.family`, :func:`~gearopt_plugins.face_hobbing.generation.
 generate_from_blade_systems`): each flank is cut by the blade system of a cyclo-palloid head with
 r_ci = r_co = R_h and no additional slope angle, its edge a circular arc of radius R_b.
 
@@ -72,14 +72,14 @@ from gearopt.errors import DesignError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.validate import check_keys, read_integer, read_number, read_table
-from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
+from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.cyclo_palloid import (
     CycloPalloidMachine,
     CycloPalloidMember,
     member_settings,
 )
-from gearopt_plugins.cyclo_palloid_family import BladeSystem
-from gearopt_plugins.cyclo_palloid_generation import (
+from gearopt_plugins.face_hobbing.family import BladeSystem
+from gearopt_plugins.face_hobbing.generation import (
     BLADE_OF_FLANK,
     blade_systems,
     generate_from_blade_systems,

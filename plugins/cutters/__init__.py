@@ -1,0 +1,1 @@
+"""Cutter and blade descriptions that several machine models share (:mod:`.blades`)."""
