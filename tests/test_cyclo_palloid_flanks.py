@@ -137,8 +137,9 @@ def test_outer_blades_lead_by_half_a_group_from_their_disks_radial_lines():
     # outer blade lambda ahead of the inner one; at any common rotation and cradle angle, each
     # blade's angle about its disk's axis from that disk's radial line O_ck O_m differs by half
     # a group pitch, and each blade passes the pitch point M at its own theta_k = 0
+    from gearopt_plugins.cyclo_palloid.settings import blade_systems
     from gearopt_plugins.face_hobbing.family import components
-    from gearopt_plugins.face_hobbing.generation import blade_systems, outer_phase_rad
+    from gearopt_plugins.face_hobbing.generation import outer_phase_rad
 
     def datum_angle(system, theta, psi):
         f = components(system, 0.0 * theta, theta, psi)
@@ -164,7 +165,8 @@ def test_outer_blades_lead_by_half_a_group_from_their_disks_radial_lines():
 
 
 def test_equal_radii_lead_by_exactly_half_a_group(table3_design):
-    from gearopt_plugins.face_hobbing.generation import blade_systems, outer_phase_rad
+    from gearopt_plugins.cyclo_palloid.settings import blade_systems
+    from gearopt_plugins.face_hobbing.generation import outer_phase_rad
 
     for member in MEMBERS:
         settings = gearopt.basic_settings(table3_design).member(member)
@@ -214,12 +216,13 @@ def test_pinion_sheet_ends_at_the_fold(table3_design):
     # the meshing Jacobian's determinant shrinks toward zero down each column of the pinion's
     # concave flank: the sheet ends at the envelope's fold, not at the blade's tip
     from gearopt.envelope import _residual_and_jacobian, solve_envelope
-    from gearopt_plugins.face_hobbing.generation import _family, blade_systems
+    from gearopt_plugins.cyclo_palloid.settings import blade_systems
+    from gearopt_plugins.face_hobbing.generation import hobbing_family
 
     blank = table3_design.blank
     settings = gearopt.basic_settings(table3_design).pinion
     systems = blade_systems(table3_design, "pinion", settings)
-    family = _family(table3_design, "pinion", [systems["outer"]])
+    family = hobbing_family(blank, "pinion", [systems["outer"]])
     gamma = math.radians(blank.pitch_angle_deg[0])
     sol = solve_envelope(
         family,

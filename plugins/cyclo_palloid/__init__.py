@@ -31,22 +31,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from gearopt import hookimpl
-from gearopt.blank import pitch_angles_rad
 from gearopt.design import MEMBERS, Design, PairData
-from gearopt.errors import DesignError, SettingsError
+from gearopt.errors import DesignError
 from gearopt.flank import FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
-from gearopt.validate import (
-    check_keys,
-    read_integer,
-    read_number,
-    read_table,
+from gearopt.validate import check_keys, read_integer, read_number, read_table
+from gearopt_plugins.cyclo_palloid.settings import (
+    AUTO,
+    CycloPalloidMachine,
+    CycloPalloidMember,
+    CycloPalloidSettings,
+    blade_systems,
+    flank_turn_rad,
+    member_settings,
 )
-from gearopt_plugins.face_hobbing.generation import generate_flanks, solve_additional_slope_angle
+from gearopt_plugins.cyclo_palloid.thickness import solve_additional_slope_angle
+from gearopt_plugins.face_hobbing.generation import BLADE_OF_FLANK, generate_flanks
+from gearopt_plugins.face_hobbing.settings import (
+    eccentricity,
+    machine_distance_and_cradle_angle,
+    slope_angle_rad,
+)
 
 __all__ = [
     "CycloPalloid",
@@ -68,68 +76,9 @@ MEMBER_KEYS = (
     "profile_pressure_angle_deg",
 )
 MACHINE_KEYS = ("blade_groups", "blade_module_mm", *MEMBERS, *MEMBER_KEYS)
-AUTO = "auto"
-
-
-# --- kernels: pure functions of floats, radians inside -------------------------------------------
-
-
-def slope_angle_rad(
-    *, blade_module_mm: float, blade_groups: int, inner_cutter_radius_mm: float
-) -> float:
-    """Slope angle nu = asin(m_b N_b / (2 r_ci)) (seed 001 eqs 5, 9)."""
-    return math.asin(blade_module_mm * blade_groups / (2.0 * inner_cutter_radius_mm))
-
-
-def eccentricity(
-    *, inner_cutter_radius_mm: float, outer_cutter_radius_mm: float, slope_angle_rad: float
-) -> tuple[float, float]:
-    """Eccentricity e and auxiliary angle gamma of the dual head (eqs 10, 12; 33, 36 with nu').
-
-    Returns ``(e_mm, gamma_rad)``. With gamma, r_co sin(nu - gamma) = r_ci sin(nu): both blade
-    systems have the same roll circle (rho_i = rho_o).
-    """
-    rci, rco, nu = inner_cutter_radius_mm, outer_cutter_radius_mm, slope_angle_rad
-    e = math.sqrt(rco**2 - (rci * math.sin(nu)) ** 2) - rci * math.cos(nu)
-    gamma = math.asin(e * math.sin(nu) / rco)
-    return e, gamma
-
-
-def machine_distance_and_cradle_angle(
-    *, mean_cone_distance_mm: float, spiral_angle_rad: float, cutter_radius_mm: float, nu_rad: float
-) -> tuple[float, float]:
-    """Machine distance M_d and cradle angle q_2 of one blade system (eqs 13-14; 34-35).
-
-    M_d^2 = A_m^2 + r_c^2 - 2 A_m r_c sin(psi_m - nu); q_2 from sin q_2 = r_c cos(psi_m - nu) / M_d,
-    evaluated as atan2(r_c cos(psi_m - nu), A_m - r_c sin(psi_m - nu)) so that the branch is the
-    one of Fig. 5 (the pitch point M at distance A_m on x_m) without an arcsin's loss of precision.
-    Returns ``(M_d_mm, q_2_rad)``.
-    """
-    am, rc, arg = mean_cone_distance_mm, cutter_radius_mm, spiral_angle_rad - nu_rad
-    md = math.sqrt(am**2 + rc**2 - 2.0 * am * rc * math.sin(arg))
-    q2 = math.atan2(rc * math.cos(arg), am - rc * math.sin(arg))
-    return md, q2
 
 
 # --- data ----------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, kw_only=True)
-class CycloPalloidMember:
-    """Cutter and blade data of one member (``[machine.pinion]`` or ``[machine.gear]``)."""
-
-    inner_cutter_radius_mm: float
-    outer_cutter_radius_mm: float
-    additional_slope_angle_deg: float | str = 0.0
-    blade_parabola_coefficient_per_mm: float = 0.0
-    parabola_apex_mm: float = 0.0
-    rake_angle_deg: float = 0.0
-    profile_pressure_angle_deg: float = 20.0
-
-    @property
-    def is_auto(self) -> bool:
-        """True when the additional slope angle is to be solved from the tooth thickness."""
-        return self.additional_slope_angle_deg == AUTO
 
 
 #: the last member settings whose additional slope angle was solved from the thickness, keyed by
@@ -158,57 +107,6 @@ def _solved_settings(design: Design, member: str):
     while len(_SOLVED) > 16:
         del _SOLVED[next(iter(_SOLVED))]
     return found
-
-
-@dataclass(frozen=True, kw_only=True)
-class CycloPalloidMachine:
-    """The ``[machine]`` table of a cyclo-palloid design."""
-
-    blade_groups: int
-    blade_module_mm: float
-    pinion: CycloPalloidMember
-    gear: CycloPalloidMember
-
-    def member(self, name: str) -> CycloPalloidMember:
-        """Data of ``"pinion"`` or ``"gear"``."""
-        return getattr(self, name)
-
-
-@dataclass(frozen=True, kw_only=True)
-class CycloPalloidSettings:
-    """Basic machine-tool settings of one member (seed 001 Table 3 and eqs 5-59).
-
-    ``slope_angle_deg`` is nu of eq 9; the blade systems run at nu' = nu + dnu (inner) and
-    nu' - gamma' (outer). Base and rolling circles: M_d = rho_b + rho_r with
-    rho_r / rho_b = rho' / rho_cr (eq 29), rho' = r_ci sin nu' and rho_cr = A_m cos psi_m.
-    """
-
-    slope_angle_deg: float
-    additional_slope_angle_deg: float
-    inner_cutter_radius_mm: float
-    outer_cutter_radius_mm: float
-    blade_module_mm: float
-    blade_groups: int
-    eccentricity_mm: float
-    eccentricity_angle_deg: float
-    inner_assembly_angle_deg: float
-    outer_assembly_angle_deg: float
-    inner_machine_distance_mm: float
-    inner_cradle_angle_deg: float
-    outer_machine_distance_mm: float
-    outer_cradle_angle_deg: float
-    machine_root_angle_deg: float
-    machine_center_to_back_mm: float
-    blank_offset_mm: float
-    sliding_base_mm: float
-    gear_to_cradle_roll: float
-    gear_to_blade_roll: float
-    roll_circle_radius_mm: float
-    crown_gear_radius_mm: float
-    inner_base_circle_radius_mm: float
-    inner_rolling_circle_radius_mm: float
-    outer_base_circle_radius_mm: float
-    outer_rolling_circle_radius_mm: float
 
 
 # --- parsing -------------------------------------------------------------------------------------
@@ -272,76 +170,6 @@ def _parse_member(
         profile_pressure_angle_deg=read_number(
             merged, "profile_pressure_angle_deg", where, pair.pressure_angle_deg, gt=0.0, lt=45.0
         ),
-    )
-
-
-def member_settings(design: Design, member: str, additional_slope_angle_deg: float):
-    """Basic settings of one member for a given additional slope angle (eqs 5-14, 25, 30-38,
-    and the compensation of section 4, eqs 49-59)."""
-    pair, machine, comp = design.pair, design.machine, design.compensation
-    am = pair.blank.mean_cone_distance_mm
-    psi = math.radians(pair.mean_spiral_angle_deg)
-    # eqs 49-52: the auxiliary pitch angles of the pair redesigned for Sigma + dGamma
-    sigma = math.radians(pair.shaft_angle_deg + comp.shaft_angle_deg)
-    gamma_m = pitch_angles_rad(pair.pinion_teeth, pair.gear_teeth, sigma)[MEMBERS.index(member)]
-    offsets = {
-        "pinion": (comp.pinion_axial_mm, comp.offset_mm),  # eqs 58-59
-        "gear": (comp.gear_axial_mm, 0.0),  # eq 57
-    }
-    spec = machine.member(member)
-    rci, rco = spec.inner_cutter_radius_mm, spec.outer_cutter_radius_mm
-    nu = slope_angle_rad(
-        blade_module_mm=machine.blade_module_mm,
-        blade_groups=machine.blade_groups,
-        inner_cutter_radius_mm=rci,
-    )
-    nu_prime = nu + math.radians(additional_slope_angle_deg)
-    if not 0.0 < nu_prime < math.pi / 2 or rco < rci * math.sin(nu_prime):
-        raise SettingsError(
-            f"machine.{member}.additional_slope_angle_deg",
-            additional_slope_angle_deg,
-            f"nu + dnu must lie in (0, 90) deg with r_co >= r_ci sin(nu + dnu) (eq 33); "
-            f"nu = {math.degrees(nu):.6f} deg",
-        )
-    e, gamma = eccentricity(
-        inner_cutter_radius_mm=rci, outer_cutter_radius_mm=rco, slope_angle_rad=nu_prime
-    )
-    nu_k = {"inner": nu_prime, "outer": nu_prime - gamma}  # eqs 11, 38
-    radii = {"inner": rci, "outer": rco}
-    rho_prime = rci * math.sin(nu_prime)
-    rho_cr = am * math.cos(psi)
-    values: dict[str, Any] = {}
-    for k in ("inner", "outer"):
-        md, q2 = machine_distance_and_cradle_angle(
-            mean_cone_distance_mm=am,
-            spiral_angle_rad=psi,
-            cutter_radius_mm=radii[k],
-            nu_rad=nu_k[k],
-        )
-        values[f"{k}_machine_distance_mm"] = md
-        values[f"{k}_cradle_angle_deg"] = math.degrees(q2)
-        values[f"{k}_assembly_angle_deg"] = math.degrees(nu_k[k])
-        values[f"{k}_rolling_circle_radius_mm"] = md * rho_prime / (rho_prime + rho_cr)
-        values[f"{k}_base_circle_radius_mm"] = md * rho_cr / (rho_prime + rho_cr)
-    center_to_back, blank_offset = offsets[member]
-    return CycloPalloidSettings(
-        slope_angle_deg=math.degrees(nu),
-        additional_slope_angle_deg=float(additional_slope_angle_deg),
-        inner_cutter_radius_mm=rci,
-        outer_cutter_radius_mm=rco,
-        blade_module_mm=machine.blade_module_mm,
-        blade_groups=machine.blade_groups,
-        eccentricity_mm=e,
-        eccentricity_angle_deg=math.degrees(gamma),
-        machine_root_angle_deg=math.degrees(gamma_m),
-        machine_center_to_back_mm=center_to_back,
-        blank_offset_mm=blank_offset,
-        sliding_base_mm=0.0,
-        gear_to_cradle_roll=1.0 / math.sin(gamma_m),  # eqs 25, 53-54
-        gear_to_blade_roll=rho_prime / (math.sin(gamma_m) * rho_cr),  # eqs 37, 55-56
-        roll_circle_radius_mm=rho_prime,
-        crown_gear_radius_mm=rho_cr,
-        **values,
     )
 
 
@@ -410,12 +238,22 @@ class CycloPalloid(BaseMachineModel):
         """Both flanks (or ``flanks``) of the member's tooth 0, solved in one batch; with
         ``tool_pass`` k, those cut by the k-th blade group. Convex: inner blades; concave: outer
         blades (see :mod:`gearopt_plugins.face_hobbing.generation` for the phase of the outer
-        blades, the masks and the tooth numbering)."""
+        blades, the masks and the tooth numbering): those of tooth ``tool_pass`` of a right-hand
+        member, ``-tool_pass`` of a left-hand one, when the work indexes exactly (dnu = 0 and
+        m_b the mean normal module, so that m_gb = N_b / N)."""
         for flank in flanks:
             check_member_and_flank(member, flank)
         settings = self.basic_settings(design).member(member)
+        systems = blade_systems(design, member, settings, tool_pass=tool_pass)
         return generate_flanks(
-            design, member, settings, grid=grid or FlankGrid(), flanks=flanks, tool_pass=tool_pass
+            design.blank,
+            member,
+            design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
+            {f: systems[BLADE_OF_FLANK[f]] for f in flanks},
+            {f: flank_turn_rad(design, member, f, systems) for f in flanks},
+            grid=grid or FlankGrid(),
+            tool_pass=tool_pass,
+            notes={f: (f"{BLADE_OF_FLANK[f]} blades (cyclo-palloid)",) for f in flanks},
         )
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:

@@ -1,10 +1,10 @@
 """Klingelnberg epicycloid (single-radius face hobbing) machine model, seed 003.
 
-Seed 003's generation chain (its eq 3, figures missing) is the cyclo-palloid face hobbing of
-seed 001 with one cutter head radius R_h per flank, so this model reuses that chain
-(:mod:`gearopt_plugins.face_hobbing.family`, :func:`~gearopt_plugins.face_hobbing.generation.
-generate_from_blade_systems`): each flank is cut by the blade system of a cyclo-palloid head with
-r_ci = r_co = R_h and no additional slope angle, its edge a circular arc of radius R_b.
+Seed 003's generation chain (its eq 3, figures missing) is the face hobbing of seed 001 with one
+cutter head radius R_h per flank, so this model states only its heads and runs the chain every
+Klingelnberg model shares (:mod:`gearopt_plugins.face_hobbing`): each flank is cut by the blade
+system of a single-radius head R_h (the dual head's r_ci = r_co with no additional slope angle:
+no eccentricity, both disks one), its edge a circular arc of radius R_b.
 
 Eq 3 from first principles, frame by frame (seed 003 -> seed 001):
 
@@ -63,7 +63,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from gearopt import hookimpl
@@ -73,17 +73,21 @@ from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.validate import check_keys, read_integer, read_number, read_table
 from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
-from gearopt_plugins.cyclo_palloid import (
-    CycloPalloidMachine,
-    CycloPalloidMember,
-    member_settings,
-)
 from gearopt_plugins.face_hobbing.family import BladeSystem
 from gearopt_plugins.face_hobbing.generation import (
     BLADE_OF_FLANK,
-    blade_systems,
-    generate_from_blade_systems,
+    SIDE_OF_BLADE,
+    BladeEdge,
+    blade_system,
+    generate_flanks,
     tooth_turn_rad,
+)
+from gearopt_plugins.face_hobbing.settings import (
+    CutterDisk,
+    WorkSettings,
+    cutter_disk,
+    slope_angle_rad,
+    work_settings,
 )
 
 __all__ = [
@@ -93,6 +97,7 @@ __all__ = [
     "EpicycloidMachine",
     "EpicycloidMember",
     "EpicycloidSettings",
+    "flank_system",
 ]
 
 FLANK_KEYS = (
@@ -151,21 +156,6 @@ class EpicycloidMachine:
 
     def member(self, name: str) -> EpicycloidMember:
         return getattr(self, name)
-
-    def cyclo_palloid(self, member: str, flank: str) -> CycloPalloidMachine:
-        """The cyclo-palloid machine whose ``member`` has both blade radii = this flank's R_h
-        (no additional slope angle, straight blades): its blade system cuts this flank."""
-        spec = self.member(member).flank(flank)
-        cp = CycloPalloidMember(
-            inner_cutter_radius_mm=spec.cutter_head_radius_mm,
-            outer_cutter_radius_mm=spec.cutter_head_radius_mm,
-            additional_slope_angle_deg=0.0,
-            rake_angle_deg=spec.rake_angle_deg,
-            profile_pressure_angle_deg=spec.profile_pressure_angle_deg,
-        )
-        return CycloPalloidMachine(
-            blade_groups=self.blade_groups, blade_module_mm=self.blade_module_mm, pinion=cp, gear=cp
-        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -236,20 +226,54 @@ def _parse_flank(
     )
 
 
-def _flank_system(
-    design: Design, member: str, flank: str, *, tool_pass: int = 0
-) -> tuple[BladeSystem, float, Any]:
-    """The blade system that cuts ``flank``, its turn onto tooth 0 and the cyclo-palloid
-    settings of the single-radius head it belongs to."""
+def work(design: Design, member: str) -> WorkSettings:
+    """The work's settings of ``member``: every head of the machine rolls on the roll circle
+    rho = N_b m_b / 2 (seed 001 eq 9 with dnu = 0: r sin(nu) for any head radius r), so the
+    roll ratios are one for both flanks."""
     machine: EpicycloidMachine = design.machine
-    cp_design = replace(design, model="cyclo-palloid", machine=machine.cyclo_palloid(member, flank))
-    settings = member_settings(cp_design, member, 0.0)
-    systems = blade_systems(cp_design, member, settings, tool_pass=tool_pass)
-    spec = machine.member(member).flank(flank)
-    system = replace(
-        systems[BLADE_OF_FLANK[flank]], profile_curvature_per_mm=spec.profile_curvature_per_mm
+    return work_settings(
+        design.pair,
+        design.compensation,
+        member,
+        blade_groups=machine.blade_groups,
+        blade_module_mm=machine.blade_module_mm,
+        roll_circle_radius_mm=machine.blade_module_mm * machine.blade_groups / 2.0,
     )
-    return system, tooth_turn_rad(cp_design, member, flank, systems), settings
+
+
+def flank_system(
+    design: Design, member: str, flank: str, *, tool_pass: int = 0
+) -> tuple[BladeSystem, float, CutterDisk]:
+    """The blade system that cuts ``flank``, its turn onto tooth 0 and its head's disk.
+
+    The head of radius R_h sets its blades at the slope angle nu, sin nu = N_b m_b / (2 R_h),
+    on the disk of eqs 13-14; its blade groups are half a group pitch apart, the lead pi / N_b
+    of :func:`~gearopt_plugins.face_hobbing.generation.outer_phase_rad` for coinciding disks.
+    """
+    machine: EpicycloidMachine = design.machine
+    spec = machine.member(member).flank(flank)
+    work_ = work(design, member)
+    nu = slope_angle_rad(
+        blade_module_mm=machine.blade_module_mm,
+        blade_groups=machine.blade_groups,
+        inner_cutter_radius_mm=spec.cutter_head_radius_mm,
+    )
+    disk = cutter_disk(work_, cutter_radius_mm=spec.cutter_head_radius_mm, assembly_angle_rad=nu)
+    blade = BladeEdge(
+        pressure_angle_deg=spec.profile_pressure_angle_deg,
+        rake_angle_deg=spec.rake_angle_deg,
+        profile_curvature_per_mm=spec.profile_curvature_per_mm,
+    )
+    side = SIDE_OF_BLADE[BLADE_OF_FLANK[flank]]
+    system = blade_system(work_, disk, blade, side=side, tool_pass=tool_pass)
+    teeth = design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth
+    turn = tooth_turn_rad(
+        flank,
+        teeth=teeth,
+        gear_to_blade_roll=work_.gear_to_blade_roll,
+        lead_rad=math.pi / machine.blade_groups,
+    )
+    return system, turn, disk
 
 
 # --- the model -----------------------------------------------------------------------------------
@@ -291,29 +315,23 @@ class Epicycloid(BaseMachineModel):
         out = {}
         for member in MEMBERS:
             values: dict[str, Any] = {}
-            common = None
             for prefix, flank in (("", DRIVE_FLANK[member]), ("coast_", COAST_FLANK[member])):
                 spec = design.machine.member(member).flank(flank)
-                _, _, s = _flank_system(design, member, flank)
-                blades = BLADE_OF_FLANK[flank]
+                _, _, disk = flank_system(design, member, flank)
                 rb = spec.blade_profile_radius_mm
                 values.update(
                     {
                         f"{prefix}cutter_head_radius_mm": spec.cutter_head_radius_mm,
                         f"{prefix}cutter_edge_radius_mm": 0.0 if math.isinf(rb) else rb,
                         f"{prefix}cutter_edge_curvature_per_mm": spec.profile_curvature_per_mm,
-                        f"{prefix}slope_angle_deg": s.slope_angle_deg,
-                        f"{prefix}machine_distance_mm": getattr(s, f"{blades}_machine_distance_mm"),
-                        f"{prefix}cradle_angle_deg": getattr(s, f"{blades}_cradle_angle_deg"),
-                        f"{prefix}base_circle_radius_mm": getattr(
-                            s, f"{blades}_base_circle_radius_mm"
-                        ),
-                        f"{prefix}rolling_circle_radius_mm": getattr(
-                            s, f"{blades}_rolling_circle_radius_mm"
-                        ),
+                        f"{prefix}slope_angle_deg": disk.assembly_angle_deg,
+                        f"{prefix}machine_distance_mm": disk.machine_distance_mm,
+                        f"{prefix}cradle_angle_deg": disk.cradle_angle_deg,
+                        f"{prefix}base_circle_radius_mm": disk.base_circle_radius_mm,
+                        f"{prefix}rolling_circle_radius_mm": disk.rolling_circle_radius_mm,
                     }
                 )
-                common = common or s
+            common = work(design, member)
             out[member] = EpicycloidSettings(
                 **values,
                 blade_groups=common.blade_groups,
@@ -352,7 +370,7 @@ class Epicycloid(BaseMachineModel):
             check_member_and_flank(member, flank)
         systems, turns, notes = {}, {}, {}
         for flank in flanks:
-            systems[flank], turns[flank], _ = _flank_system(
+            systems[flank], turns[flank], _ = flank_system(
                 design, member, flank, tool_pass=tool_pass
             )
             spec = design.machine.member(member).flank(flank)
@@ -360,9 +378,10 @@ class Epicycloid(BaseMachineModel):
                 f"{BLADE_OF_FLANK[flank]} blades (epicycloid): R_h = "
                 f"{spec.cutter_head_radius_mm:g} mm, R_b = {spec.blade_profile_radius_mm:g} mm",
             )
-        return generate_from_blade_systems(
-            design,
+        return generate_flanks(
+            design.blank,
             member,
+            design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
             systems,
             turns,
             grid=grid or FlankGrid(),

@@ -1,6 +1,6 @@
-"""The cyclo-palloid generating family r(u, theta, psi_cr) and its meshing function (seed 001).
+"""The face-hobbing generating family r(u, theta, psi_cr) and its meshing function (seed 001).
 
-One blade system (inner or outer) of the dual head, as seed 001 writes it for a right-hand
+One blade system (inner or outer) of a face-hobbing head, as seed 001 writes it for a right-hand
 member: the cutting edge in the blade frame (eqs 2-4), the cutter (eqs 7-8), the cutter rotation
 theta (eqs 15-16), the cradle rotation psi_cr (eqs 17-19), the work (eqs 20-23). Everything is
 evaluated in the machine frame S_m, where the derivatives are cross products:

@@ -1,9 +1,13 @@
-"""Cyclo-palloid flank generation: seed 001's envelope (eqs 15-31) on a FlankMap grid.
+"""Face-hobbing flank generation: seed 001's envelope (eqs 15-31) on a FlankMap grid, from
+settings.
 
-Each flank is the envelope of one blade system of the dual head (inner blades: convex flank,
-outer blades: concave flank) solved by :func:`gearopt.envelope.solve_envelope`; this module
-supplies the generating family (:class:`CycloPalloidFamily`), the blade systems from the basic
-settings, and the relative angular position of the two flanks, which sets the tooth thickness.
+Each flank is the envelope of one blade system (:class:`~gearopt_plugins.face_hobbing.family.
+BladeSystem`) solved by :func:`gearopt.envelope.solve_envelope`. This module is what the
+Klingelnberg models (cyclo-palloid, epicycloid) share past their heads: the generating family
+(:class:`FaceHobbingFamily`), a blade system from the member's settings
+(:func:`blade_system`: the work's settings, a disk, a blade edge), the turn that puts a flank
+on tooth 0 (:func:`tooth_turn_rad`, :func:`outer_phase_rad`) and the batch generation
+(:func:`generate_flanks`). None of it reads a design: a blank, a number of teeth and settings.
 
 Phase of the outer blades, derived from the machine's kinematics (seed 001 states none of it).
 Seed 001 writes each blade system with its own cutter rotation theta_k (eqs 15-19) and the work's
@@ -14,7 +18,8 @@ eq 37 gives both systems one m'_gb), so theta_o = theta_i + lambda with a consta
 the outer blade. A tooth space is cut between the passages of one group's outer and inner blades
 through it, so by eq 23 its width at M is the work's rotation m'_gb lambda between them: the
 concave flank of tooth 0 is the outer system's envelope turned by 2 pi / N - m'_gb lambda
-(:func:`tooth_turn_rad`).
+(:func:`tooth_turn_rad`). A single-radius head (the epicycloid's) is the case r_ci = r_co: the
+two disks coincide and lambda = pi / N_b.
 
 lambda is fixed by the tool and by how each disk is set on the cradle. Eq 19 (with eqs 13-14,
 or 34-35 under dnu) sets disk k in the cradle frame S_d in two steps: its centre O_ck at the
@@ -71,20 +76,17 @@ flank is the outer blade's envelope on the other side of the same tooth.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt.design import MEMBERS, Design
+from gearopt.blank import Blank
+from gearopt.design import MEMBERS
 from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import SettingsError
 from gearopt.flank import FlankGrid, FlankMap
-from gearopt.solve import newton
-from gearopt.thickness import NormalSection
 from gearopt_plugins.face_hobbing.family import (
     BladeSystem,
     components,
@@ -92,23 +94,28 @@ from gearopt_plugins.face_hobbing.family import (
     meshing_jacobian,
     pitch_line_start,
 )
+from gearopt_plugins.face_hobbing.settings import CutterDisk, WorkSettings
 
 __all__ = [
-    "CycloPalloidFamily",
-    "ThicknessSolution",
-    "blade_systems",
+    "BLADE_OF_FLANK",
+    "BladeEdge",
+    "FaceHobbingFamily",
+    "blade_system",
     "generate_flanks",
-    "generate_from_blade_systems",
+    "hobbing_family",
     "outer_phase_rad",
-    "solve_additional_slope_angle",
     "tooth_turn_rad",
 ]
 
+#: in face cutting the inner blades cut the convex flank and the outer blades the concave flank
+#: of every member
 BLADE_OF_FLANK = {"convex": "inner", "concave": "outer"}
+#: the side of a blade system (:class:`BladeSystem`): +1 inner, -1 outer
+SIDE_OF_BLADE = {"inner": 1, "outer": -1}
 
 
 @dataclass(frozen=True, kw_only=True)
-class CycloPalloidFamily:
+class FaceHobbingFamily:
     """Blade systems as a :class:`gearopt.envelope.GeneratingFamily`, q = (u, theta, psi_cr).
 
     One flank per blade system in ``blades`` (flank index = position in the tuple).
@@ -176,133 +183,50 @@ class CycloPalloidFamily:
         return self.blade_height_mm(q[..., 0], flank) >= -self.tip_depth_mm - 1e-9
 
 
-def blade_systems(
-    design: Design, member: str, settings: Any, *, tool_pass: int = 0
-) -> dict[str, BladeSystem]:
-    """The inner and outer blade systems of ``member`` from its basic ``settings``; those of
-    blade group ``tool_pass`` (counted against the cutter's rotation) when it is not 0."""
-    spec = design.machine.member(member)
-    phase = 2.0 * math.pi * tool_pass / design.machine.blade_groups
-    out = {}
-    for side, name in ((1, "inner"), (-1, "outer")):
-        out[name] = BladeSystem(
-            side=side,
-            cutter_radius_mm=getattr(settings, f"{name}_cutter_radius_mm"),
-            assembly_angle_rad=math.radians(getattr(settings, f"{name}_assembly_angle_deg")),
-            machine_distance_mm=getattr(settings, f"{name}_machine_distance_mm"),
-            cradle_angle_rad=math.radians(getattr(settings, f"{name}_cradle_angle_deg")),
-            spiral_angle_rad=math.radians(design.pair.mean_spiral_angle_deg),
-            pressure_angle_rad=math.radians(spec.profile_pressure_angle_deg),
-            rake_angle_rad=math.radians(spec.rake_angle_deg),
-            parabola_per_mm=spec.blade_parabola_coefficient_per_mm,
-            parabola_apex_mm=spec.parabola_apex_mm,
-            machine_root_angle_rad=math.radians(settings.machine_root_angle_deg),
-            gear_to_cradle_roll=settings.gear_to_cradle_roll,
-            gear_to_blade_roll=settings.gear_to_blade_roll,
-            work_offset_mm=(
-                settings.machine_center_to_back_mm,
-                settings.blank_offset_mm,
-                settings.sliding_base_mm,
-            ),
-            phase_rad=phase,
-        )
-    return out
+@dataclass(frozen=True, kw_only=True)
+class BladeEdge:
+    """The cutting edge of a blade system: pressure angle alpha_k on the front plane, rake
+    alpha_r (eq 4), parabola a_p about u_o (eq 2) and the curvature 1 / R_b of a circular-arc
+    edge (0 for the straight edge)."""
+
+    pressure_angle_deg: float
+    rake_angle_deg: float = 0.0
+    parabola_per_mm: float = 0.0
+    parabola_apex_mm: float = 0.0
+    profile_curvature_per_mm: float = 0.0
 
 
-def tooth_turn_rad(design: Design, member: str, flank: str, systems: dict[str, BladeSystem]):
-    """Turn of the flank's envelope about the work axis that places it on tooth 0.
-
-    The convex flank is not turned. The concave flank of tooth 0 is the outer blade's envelope
-    turned by one pitch less the work's rotation while the group's outer blade leads its inner
-    blade (the tooth space is cut between their passages).
-    """
-    if flank == "convex":
-        return 0.0
-    teeth = design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth
-    phase = outer_phase_rad(
-        blade_groups=design.machine.blade_groups, inner=systems["inner"], outer=systems["outer"]
-    )
-    return 2.0 * math.pi / teeth - systems["outer"].gear_to_blade_roll * phase
-
-
-def _family(design: Design, member: str, blades) -> CycloPalloidFamily:
-    blank = design.blank
-    return CycloPalloidFamily(
-        blades=tuple(blades),
-        scale_mm=blank.mean_cone_distance_mm,
-        tip_depth_mm=blank.mean_dedendum_mm[MEMBERS.index(member)],
-    )
-
-
-def generate_flanks(
-    design: Design,
-    member: str,
-    settings: Any,
+def blade_system(
+    work: WorkSettings,
+    disk: CutterDisk,
+    blade: BladeEdge,
     *,
-    grid: FlankGrid,
-    flanks: tuple[str, ...] = ("convex", "concave"),
+    side: int,
+    gear_to_blade_roll: float | None = None,
     tool_pass: int = 0,
-) -> dict[str, FlankMap]:
-    """FlankMaps of ``member``'s ``flanks`` for the given basic settings, solved in one batch:
-    those of tooth 0, or those cut by blade group ``tool_pass`` (tooth ``tool_pass`` of a
-    right-hand member, ``-tool_pass`` of a left-hand one, when the work indexes exactly:
-    dnu = 0 and m_b the mean normal module, so that m_gb = N_b / N)."""
-    systems = blade_systems(design, member, settings, tool_pass=tool_pass)
-    return generate_from_blade_systems(
-        design,
-        member,
-        {f: systems[BLADE_OF_FLANK[f]] for f in flanks},
-        {f: tooth_turn_rad(design, member, f, systems) for f in flanks},
-        grid=grid,
-        tool_pass=tool_pass,
-        notes={f: (f"{BLADE_OF_FLANK[f]} blades (cyclo-palloid)",) for f in flanks},
+) -> BladeSystem:
+    """The blade system of ``disk`` with the edge ``blade`` (``side`` +1 inner, -1 outer) on
+    the machine of ``work``, that of blade group ``tool_pass`` (counted against the cutter's
+    rotation) when it is not 0. ``gear_to_blade_roll`` is the work's unless given."""
+    roll = work.gear_to_blade_roll if gear_to_blade_roll is None else gear_to_blade_roll
+    return BladeSystem(
+        side=side,
+        cutter_radius_mm=disk.cutter_radius_mm,
+        assembly_angle_rad=math.radians(disk.assembly_angle_deg),
+        machine_distance_mm=disk.machine_distance_mm,
+        cradle_angle_rad=math.radians(disk.cradle_angle_deg),
+        spiral_angle_rad=math.radians(work.spiral_angle_deg),
+        pressure_angle_rad=math.radians(blade.pressure_angle_deg),
+        rake_angle_rad=math.radians(blade.rake_angle_deg),
+        parabola_per_mm=blade.parabola_per_mm,
+        parabola_apex_mm=blade.parabola_apex_mm,
+        machine_root_angle_rad=math.radians(work.machine_root_angle_deg),
+        gear_to_cradle_roll=work.gear_to_cradle_roll,
+        gear_to_blade_roll=roll,
+        work_offset_mm=work.work_offset_mm,
+        phase_rad=2.0 * math.pi * tool_pass / work.blade_groups,
+        profile_curvature_per_mm=blade.profile_curvature_per_mm,
     )
-
-
-def generate_from_blade_systems(
-    design: Design,
-    member: str,
-    systems: dict[str, BladeSystem],
-    turns_rad: dict[str, float],
-    *,
-    grid: FlankGrid,
-    tool_pass: int = 0,
-    notes: dict[str, tuple[str, ...]] | None = None,
-) -> dict[str, FlankMap]:
-    """FlankMaps of ``member``'s flanks, one per entry of ``systems`` (flank name -> the blade
-    system that cuts it), solved in one batch; each is turned by ``turns_rad[flank]`` about the
-    work axis onto tooth 0 (or the tooth of blade group ``tool_pass``). The machine models that
-    share this face-hobbing chain (cyclo-palloid, epicycloid) differ only in their systems."""
-    index = MEMBERS.index(member)
-    blank = design.blank
-    flanks = tuple(systems)
-    family_ = _family(design, member, [systems[f] for f in flanks])
-    solution = solve_envelope(
-        family_,
-        cone_distances_mm=(blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
-        heights_mm=(-blank.mean_dedendum_mm[index], blank.mean_addendum_mm[index]),
-        pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
-        grid=grid,
-        where=f"{member} flanks {', '.join(flanks)}",
-    )
-    out = {}
-    for k, flank in enumerate(flanks):
-        require_flank(solution, k, member=member, flank=flank)
-        out[flank] = replace(
-            flank_map(
-                family_,
-                solution,
-                index=k,
-                member=member,
-                flank=flank,
-                hand=blank.hand[index],
-                teeth=design.pair.pinion_teeth if member == "pinion" else design.pair.gear_teeth,
-                turn_rad=turns_rad[flank],
-                notes=(notes or {}).get(flank, ()),
-            ),
-            tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
-        )
-    return out
 
 
 def outer_phase_rad(*, blade_groups: int, inner: BladeSystem, outer: BladeSystem) -> float:
@@ -338,142 +262,69 @@ def outer_phase_rad(*, blade_groups: int, inner: BladeSystem, outer: BladeSystem
     return float(lead)
 
 
-@dataclass(frozen=True, kw_only=True)
-class ThicknessSolution:
-    """The additional slope angle that gives the requested chordal thickness (eqs 39-48)."""
+def tooth_turn_rad(flank: str, *, teeth: int, gear_to_blade_roll: float, lead_rad: float) -> float:
+    """Turn of the flank's envelope about the work axis that places it on tooth 0.
 
-    additional_slope_angle_deg: float
-    settings: Any
-    thickness_mm: float
-    residual_mm: float
-    top_land_mm: float  # normal chordal thickness at the tip (x_n = a_m)
-
-
-def solve_additional_slope_angle(
-    design: Design, member: str, settings_for: Callable[[float], Any]
-) -> ThicknessSolution:
-    """Solve seed 001 eqs 39-48 for the member's additional slope angle.
-
-    Eight unknowns: blade parameter, cutter phase and cradle angle of the chordal point on each
-    flank (M_i on the convex, M_o on the concave flank), the additional slope angle dnu and the
-    tooth's angular position phi. Eight equations: the two meshing equations (41-42) and the
-    positions of the two points in S_n (43-48). ``settings_for(dnu_deg)`` gives the member's
-    basic settings for a trial dnu (eqs 33-38).
+    The convex flank is not turned. The concave flank of tooth 0 is the outer blade's envelope
+    turned by one pitch less the work's rotation m_gb lambda while the group's outer blade leads
+    its inner blade by ``lead_rad`` lambda (the tooth space is cut between their passages).
     """
-    pair = design.pair
+    if flank == "convex":
+        return 0.0
+    return 2.0 * math.pi / teeth - gear_to_blade_roll * lead_rad
+
+
+def hobbing_family(blank: Blank, member: str, blades) -> FaceHobbingFamily:
+    """The generating family of ``blades`` (one flank each) on ``member``'s blank."""
+    return FaceHobbingFamily(
+        blades=tuple(blades),
+        scale_mm=blank.mean_cone_distance_mm,
+        tip_depth_mm=blank.mean_dedendum_mm[MEMBERS.index(member)],
+    )
+
+
+def generate_flanks(
+    blank: Blank,
+    member: str,
+    teeth: int,
+    systems: dict[str, BladeSystem],
+    turns_rad: dict[str, float],
+    *,
+    grid: FlankGrid,
+    tool_pass: int = 0,
+    notes: dict[str, tuple[str, ...]] | None = None,
+) -> dict[str, FlankMap]:
+    """FlankMaps of ``member``'s flanks, one per entry of ``systems`` (flank name -> the blade
+    system that cuts it), solved in one batch; each is turned by ``turns_rad[flank]`` about the
+    work axis onto tooth 0, or onto the tooth cut by blade group ``tool_pass`` (tooth
+    ``tool_pass`` of a right-hand member, ``-tool_pass`` of a left-hand one, when the work
+    indexes exactly: m_gb = N_b / N)."""
     index = MEMBERS.index(member)
-    blank = design.blank
-    target = pair.mean_normal_chordal_thickness_mm[index]
-    depth = blank.mean_addendum_mm[index] - pair.mean_normal_chordal_addendum_mm[index]
-    section = NormalSection(
-        cone_distance_mm=blank.mean_cone_distance_mm,
+    flanks = tuple(systems)
+    family_ = hobbing_family(blank, member, [systems[f] for f in flanks])
+    solution = solve_envelope(
+        family_,
+        cone_distances_mm=(blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
+        heights_mm=(-blank.mean_dedendum_mm[index], blank.mean_addendum_mm[index]),
         pitch_angle_rad=math.radians(blank.pitch_angle_deg[index]),
-        spiral_angle_rad=math.radians(pair.mean_spiral_angle_deg),
-        spiral_sign=1,  # solved on the right-hand member; the left hand is its mirror
+        grid=grid,
+        where=f"{member} flanks {', '.join(flanks)}",
     )
-    where = f"machine.{member}.additional_slope_angle_deg"
-
-    def state(dnu_mrad):
-        settings = settings_for(math.degrees(dnu_mrad * 1e-3))
-        systems = blade_systems(design, member, settings)
-        return settings, systems
-
-    def points(x):
-        settings, systems = state(x[6])
-        out = []
-        for k, flank in enumerate(("convex", "concave")):
-            fam = _family(design, member, [systems[BLADE_OF_FLANK[flank]]])
-            q = np.asarray(x[3 * k : 3 * k + 3])
-            g = fam.geometry(q, 0)
-            turn = tooth_turn_rad(design, member, flank, systems)
-            c, s = math.cos(turn), math.sin(turn)
-            p = g["point"]
-            p = np.array([c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]])
-            _, _, f = fam.axial_radial_meshing(q, 0)
-            out.append((section.coordinates(p, x[7]), float(f)))
-        return out
-
-    def residual(x, depth_mm, dnu_mrad=None):
-        # x = (q_i, q_o, phi, dnu) when dnu is free, else (q_i, q_o, phi, thickness)
-        free_dnu = dnu_mrad is None
-        dnu = x[7] if free_dnu else dnu_mrad
-        (p1, f1), (p2, f2) = points(np.array([*x[:6], dnu, x[6]]))
-        thickness = target if free_dnu else x[7]
-        return [
-            f1 * 1e3,
-            p1[0] - depth_mm,
-            p1[2],
-            f2 * 1e3,
-            p2[0] - depth_mm,
-            p2[2],
-            p1[1] + p2[1],
-            p2[1] - p1[1] - thickness,
-        ]
-
-    def solve(x0, depth_mm, dnu_mrad=None):
-        steps = np.array([1e-5, 1e-7, 1e-7, 1e-5, 1e-7, 1e-7, 1e-7, 1e-5])
-
-        def batch(x, idx):
-            return np.array([residual(row, depth_mm, dnu_mrad) for row in x])
-
-        def jacobian(x, idx):
-            # central differences: the settings (eqs 33-38) are plain-float code
-            out = np.empty((len(x), 8, 8))
-            for k in range(8):
-                dx = np.zeros(8)
-                dx[k] = steps[k]
-                out[:, :, k] = (batch(x + dx, idx) - batch(x - dx, idx)) / (2.0 * steps[k])
-            return out
-
-        return newton(
-            batch,
-            x0[None, :],
-            jac=jacobian,
-            tol=1e-11,
-            max_iter=30,
-            max_step=[1.0, 0.05, 0.05, 1.0, 0.05, 0.05, 0.05, 5.0],
+    out = {}
+    for k, flank in enumerate(flanks):
+        require_flank(solution, k, member=member, flank=flank)
+        out[flank] = replace(
+            flank_map(
+                family_,
+                solution,
+                index=k,
+                member=member,
+                flank=flank,
+                hand=blank.hand[index],
+                teeth=teeth,
+                turn_rad=turns_rad[flank],
+                notes=(notes or {}).get(flank, ()),
+            ),
+            tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
         )
-
-    # start: the pitch-line points at M and the middle of the tooth at dnu = 0
-    _, systems = state(0.0)
-    x0 = []
-    for flank in ("convex", "concave"):
-        b = systems[BLADE_OF_FLANK[flank]]
-        x0.extend(np.ravel(np.stack(pitch_line_start(b, np.array([blank.mean_cone_distance_mm])))))
-    teeth = pair.pinion_teeth if member == "pinion" else pair.gear_teeth
-    x0 = np.array([*x0, 0.5 * math.pi / teeth, 0.0])
-    x0[0] = x0[3] = depth / math.cos(math.radians(pair.pressure_angle_deg))
-    sol = solve(x0, depth)
-    worst = float(np.max(np.abs(sol.residual)))
-    if not sol.all_converged:
-        raise SettingsError(
-            where,
-            "auto",
-            f"no additional slope angle gives the chordal thickness {target} mm "
-            f"(eqs 39-48 did not converge, residual {worst:.2e} after {sol.iterations} steps)",
-        )
-    x = sol.x[0]
-    dnu_mrad = x[7]
-    # the same tooth at the tip: its top land must keep a positive width
-    addendum = blank.mean_addendum_mm[index]
-    start = np.array([*x[:7], target])
-    start[0] = start[3] = addendum / math.cos(math.radians(pair.pressure_angle_deg))
-    top = solve(start, addendum, dnu_mrad)
-    top_land = float(top.x[0][7]) if top.all_converged else -1.0
-    if top_land <= 0.0:
-        raise SettingsError(
-            where,
-            "auto",
-            f"the chordal thickness {target} mm needs dnu = "
-            f"{math.degrees(dnu_mrad * 1e-3):.4f} deg, which makes the tooth pointed (no top "
-            "land at the tip)",
-        )
-    settings, _ = state(dnu_mrad)
-    (p1, _), (p2, _) = points(np.array([*x[:6], dnu_mrad, x[6]]))
-    return ThicknessSolution(
-        additional_slope_angle_deg=math.degrees(dnu_mrad * 1e-3),
-        settings=settings,
-        thickness_mm=float(p2[1] - p1[1]),
-        residual_mm=worst,
-        top_land_mm=top_land,
-    )
+    return out
