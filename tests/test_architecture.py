@@ -10,14 +10,19 @@ included, imports under ``if TYPE_CHECKING:`` left out), and the rules it must k
   (:data:`LAZY`);
 - the textbook TCA (:mod:`gearopt.newton_tca`, the engine's reference) imported by no production
   module but the benchmarks;
-- no module of ``gearopt`` over 800 lines; no source, test or document citing a file outside the
-  repository.
+- no module over 800 lines; no source, test or document citing a file outside the repository;
+- the built-in plugins (docs/architecture.md, Layers of the built-in plugins): one subpackage per
+  machine model plus the evaluators and the objectives, no flat module beside ``__init__.py``;
+  a package imports another only from a lower layer (the helpers several models share), never
+  a package ``__init__`` above it (the plugin); ``gearopt`` imports no built-in plugin; every
+  entry point names a module of a plugin package.
 """
 
 from __future__ import annotations
 
 import ast
 import re
+import tomllib
 from collections import defaultdict
 from pathlib import Path
 
@@ -96,6 +101,24 @@ LAYERS = (
             "gearopt.study_cli",
             "gearopt.bench",
             "gearopt",
+        ),
+    ),
+)
+#: the layers of the built-in plugins (docs/architecture.md, Layers of the built-in plugins),
+#: lowest first: a package imports from another only in a lower layer. Inside a package its
+#: modules lie below its ``__init__`` (the plugin: hook implementations, the model's class)
+PLUGINS = "gearopt_plugins"
+PLUGIN_LAYERS = (
+    ("shared", ("gearopt_plugins.cutters", "gearopt_plugins.face_hobbing")),
+    (
+        "plugins",
+        (
+            "gearopt_plugins.chain_error",
+            "gearopt_plugins.cyclo_palloid",
+            "gearopt_plugins.epicycloid",
+            "gearopt_plugins.evaluators",
+            "gearopt_plugins.face_milling",
+            "gearopt_plugins.objectives",
         ),
     ),
 )
@@ -331,7 +354,7 @@ def test_no_private_attribute_of_another_modules_object_is_read():
     assert reads == []
 
 
-@pytest.mark.parametrize("module", [m for m in MODULES if m.split(".")[0] == "gearopt"])
+@pytest.mark.parametrize("module", list(MODULES))
 def test_no_module_over_800_lines(module):
     lines = MODULES[module].read_text(encoding="utf-8").count("\n")
     assert lines <= MAX_LINES, f"{module}: {lines} lines"
@@ -358,3 +381,72 @@ def test_nothing_cites_a_file_outside_the_repository():
         if OUTSIDE.search(line)
     ]
     assert citing == []
+
+
+def _plugin_package(module: str) -> str:
+    """The top-level package of a built-in plugin module (``gearopt_plugins.x`` of
+    ``gearopt_plugins.x.y``)."""
+    return ".".join(module.split(".")[:2])
+
+
+def _plugin_layer(module: str) -> int:
+    package = _plugin_package(module)
+    for k, (_, packages) in enumerate(PLUGIN_LAYERS):
+        if package in packages:
+            return k
+    raise AssertionError(f"{package} is in no plugin layer: add it to PLUGIN_LAYERS and docs")
+
+
+def test_plugins_hold_no_flat_module():
+    folder = PACKAGES[PLUGINS]
+    flat = [p.name for p in folder.glob("*.py") if p.name != "__init__.py"]
+    assert flat == []
+    # every folder of Python modules is a package
+    loose = [
+        str(d.relative_to(folder))
+        for d in folder.rglob("*")
+        if d.is_dir() and any(d.glob("*.py")) and not (d / "__init__.py").exists()
+    ]
+    assert loose == []
+    packages = {_plugin_package(m) for m in MODULES if m.startswith(PLUGINS + ".")}
+    assert packages == {p for _, layer in PLUGIN_LAYERS for p in layer}
+
+
+def test_plugin_packages_import_one_way():
+    wrong = []
+    for module, found in IMPORTS.items():
+        if module.split(".")[0] != PLUGINS or module == PLUGINS:
+            continue
+        for line, target, _, _ in found:
+            if target not in MODULES or target.split(".")[0] != PLUGINS:
+                continue
+            if target == PLUGINS or (
+                _plugin_package(target) != _plugin_package(module)
+                and _plugin_layer(target) >= _plugin_layer(module)
+            ):
+                wrong.append(f"{module}:{line} imports {target}")
+            elif module.startswith(target + "."):  # its own package's __init__: the plugin
+                wrong.append(f"{module}:{line} imports its package {target}")
+    assert wrong == []
+
+
+def test_the_core_imports_no_built_in_plugin():
+    found = [
+        f"{module}:{line} imports {target}"
+        for module, imports in IMPORTS.items()
+        if module.split(".")[0] == "gearopt"
+        for line, target, _, _ in imports
+        if target.split(".")[0] == PLUGINS
+    ]
+    assert found == []
+
+
+def test_entry_points_name_modules_of_plugin_packages():
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    points = project["project"]["entry-points"]["gearopt"]
+    assert set(points) >= {"cyclo-palloid", "epicycloid", "face-milling", "tca", "objectives"}
+    for name, target in points.items():
+        module = target.split(":")[0]
+        assert module in MODULES, name
+        _plugin_layer(module)  # in a plugin package
+        assert _plugin_package(module) in PLUGIN_LAYERS[-1][1], name
