@@ -441,9 +441,18 @@ def test_the_core_imports_no_built_in_plugin():
     assert found == []
 
 
+def _project() -> dict:
+    return tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+
+
+def test_every_package_is_installed():
+    # a wheel holds the packages pyproject.toml lists, not the folders beside them
+    packages = {m for m, path in MODULES.items() if path.name == "__init__.py"}
+    assert set(_project()["tool"]["setuptools"]["packages"]) == packages
+
+
 def test_entry_points_name_modules_of_plugin_packages():
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
-    points = project["project"]["entry-points"]["gearopt"]
+    points = _project()["project"]["entry-points"]["gearopt"]
     assert set(points) >= {"cyclo-palloid", "epicycloid", "face-milling", "tca", "objectives"}
     for name, target in points.items():
         module = target.split(":")[0]
