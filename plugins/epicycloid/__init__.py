@@ -226,7 +226,7 @@ def _parse_flank(
     )
 
 
-def work(design: Design, member: str) -> WorkSettings:
+def member_work(design: Design, member: str) -> WorkSettings:
     """The work's settings of ``member``: every head of the machine rolls on the roll circle
     rho = N_b m_b / 2 (seed 001 eq 9 with dnu = 0: r sin(nu) for any head radius r), so the
     roll ratios are one for both flanks."""
@@ -252,7 +252,7 @@ def flank_system(
     """
     machine: EpicycloidMachine = design.machine
     spec = machine.member(member).flank(flank)
-    work_ = work(design, member)
+    work_ = member_work(design, member)
     nu = slope_angle_rad(
         blade_module_mm=machine.blade_module_mm,
         blade_groups=machine.blade_groups,
@@ -331,7 +331,7 @@ class Epicycloid(BaseMachineModel):
                         f"{prefix}rolling_circle_radius_mm": disk.rolling_circle_radius_mm,
                     }
                 )
-            common = work(design, member)
+            common = member_work(design, member)
             out[member] = EpicycloidSettings(
                 **values,
                 blade_groups=common.blade_groups,
