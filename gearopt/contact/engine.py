@@ -429,6 +429,15 @@ class ContactEngine:
         rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
         return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape))
 
+    def point_tables(self, side, phi):
+        """The tables of the compiled point evaluations
+        (:func:`gearopt.contact.kernels.clearance_at`) on rows (side, pinion angle; gear angle
+        0), each ``(n,)``: ``(rows, pinion, gear)``."""
+        n = len(phi)
+        rows = self.rows_of(np.asarray(side, np.intp), np.asarray(phi, float), 0.0)
+        gear, pinion, _ = self.kernel_tables
+        return rows.kernel_rows(n), pinion, gear
+
     def clearance_on_rows(self, rows: EngineRows, sh):
         """:meth:`at` on known rows by :func:`gearopt.contact.kernels.clearance_at`: rows
         ``(n, 1)`` and points ``(2, n, m)`` as the refinement has them, anything else one row

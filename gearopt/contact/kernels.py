@@ -40,7 +40,9 @@ __all__ = [
     "node_xy",
     "point_fields",
     "refine",
+    "swept_exits",
     "tangency",
+    "union_exits",
     "warm",
 ]
 
@@ -554,6 +556,182 @@ def lowest_nodes(field, keep, side, pick, values):
             values[r, c] = best
 
 
+@compiled(inline=True)
+def _separation(rows, r, s, t, pinion, gear, zone):
+    """The separation (mm) of row ``r`` at pinion grid point ``(s, t)``: the clearance above
+    the row's lag times its node factor interpolated bilinearly, +inf where not valid
+    (:meth:`gearopt.mesh.zone.Zones.separation`, point by point). ``zone``: the rows' lags
+    ``(R,)``, node factors ``(R, n_f, n_p)``, the grid's origin and spacing (face, profile)
+    and its last cells (floats), the compound."""
+    lag, factor, s0, ds, t0, dt, last0, last1, _ = zone
+    delta, valid = _point_in(rows, r, s, t, pinion, gear, pinion[14])
+    if not valid:
+        return math.inf
+    x = min(max((s - s0) / ds, 0.0), last0 + 1.0)
+    y = min(max((t - t0) / dt, 0.0), last1 + 1.0)
+    i = min(int(x), int(last0))
+    j = min(int(y), int(last1))
+    u, v = x - i, y - j
+    f = (1.0 - u) * ((1.0 - v) * factor[r, i, j] + v * factor[r, i, j + 1]) + u * (
+        (1.0 - v) * factor[r, i + 1, j] + v * factor[r, i + 1, j + 1]
+    )
+    return (delta - lag[r]) * f
+
+
+@compiled(inline=True)
+def _crossing(t0, f0, t1, f1, t2, f2):
+    """:func:`gearopt.mesh.zone._crossing` of one bracket."""
+    if not math.isfinite(f2):
+        return t2
+    linear = t1 + (t2 - t1) * f1 / (f1 - f2)
+    quad = (
+        t0 * f1 * f2 / ((f0 - f1) * (f0 - f2))
+        + t1 * f0 * f2 / ((f1 - f0) * (f1 - f2))
+        + t2 * f0 * f1 / ((f2 - f0) * (f2 - f1))
+    )
+    if math.isfinite(quad) and f0 < f1 and quad >= t1 and quad <= t2:
+        return quad
+    return linear
+
+
+@compiled
+def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f):
+    """The least over pairs ``a:b`` (one ray) of their separations at ``tau`` along the ray,
+    each at its least over the motion (:func:`gearopt.mesh.zone._swept`); ``f`` scratch."""
+    s = ray[0] + tau * ray[2]
+    t = ray[1] + tau * ray[3]
+    for p in range(a, b):
+        f[p] = _separation(rows, pair_row[p], s, t, pinion, gear, zone)
+    least = math.inf
+    for p in range(a, b):
+        g = f[p]
+        if prev[p] >= 0 and nxt[p] >= 0:
+            fa, fd = f[prev[p]], f[nxt[p]]
+            curv = fa - 2.0 * g + fd
+            finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
+            if finite and g <= fa and g <= fd and curv > 0.0:
+                g = g - 0.125 * (fd - fa) ** 2 / curv
+        least = min(least, g)
+    return least
+
+
+@compiled
+def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau, zoom, out):
+    """:meth:`gearopt.mesh.zone.Zones.pattern_exits` ray by ray, each scanned only up to its
+    first exit (the result needs no sample beyond it): ray k (``rays[k]`` = origin, unit
+    direction) holds pairs ``start[k]:start[k + 1]`` (rows ``pair_row``, neighbours over the
+    motion ``prev``, ``nxt``: -1 without) and is scanned at ``tau[k]``; its field is the least
+    swept separation minus the compound (``zone[8]``); an exit through a flank's boundary is
+    located on the finer scan ``zoom`` (fractions of its bracket). Writes ``out`` ``(K,)``."""
+    c = zone[8]
+    f = np.empty(pair_row.shape[0])
+    m = tau.shape[1]
+    for k in range(rays.shape[0]):
+        a, b = start[k], start[k + 1]
+        g0 = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, rays[k], tau[k, 0], f)
+        out[k] = 0.0
+        if not g0 - c < 0.0:
+            continue
+        gm2, gm1 = math.nan, g0 - c
+        j = 1
+        while j < m:
+            g = _swept_min(
+                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, rays[k], tau[k, j], f
+            )
+            g -= c
+            if not g < 0.0:
+                break
+            gm2, gm1 = gm1, g
+            j += 1
+        if j == m:
+            out[k] = tau[k, m - 1]
+            continue
+        t1, t2 = tau[k, j - 1], tau[k, j]
+        if math.isfinite(g):
+            t0 = tau[k, max(j - 2, 0)]
+            out[k] = _crossing(t0, gm2 if j >= 2 else math.nan, t1, gm1, t2, g)
+            continue
+        za = fa = zb = fb = 0.0
+        out_first = False  # (the bracket: the first sample out, but never before the second)
+        for i in range(zoom.shape[0]):
+            zb = t1 + (t2 - t1) * zoom[i]
+            fb = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, rays[k], zb, f)
+            fb -= c
+            if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
+                break
+            out_first = not fb < 0.0
+            za, fa = zb, fb
+        out[k] = _crossing(za, math.nan, za, fa, zb, fb) if math.isfinite(fb) else 0.5 * (za + zb)
+
+
+@compiled
+def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out):
+    """:meth:`gearopt.mesh.zone.Zones.exits` ray by ray, each scanned only up to its first
+    sample out of every zone: ray k (``rays[k]`` = origin, unit direction) holds the zones of
+    pairs ``start[k]:start[k + 1]`` (rows ``pair_row``) and is scanned at ``tau[k]``; each
+    zone that held the ray up to that sample gives a crossing of its separation through the
+    compound (``zone[8]``; through a flank's boundary, on the finer scan ``zoom``); the
+    farthest is the exit. Writes ``out`` ``(K,)``."""
+    c = zone[8]
+    m = tau.shape[1]
+    f = np.empty((pair_row.shape[0], m))
+    for k in range(rays.shape[0]):
+        a, b = start[k], start[k + 1]
+        ox, oy, dx, dy = rays[k, 0], rays[k, 1], rays[k, 2], rays[k, 3]
+        j = 0
+        while j < m:
+            held = False
+            for p in range(a, b):
+                f[p, j] = (
+                    _separation(
+                        rows,
+                        pair_row[p],
+                        ox + tau[k, j] * dx,
+                        oy + tau[k, j] * dy,
+                        pinion,
+                        gear,
+                        zone,
+                    )
+                    - c
+                )
+                held = held or f[p, j] < 0.0
+            if not held:
+                break
+            j += 1
+        if j == m:
+            out[k] = tau[k, m - 1]
+            continue
+        result = 0.0
+        for p in range(a, b):
+            if j == 0 or not f[p, j - 1] < 0.0:
+                continue
+            t1, t2, f1, f2 = tau[k, j - 1], tau[k, j], f[p, j - 1], f[p, j]
+            if math.isfinite(f2):
+                t0 = tau[k, max(j - 2, 0)]
+                x = _crossing(t0, f[p, j - 2] if j >= 2 else math.nan, t1, f1, t2, f2)
+            else:
+                za = fa = zb = fb = 0.0
+                out_first = False
+                for i in range(zoom.shape[0]):
+                    zb = t1 + (t2 - t1) * zoom[i]
+                    fb = (
+                        _separation(
+                            rows, pair_row[p], ox + zb * dx, oy + zb * dy, pinion, gear, zone
+                        )
+                        - c
+                    )
+                    if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
+                        break
+                    out_first = not fb < 0.0
+                    za, fa = zb, fb
+                if math.isfinite(fb):
+                    x = _crossing(za, math.nan, za, fa, zb, fb)
+                else:
+                    x = 0.5 * (za + zb)
+            result = math.nan if (x != x or result != result) else max(result, x)
+        out[k] = result
+
+
 def warm() -> None:
     """Compile every kernel, or load it from the disk cache, in this process, on tables of the
     engine's types (one cell, zero coefficients): done once before worker processes start, so
@@ -612,3 +790,9 @@ def warm() -> None:
     )
     maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
     interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, ok)
+    zone = (np.zeros(1), np.zeros((1, 2, 2)), 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0)
+    start, pair_row, tau = np.array([0, 1], ip), np.zeros(1, ip), np.zeros((1, 2))
+    rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)
+    union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
+    none = np.full(1, -1, ip)
+    swept_exits(rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out)
