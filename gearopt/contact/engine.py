@@ -138,16 +138,11 @@ class ContactEngine:
         self.shape = first.pinion.shape
         self.sense = np.array([f.sense for f in fields], float)
         self.gear_sense = -self.sense
-        self.turn0 = np.array([f.gear_offset_rad for f in fields])
+        self.place(fields)
         g = math.radians(first.pinion.pitch_angle_deg)
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
         tables = [f.node_tables for f in fields]
         self.ds, self.dh = tables[0]["cell_mm"]
-        # mm of normal separation per rad of gear rotation, typical of each side (a fixed
-        # tolerance in rad for the refinement's edge test)
-        scale = np.array([f.node_factor_mm or 50.0 for f in fields])
-        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
-        self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
         # the generated pinion nodes of each side, padded to one count with at least one more
         # (padding: the first generated node again, its result dropped); components stored
@@ -181,6 +176,17 @@ class ContactEngine:
         self.pinion_generated = np.concatenate([f.pinion.cells.generated for f in fields])
         self._linear_maps(fields)
         self.kernel_tables = self._kernel_tables()
+
+    def place(self, fields) -> None:
+        """Take the fields' phases (the gears' polar-angle offsets) and node factors anew: the
+        constants a field settles while it places its gear, once the engine is built (its other
+        tables do not change)."""
+        self.turn0 = np.array([f.gear_offset_rad for f in fields])
+        # mm of normal separation per rad of gear rotation, typical of each side (a fixed
+        # tolerance in rad for the refinement's edge test)
+        scale = np.array([f.node_factor_mm or 50.0 for f in fields])
+        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
+        self.tol_um = np.array([f.edge_tolerance_um for f in fields])
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.

@@ -122,13 +122,13 @@ class ClearanceField:
             delta, valid = self._node_clearance()
             phase_rad = -self.gear_sense * float(np.median(delta[valid]))
         self.phase_rad = float(phase_rad)
-        self._engine = ContactEngine([self])
+        self._engine.place([self])
         delta, valid = self._node_clearance()
         centre = float(np.median(self.gear_sense * delta[valid]))
         self.node_factor_mm = self._node_factor
         pitch = self.gear.pitch_rad
         self._shift = pitch * round(centre / pitch)
-        self._engine = ContactEngine([self])
+        self._engine.place([self])
 
     def _node_clearance(self):
         sample = self._engine.sample(np.zeros(1, np.intp), np.zeros(1), 0.0, refine=False)
