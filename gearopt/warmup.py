@@ -9,7 +9,7 @@ import sys
 import threading
 import time
 
-from gearopt.contact import kernels as contact_kernels
+from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
 from gearopt.mesh import kernels as mesh_kernels

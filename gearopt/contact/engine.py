@@ -470,26 +470,19 @@ class ContactEngine:
     def node_fields(self, side, phi, angle):
         """The clearance, normal factor and R2 at every grid node for rows (side, phi, gear
         angle), each ``(n, nodes)``: +inf, 0, 0 off the pinion's generated nodes
-        (:func:`gearopt.contact.kernels.node_fields`; the nodes' polar angles in between by
-        numpy's vectorised arctan2)."""
+        (:func:`gearopt.contact.kernels.node_fields`)."""
         n = len(phi)
         rows = self.rows_of(side, phi, angle)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
-        theta = np.empty((2, n, self.node_index.shape[1]))
-        count = self.kernel_tables[2]
-        constants, side = rows.kernel_rows(n), np.array(side, np.intp)
-        _kernels.node_xy(constants, side, count, self.node_xy, self.node_z, theta)
-        theta = np.arctan2(theta[1], theta[0], out=theta[0])
         _kernels.node_fields(
-            constants,
-            side,
-            count,
+            rows.kernel_rows(n),
+            np.array(side, np.intp),
+            self.kernel_tables[2],
             self.node_index,
             self.node_xy,
             self.node_z,
             self.node_nxy,
             self.node_nz,
-            theta,
             self.kernel_tables[0],
             out,
         )

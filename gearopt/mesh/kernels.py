@@ -83,7 +83,7 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
 
 def warm() -> None:
     """Compile the kernels, or load them from the disk cache (as
-    :func:`gearopt.contact.kernels.warm`); nothing without them."""
+    :func:`gearopt.contact.kernel_warmup.warm`); nothing without them."""
     if not ENABLED:
         return
     one, index = np.zeros((1, 1)), np.zeros(1, np.intp)
