@@ -573,11 +573,8 @@ def lowest_nodes(field, keep, side, pick, values):
 
 @compiled(inline=True)
 def _separation(rows, r, s, t, pinion, gear, zone):
-    """The separation (mm) of row ``r`` at pinion grid point ``(s, t)``: the clearance above
-    the row's lag times its node factor interpolated bilinearly, +inf where not valid
-    (:meth:`gearopt.mesh.zone.Zones.separation`, point by point). ``zone``: the rows' lags
-    ``(R,)``, node factors ``(R, n_f, n_p)``, the grid's origin and spacing (face, profile)
-    and its last cells (floats), the compound."""
+    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
+    rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
     lag, factor, s0, ds, t0, dt, last0, last1, _ = zone
     delta, valid = _point_in(rows, r, s, t, pinion, gear, pinion[14])
     if not valid:
@@ -610,72 +607,127 @@ def _crossing(t0, f0, t1, f1, t2, f2):
 
 
 @compiled
-def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f):
-    """The least over pairs ``a:b`` (one ray) of their separations at ``tau`` along the ray,
-    each at its least over the motion (:func:`gearopt.mesh.zone._swept`); ``f`` scratch."""
-    s = ray[0] + tau * ray[2]
-    t = ray[1] + tau * ray[3]
-    for p in range(a, b):
-        f[p] = _separation(rows, pair_row[p], s, t, pinion, gear, zone)
+def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
+    """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
+    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``)."""
+    for q in (prev[p], p, nxt[p]):
+        if q >= 0 and not have[q]:
+            s = ray[0] + tau * ray[2]
+            t = ray[1] + tau * ray[3]
+            f[q] = _separation(rows, pair_row[q], s, t, pinion, gear, zone)
+            have[q] = True
+    g = f[p]
+    if prev[p] >= 0 and nxt[p] >= 0:
+        fa, fd = f[prev[p]], f[nxt[p]]
+        curv = fa - 2.0 * g + fd
+        finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
+        if finite and g <= fa and g <= fd and curv > 0.0:
+            g = g - 0.125 * (fd - fa) ** 2 / curv
+    return g
+
+
+@compiled
+def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint):
+    """With ``hint[0]`` < 0 the pattern at ``tau`` along a ray of pairs ``a:b``, the least swept
+    separation (:func:`_swept`) minus the compound; else -1.0 inside, +1.0 out, trying pair
+    ``hint[0]`` (the last found inside) first and the others until one is inside."""
+    c = zone[8]
+    have[a:b] = False
+    if hint[0] >= 0:
+        if _swept(rows, pinion, gear, zone, hint[0], pair_row, prev, nxt, ray, tau, f, have) < c:
+            return -1.0
+        for p in range(a, b):
+            if _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have) < c:
+                hint[0] = p
+                return -1.0
+        return 1.0
     least = math.inf
     for p in range(a, b):
-        g = f[p]
-        if prev[p] >= 0 and nxt[p] >= 0:
-            fa, fd = f[prev[p]], f[nxt[p]]
-            curv = fa - 2.0 * g + fd
-            finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
-            if finite and g <= fa and g <= fd and curv > 0.0:
-                g = g - 0.125 * (fd - fa) ** 2 / curv
-        least = min(least, g)
-    return least
+        least = min(
+            least, _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have)
+        )
+    return least - c
 
 
 @compiled
 def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau, zoom, out):
-    """:meth:`gearopt.mesh.zone.Zones.pattern_exits` ray by ray, each scanned only up to its
-    first exit (the result needs no sample beyond it): ray k (``rays[k]`` = origin, unit
-    direction) holds pairs ``start[k]:start[k + 1]`` (rows ``pair_row``, neighbours over the
-    motion ``prev``, ``nxt``: -1 without) and is scanned at ``tau[k]``; its field is the least
-    swept separation minus the compound (``zone[8]``); an exit through a flank's boundary is
-    located on the finer scan ``zoom`` (fractions of its bracket). Writes ``out`` ``(K,)``."""
-    c = zone[8]
+    """:meth:`gearopt.mesh.zone.Zones.pattern_exits` into ``out``: ray k (``rays[k]``: origin,
+    direction) of pairs ``start[k]:start[k + 1]`` (rows ``pair_row``, neighbours over the
+    motion ``prev``, ``nxt``, -1 without) scanned at ``tau[k]`` up to its first exit, a sample
+    inside once a pair is; the field whole only where it brackets the exit (the same result);
+    an exit through a flank's boundary on the finer scan ``zoom``."""
     f = np.empty(pair_row.shape[0])
+    have = np.zeros(pair_row.shape[0], np.bool_)
     m = tau.shape[1]
+    full = np.full(1, -1, np.intp)
     for k in range(rays.shape[0]):
-        a, b = start[k], start[k + 1]
-        g0 = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, rays[k], tau[k, 0], f)
+        a, b, ray = start[k], start[k + 1], rays[k]
+        hint = np.full(1, a, np.intp)
         out[k] = 0.0
-        if not g0 - c < 0.0:
+        if (
+            not b > a
+            or _swept_min(
+                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau[k, 0], f, have, hint
+            )
+            > 0.0
+        ):
             continue
-        gm2, gm1 = math.nan, g0 - c
         j = 1
         while j < m:
-            g = _swept_min(
-                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, rays[k], tau[k, j], f
-            )
-            g -= c
-            if not g < 0.0:
+            if (
+                _swept_min(
+                    rows,
+                    pinion,
+                    gear,
+                    zone,
+                    a,
+                    b,
+                    pair_row,
+                    prev,
+                    nxt,
+                    ray,
+                    tau[k, j],
+                    f,
+                    have,
+                    hint,
+                )
+                > 0.0
+            ):
                 break
-            gm2, gm1 = gm1, g
             j += 1
         if j == m:
             out[k] = tau[k, m - 1]
             continue
         t1, t2 = tau[k, j - 1], tau[k, j]
+        g = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t2, f, have, full)
         if math.isfinite(g):
-            t0 = tau[k, max(j - 2, 0)]
-            out[k] = _crossing(t0, gm2 if j >= 2 else math.nan, t1, gm1, t2, g)
+            gm1 = _swept_min(
+                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t1, f, have, full
+            )
+            gm2 = math.nan
+            if j >= 2:
+                t0 = tau[k, j - 2]
+                gm2 = _swept_min(
+                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t0, f, have, full
+                )
+            out[k] = _crossing(tau[k, max(j - 2, 0)], gm2, t1, gm1, t2, g)
             continue
-        za = fa = zb = fb = 0.0
+        za = zb = 0.0
         out_first = False  # (the bracket: the first sample out, but never before the second)
         for i in range(zoom.shape[0]):
             zb = t1 + (t2 - t1) * zoom[i]
-            fb = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, rays[k], zb, f)
-            fb -= c
-            if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
+            inside = (
+                _swept_min(
+                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, hint
+                )
+                < 0.0
+            )
+            if i >= 1 and (out_first or not inside or i == zoom.shape[0] - 1):
                 break
-            out_first = not fb < 0.0
-            za, fa = zb, fb
+            out_first = not inside
+            za = zb
+        fa = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, za, f, have, full)
+        fb = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, full)
         out[k] = _crossing(za, math.nan, za, fa, zb, fb) if math.isfinite(fb) else 0.5 * (za + zb)
 
 
