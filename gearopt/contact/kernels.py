@@ -571,7 +571,7 @@ def lowest_nodes(field, keep, side, pick, values):
             values[r, c] = best
 
 
-@compiled(inline=True)
+@compiled
 def _separation(rows, r, s, t, pinion, gear, zone):
     """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
     rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
