@@ -9,9 +9,10 @@ import sys
 import threading
 import time
 
-from gearopt.contact import kernels as contact_kernels
+from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
+from gearopt.mesh import kernels as mesh_kernels
 
 __all__ = ["ANNOUNCE_AFTER_S", "warm_kernels"]
 
@@ -20,10 +21,10 @@ ANNOUNCE_AFTER_S = 1.0
 
 
 def warm_kernels(*, announce: bool = True) -> float:
-    """Compile every compiled kernel (contact engine, loaded contact) in this process, or load
-    it from numba's disk cache, and return the seconds it took. A first use after an install
-    compiles them (about half a minute); ``announce``: said on stderr when it takes longer than
-    :data:`ANNOUNCE_AFTER_S` (a cached load takes well under a second)."""
+    """Compile every compiled kernel (contact engine, mesh cycle, loaded contact) in this
+    process, or load it from numba's disk cache, and return the seconds it took. A first use
+    after an install compiles them (about half a minute); ``announce``: said on stderr when it
+    takes longer than :data:`ANNOUNCE_AFTER_S` (a cached load takes well under a second)."""
     start = time.perf_counter()
     said = threading.Event()
 
@@ -42,6 +43,7 @@ def warm_kernels(*, announce: bool = True) -> float:
         timer.start()
     try:
         contact_kernels.warm()
+        mesh_kernels.warm()
         loaded_kernels.warm()
         lcp_kernels.warm()
     finally:

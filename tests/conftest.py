@@ -23,7 +23,7 @@ def _compiled_kernels():
     """The compiled kernels (contact engine, loaded contact) compiled (or loaded from the disk
     cache) once in this process before any test starts a subprocess: CLI and study workers
     then load the cache rather than compile it side by side."""
-    from gearopt.contact import kernels as contact_kernels
+    from gearopt.contact import kernel_warmup as contact_kernels
     from gearopt.loaded import kernels as loaded_kernels
 
     contact_kernels.warm()

@@ -16,6 +16,8 @@ from numpy.typing import NDArray
 from gearopt.contact.engine import ContactEngine, EngineRows
 from gearopt.flank import hermite_cells
 
+from . import numpy_zone
+
 AROUND_ROWS = 32  # batches up to this many rows evaluate the stencils of all cut-backs
 JOINT_ROWS = 16  # node fields of up to this many rows: all sides in one evaluation
 FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
@@ -31,9 +33,11 @@ METHODS = ("node_fields", "clearance_on_rows", "lowest_nodes", "refine")
 
 def install(monkeypatch) -> None:
     """Put the numpy reference in place of the engine's compiled methods (pytest's
-    ``monkeypatch``): every engine then evaluates with numpy."""
+    ``monkeypatch``), and the zones' numpy scans in place of theirs
+    (:mod:`tests.numpy_zone`): every engine then evaluates with numpy."""
     for name in METHODS:
         monkeypatch.setattr(ContactEngine, name, globals()[name])
+    numpy_zone.install(monkeypatch)
 
 
 def _work(name: str, shape, dtype=float) -> NDArray:

@@ -138,16 +138,11 @@ class ContactEngine:
         self.shape = first.pinion.shape
         self.sense = np.array([f.sense for f in fields], float)
         self.gear_sense = -self.sense
-        self.turn0 = np.array([f.gear_offset_rad for f in fields])
+        self.place(fields)
         g = math.radians(first.pinion.pitch_angle_deg)
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
         tables = [f.node_tables for f in fields]
         self.ds, self.dh = tables[0]["cell_mm"]
-        # mm of normal separation per rad of gear rotation, typical of each side (a fixed
-        # tolerance in rad for the refinement's edge test)
-        scale = np.array([f.node_factor_mm or 50.0 for f in fields])
-        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
-        self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
         # the generated pinion nodes of each side, padded to one count with at least one more
         # (padding: the first generated node again, its result dropped); components stored
@@ -181,6 +176,17 @@ class ContactEngine:
         self.pinion_generated = np.concatenate([f.pinion.cells.generated for f in fields])
         self._linear_maps(fields)
         self.kernel_tables = self._kernel_tables()
+
+    def place(self, fields) -> None:
+        """Take the fields' phases (the gears' polar-angle offsets) and node factors anew: the
+        constants a field settles while it places its gear, once the engine is built (its other
+        tables do not change)."""
+        self.turn0 = np.array([f.gear_offset_rad for f in fields])
+        # mm of normal separation per rad of gear rotation, typical of each side (a fixed
+        # tolerance in rad for the refinement's edge test)
+        scale = np.array([f.node_factor_mm or 50.0 for f in fields])
+        self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
+        self.tol_um = np.array([f.edge_tolerance_um for f in fields])
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -429,6 +435,15 @@ class ContactEngine:
         rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
         return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape))
 
+    def point_tables(self, side, phi):
+        """The tables of the compiled point evaluations
+        (:func:`gearopt.contact.kernels.clearance_at`) on rows (side, pinion angle; gear angle
+        0), each ``(n,)``: ``(rows, pinion, gear)``."""
+        n = len(phi)
+        rows = self.rows_of(np.asarray(side, np.intp), np.asarray(phi, float), 0.0)
+        gear, pinion, _ = self.kernel_tables
+        return rows.kernel_rows(n), pinion, gear
+
     def clearance_on_rows(self, rows: EngineRows, sh):
         """:meth:`at` on known rows by :func:`gearopt.contact.kernels.clearance_at`: rows
         ``(n, 1)`` and points ``(2, n, m)`` as the refinement has them, anything else one row
@@ -455,26 +470,19 @@ class ContactEngine:
     def node_fields(self, side, phi, angle):
         """The clearance, normal factor and R2 at every grid node for rows (side, phi, gear
         angle), each ``(n, nodes)``: +inf, 0, 0 off the pinion's generated nodes
-        (:func:`gearopt.contact.kernels.node_fields`; the nodes' polar angles in between by
-        numpy's vectorised arctan2)."""
+        (:func:`gearopt.contact.kernels.node_fields`)."""
         n = len(phi)
         rows = self.rows_of(side, phi, angle)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
-        theta = np.empty((2, n, self.node_index.shape[1]))
-        count = self.kernel_tables[2]
-        constants, side = rows.kernel_rows(n), np.array(side, np.intp)
-        _kernels.node_xy(constants, side, count, self.node_xy, self.node_z, theta)
-        theta = np.arctan2(theta[1], theta[0], out=theta[0])
         _kernels.node_fields(
-            constants,
-            side,
-            count,
+            rows.kernel_rows(n),
+            np.array(side, np.intp),
+            self.kernel_tables[2],
             self.node_index,
             self.node_xy,
             self.node_z,
             self.node_nxy,
             self.node_nz,
-            theta,
             self.kernel_tables[0],
             out,
         )

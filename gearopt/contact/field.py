@@ -122,13 +122,13 @@ class ClearanceField:
             delta, valid = self._node_clearance()
             phase_rad = -self.gear_sense * float(np.median(delta[valid]))
         self.phase_rad = float(phase_rad)
-        self._engine = ContactEngine([self])
+        self._engine.place([self])
         delta, valid = self._node_clearance()
         centre = float(np.median(self.gear_sense * delta[valid]))
         self.node_factor_mm = self._node_factor
         pitch = self.gear.pitch_rad
         self._shift = pitch * round(centre / pitch)
-        self._engine = ContactEngine([self])
+        self._engine.place([self])
 
     def _node_clearance(self):
         sample = self._engine.sample(np.zeros(1, np.intp), np.zeros(1), 0.0, refine=False)
@@ -266,6 +266,13 @@ class JointField:
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
         side = np.asarray(side, np.intp)
         return self._engine.at(side, np.stack([s, h]), phi_rad, gear_angle_rad)
+
+    def point_tables(self, side, phi_rad) -> tuple:
+        """For compiled callers: the tables of the clearance at pinion grid points on rows
+        (field ``side[k]``, pinion angle ``phi_rad[k]``, the gear at its ideal angle), as
+        :func:`gearopt.contact.kernels.clearance_at` takes them: ``(rows, pinion, gear)``. Its
+        ``(delta, valid)`` on row k is :meth:`clearance_at_grid`'s."""
+        return self._engine.point_tables(side, phi_rad)
 
     @staticmethod
     def _near_rows(near):

@@ -4,9 +4,8 @@ Written point by point in compiled loops, so that a small batch costs its points
 numpy's fixed overhead per call (the engine's refinement evaluates a few hundred points at a
 time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares their tables:
 
-- :func:`node_xy`, :func:`node_fields`: the clearance, the normal factor and R2 at every
-  generated node of the pinion flank for each row (side, pinion angle, gear angle), off-mask
-  nodes +inf / 0 / 0 (the nodes' polar angles between the two by numpy's vectorised arctan2);
+- :func:`node_fields`: the clearance, the normal factor and R2 at every generated node of the
+  pinion flank for each row (side, pinion angle, gear angle), off-mask nodes +inf / 0 / 0;
 - :func:`point_fields`: the clearance, the normal factor, R2 and the gear's grid coordinates of
   pinion points given in the member frame (the loaded contact's patches);
 - :func:`clearance_at`: the clearance at pinion grid coordinates by the pinion's local
@@ -37,11 +36,11 @@ __all__ = [
     "interval_end",
     "lowest_nodes",
     "node_fields",
-    "node_xy",
     "point_fields",
     "refine",
+    "swept_exits",
     "tangency",
-    "warm",
+    "union_exits",
 ]
 
 
@@ -108,30 +107,48 @@ def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
     return gap * sense, valid, radius
 
 
-@compiled
-def node_xy(rows, side, count, xy, z, out):
-    """The first two linear outputs (qx, qy in the gear frame) of the nodes of
-    :func:`node_fields` into ``out`` (``(2, n, m)``, by node column; 1 beyond the row's
-    nodes), for one vectorised arctan2 (numpy's SIMD one costs a sixth of libm's point by point)."""
-    kx, ky = rows[0], rows[1]
-    n = side.shape[0]
-    for r in range(n):
-        k = side[r]
-        for j in range(count[k]):
-            x, y = xy[0, k, j], xy[1, k, j]
-            out[0, r, j] = kx[0, r] * x + ky[0, r] * y + z[0, k, j]
-            out[1, r, j] = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
-        out[:, r, count[k] :] = 1.0  # (padding: a harmless angle, never read)
+# Cephes' atan (S. L. Moshier): the rational approximation on [0, 0.66] after reduction by
+# tan(3 pi / 8) and tan(pi / 8); measured within 1 ulp of numpy's arctan2, at two thirds of
+# libm's cost
+_ATAN_P = (-8.750608600031904122785e-1, -1.615753718733365076637e1, -7.500855792314704667340e1)
+_ATAN_P += (-1.228866684490136173410e2, -6.485021904942025371773e1)
+_ATAN_Q = (2.485846490142306297962e1, 1.650270098316988542046e2, 4.328810604912902668951e2)
+_ATAN_Q += (4.853903996359136964868e2, 1.945506571482613964425e2)
+_MOREBITS = 6.123233995736765886130e-17  # pi / 2 - its double
+
+
+@compiled(inline=True)
+def _atan2(y, x):
+    """atan2(y, x) for the node fields (Cephes' atan of y / x, then the quadrant)."""
+    if x == 0.0 or not (math.isfinite(x) and math.isfinite(y)):
+        return math.atan2(y, x)
+    a = y / x
+    neg = a < 0.0
+    a = -a if neg else a
+    if a > 2.41421356237309504880:
+        base, a, more = 0.5 * math.pi, -(1.0 / a), _MOREBITS
+    elif a <= 0.66:
+        base, more = 0.0, 0.0
+    else:
+        base, a, more = 0.25 * math.pi, (a - 1.0) / (a + 1.0), 0.5 * _MOREBITS
+    z = a * a
+    p = (((_ATAN_P[0] * z + _ATAN_P[1]) * z + _ATAN_P[2]) * z + _ATAN_P[3]) * z + _ATAN_P[4]
+    q = ((((z + _ATAN_Q[0]) * z + _ATAN_Q[1]) * z + _ATAN_Q[2]) * z + _ATAN_Q[3]) * z + _ATAN_Q[4]
+    t = base + (a * (z * p / q) + a + more)
+    t = -t if neg else t
+    if x > 0.0:
+        return t
+    return t + math.pi if y >= 0.0 else t - math.pi
 
 
 @compiled
-def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
+def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     """Node fields of rows r (``rows`` as :func:`clearance_at`'s, ``side``: ``(n,)``) on the
     generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
     coordinates ``xy`` (``(2, K, m)``), z terms ``z`` (``(4, K, m)``), normals' terms ``nxy``,
-    ``nz`` (``(2, K, m)``), the nodes' polar angles in the gear frame ``theta`` (``(n, m)``,
-    atan2 of :func:`node_xy`'s). Writes the clearance (+inf off the mask or off the gear
-    flank), the normal factor and R2 (0 off the mask) into ``out`` (``(3, n, nodes)``)."""
+    ``nz`` (``(2, K, m)``); the nodes' polar angles in the gear frame by :func:`_atan2`.
+    Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
+    (0 off the mask) into ``out`` (``(3, n, nodes)``)."""
     kx, ky, turn, sense, offset, _ = rows
     n = turn.shape[0]
     for r in range(n):
@@ -146,7 +163,7 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, theta, gear, out):
             o2 = kx[2, r] * x + ky[2, r] * y + z[2, k, j]
             o3 = kx[3, r] * x + ky[3, r] * y + z[3, k, j]
             gap, valid, radius = _gear_gap(
-                o0, o1, o2, o3, theta[r, j], turn[r], sense[r], offset[r], gear
+                o0, o1, o2, o3, _atan2(o1, o0), turn[r], sense[r], offset[r], gear
             )
             nx, ny = nxy[0, k, j], nxy[1, k, j]
             m0 = kx[0, r] * nx + ky[0, r] * ny + nz[0, k, j]
@@ -554,61 +571,229 @@ def lowest_nodes(field, keep, side, pick, values):
             values[r, c] = best
 
 
-def warm() -> None:
-    """Compile every kernel, or load it from the disk cache, in this process, on tables of the
-    engine's types (one cell, zero coefficients): done once before worker processes start, so
-    that they load the cache rather than compile it side by side (numba's cache is not safe
-    for concurrent writers). Nothing without the kernels."""
-    if not ENABLED:
-        return
-    ip = np.intp
-    coef, ok = np.zeros((1, 16)), np.ones(1, np.bool_)
-    gear = (0.0, 0.0, 0.0, 0.0, 1, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, coef, ok)
-    lin, const = np.zeros((5, 2)), np.zeros(5)
-    pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, ok)
-    rows = (
-        np.zeros((4, 1)),
-        np.zeros((4, 1)),
-        np.zeros(1),
-        np.ones(1),
-        np.zeros(1, ip),
-        np.zeros(1, ip),
+@compiled
+def _separation(rows, r, s, t, pinion, gear, zone):
+    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
+    rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
+    lag, factor, s0, ds, t0, dt, last0, last1, _ = zone
+    delta, valid = _point_in(rows, r, s, t, pinion, gear, pinion[14])
+    if not valid:
+        return math.inf
+    x = min(max((s - s0) / ds, 0.0), last0 + 1.0)
+    y = min(max((t - t0) / dt, 0.0), last1 + 1.0)
+    i = min(int(x), int(last0))
+    j = min(int(y), int(last1))
+    u, v = x - i, y - j
+    f = (1.0 - u) * ((1.0 - v) * factor[r, i, j] + v * factor[r, i, j + 1]) + u * (
+        (1.0 - v) * factor[r, i + 1, j] + v * factor[r, i + 1, j + 1]
     )
-    side, count, index = np.zeros(1, ip), np.ones(1, ip), np.zeros((1, 1), ip)
-    xy, z, theta = np.zeros((2, 1, 1)), np.zeros((4, 1, 1)), np.zeros((1, 1))
-    node_xy(rows, side, count, xy, z, np.empty((2, 1, 1)))
-    node_fields(
-        rows, side, count, index, xy, z, xy.copy(), xy.copy(), theta, gear, np.empty((3, 1, 1))
+    return (delta - lag[r]) * f
+
+
+@compiled(inline=True)
+def _crossing(t0, f0, t1, f1, t2, f2):
+    """:func:`gearopt.mesh.zone._crossing` of one bracket."""
+    if not math.isfinite(f2):
+        return t2
+    linear = t1 + (t2 - t1) * f1 / (f1 - f2)
+    quad = (
+        t0 * f1 * f2 / ((f0 - f1) * (f0 - f2))
+        + t1 * f0 * f2 / ((f1 - f0) * (f1 - f2))
+        + t2 * f0 * f1 / ((f2 - f0) * (f2 - f1))
     )
-    clearance_at(
-        rows, np.zeros((2, 1, 1)), pinion, gear, np.empty((1, 1)), np.empty((1, 1), np.bool_)
-    )
-    point_fields(
-        rows,
-        np.zeros((1, 1, 3)),
-        np.zeros((1, 1, 3)),
-        np.zeros(4),
-        np.zeros(4),
-        gear,
-        np.empty((5, 1, 1)),
-        np.empty((1, 1), np.bool_),
-    )
-    cell = np.ones(2)
-    refine(
-        rows,
-        np.zeros(1),
-        np.zeros(1),
-        np.full(1, np.nan),
-        np.ones(1, ip),
-        np.zeros(1, ip),
-        np.zeros(1),
-        cell,
-        pinion,
-        gear,
-        np.zeros(1, np.bool_),
-    )
-    lowest_nodes(
-        np.zeros((1, 1)), np.ones((1, 1), np.bool_), side, np.empty((1, 1), ip), np.empty((1, 1))
-    )
-    maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
-    interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, ok)
+    if math.isfinite(quad) and f0 < f1 and quad >= t1 and quad <= t2:
+        return quad
+    return linear
+
+
+@compiled
+def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
+    """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
+    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``)."""
+    for q in (prev[p], p, nxt[p]):
+        if q >= 0 and not have[q]:
+            s = ray[0] + tau * ray[2]
+            t = ray[1] + tau * ray[3]
+            f[q] = _separation(rows, pair_row[q], s, t, pinion, gear, zone)
+            have[q] = True
+    g = f[p]
+    if prev[p] >= 0 and nxt[p] >= 0:
+        fa, fd = f[prev[p]], f[nxt[p]]
+        curv = fa - 2.0 * g + fd
+        finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
+        if finite and g <= fa and g <= fd and curv > 0.0:
+            g = g - 0.125 * (fd - fa) ** 2 / curv
+    return g
+
+
+@compiled
+def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint):
+    """With ``hint[0]`` < 0 the pattern at ``tau`` along a ray of pairs ``a:b``, the least swept
+    separation (:func:`_swept`) minus the compound; else -1.0 inside, +1.0 out, trying pair
+    ``hint[0]`` (the last found inside) first and the others until one is inside."""
+    c = zone[8]
+    have[a:b] = False
+    if hint[0] >= 0:
+        if _swept(rows, pinion, gear, zone, hint[0], pair_row, prev, nxt, ray, tau, f, have) < c:
+            return -1.0
+        for p in range(a, b):
+            if _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have) < c:
+                hint[0] = p
+                return -1.0
+        return 1.0
+    least = math.inf
+    for p in range(a, b):
+        least = min(
+            least, _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have)
+        )
+    return least - c
+
+
+@compiled
+def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau, zoom, out):
+    """:meth:`gearopt.mesh.zone.Zones.pattern_exits` into ``out``: ray k (``rays[k]``: origin,
+    direction) of pairs ``start[k]:start[k + 1]`` (rows ``pair_row``, neighbours over the
+    motion ``prev``, ``nxt``, -1 without) scanned at ``tau[k]`` up to its first exit, a sample
+    inside once a pair is; the field whole only where it brackets the exit (the same result);
+    an exit through a flank's boundary on the finer scan ``zoom``."""
+    f = np.empty(pair_row.shape[0])
+    have = np.zeros(pair_row.shape[0], np.bool_)
+    m = tau.shape[1]
+    full = np.full(1, -1, np.intp)
+    for k in range(rays.shape[0]):
+        a, b, ray = start[k], start[k + 1], rays[k]
+        hint = np.full(1, a, np.intp)
+        out[k] = 0.0
+        if (
+            not b > a
+            or _swept_min(
+                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau[k, 0], f, have, hint
+            )
+            > 0.0
+        ):
+            continue
+        j = 1
+        while j < m:
+            if (
+                _swept_min(
+                    rows,
+                    pinion,
+                    gear,
+                    zone,
+                    a,
+                    b,
+                    pair_row,
+                    prev,
+                    nxt,
+                    ray,
+                    tau[k, j],
+                    f,
+                    have,
+                    hint,
+                )
+                > 0.0
+            ):
+                break
+            j += 1
+        if j == m:
+            out[k] = tau[k, m - 1]
+            continue
+        t1, t2 = tau[k, j - 1], tau[k, j]
+        g = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t2, f, have, full)
+        if math.isfinite(g):
+            gm1 = _swept_min(
+                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t1, f, have, full
+            )
+            gm2 = math.nan
+            if j >= 2:
+                t0 = tau[k, j - 2]
+                gm2 = _swept_min(
+                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t0, f, have, full
+                )
+            out[k] = _crossing(tau[k, max(j - 2, 0)], gm2, t1, gm1, t2, g)
+            continue
+        za = zb = 0.0
+        out_first = False  # (the bracket: the first sample out, but never before the second)
+        for i in range(zoom.shape[0]):
+            zb = t1 + (t2 - t1) * zoom[i]
+            inside = (
+                _swept_min(
+                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, hint
+                )
+                < 0.0
+            )
+            if i >= 1 and (out_first or not inside or i == zoom.shape[0] - 1):
+                break
+            out_first = not inside
+            za = zb
+        fa = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, za, f, have, full)
+        fb = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, full)
+        out[k] = _crossing(za, math.nan, za, fa, zb, fb) if math.isfinite(fb) else 0.5 * (za + zb)
+
+
+@compiled
+def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out):
+    """:meth:`gearopt.mesh.zone.Zones.exits` ray by ray, each scanned only up to its first
+    sample out of every zone: ray k (``rays[k]`` = origin, unit direction) holds the zones of
+    pairs ``start[k]:start[k + 1]`` (rows ``pair_row``) and is scanned at ``tau[k]``; each
+    zone that held the ray up to that sample gives a crossing of its separation through the
+    compound (``zone[8]``; through a flank's boundary, on the finer scan ``zoom``); the
+    farthest is the exit. Writes ``out`` ``(K,)``."""
+    c = zone[8]
+    m = tau.shape[1]
+    f = np.empty((pair_row.shape[0], m))
+    for k in range(rays.shape[0]):
+        a, b = start[k], start[k + 1]
+        ox, oy, dx, dy = rays[k, 0], rays[k, 1], rays[k, 2], rays[k, 3]
+        j = 0
+        while j < m:
+            held = False
+            for p in range(a, b):
+                f[p, j] = (
+                    _separation(
+                        rows,
+                        pair_row[p],
+                        ox + tau[k, j] * dx,
+                        oy + tau[k, j] * dy,
+                        pinion,
+                        gear,
+                        zone,
+                    )
+                    - c
+                )
+                held = held or f[p, j] < 0.0
+            if not held:
+                break
+            j += 1
+        if j == m:
+            out[k] = tau[k, m - 1]
+            continue
+        result = 0.0
+        for p in range(a, b):
+            if j == 0 or not f[p, j - 1] < 0.0:
+                continue
+            t1, t2, f1, f2 = tau[k, j - 1], tau[k, j], f[p, j - 1], f[p, j]
+            if math.isfinite(f2):
+                t0 = tau[k, max(j - 2, 0)]
+                x = _crossing(t0, f[p, j - 2] if j >= 2 else math.nan, t1, f1, t2, f2)
+            else:
+                za = fa = zb = fb = 0.0
+                out_first = False
+                for i in range(zoom.shape[0]):
+                    zb = t1 + (t2 - t1) * zoom[i]
+                    fb = (
+                        _separation(
+                            rows, pair_row[p], ox + zb * dx, oy + zb * dy, pinion, gear, zone
+                        )
+                        - c
+                    )
+                    if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
+                        break
+                    out_first = not fb < 0.0
+                    za, fa = zb, fb
+                if math.isfinite(fb):
+                    x = _crossing(za, math.nan, za, fa, zb, fb)
+                else:
+                    x = 0.5 * (za + zb)
+            result = math.nan if (x != x or result != result) else max(result, x)
+        out[k] = result

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import ClearanceField, ContactError, FieldSample
+from gearopt.mesh import kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, gear_path_angle
 from gearopt.mesh.handover import FIT_TAGS, ITERATION_TAGS, HandOver, Request, lag_crossing
 from gearopt.mesh.pattern import centroids, separation_mm
@@ -457,22 +458,37 @@ class SideCycle:
         pair_te = ((g_min - g) * ARCSEC).T
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
 
-        # separations at the contact gear angle of each position (same lag for every pair)
+        # separations at the contact gear angle of each position (same lag for every pair),
+        # the pattern and the path (separation_mm, centroids: one compiled pass)
         compound_mm = compound_um * 1e-3
-        sep = separation_mm(self.sample, np.repeat(lag, pairs), separation, self.inv)
-        sep = sep.reshape((positions, pairs) + field.pinion.shape)
-        pattern = sep.min(axis=(0, 1)) * 1e3
+        kind = "normal_factor_mm" if separation == "normal" else "radius_mm"
+        node_factor = getattr(self.sample, kind)
         face = field.pinion.face_mm - frame.toe_mm
         profile = field.pinion.profile_mm - frame.root_mm
-        path_s, path_h = centroids(sep[rows, carrying], compound_mm, face, profile)
+        size = face.size * profile.size
+        sep = np.empty((positions * pairs, size))
+        out = np.empty(size + 2 * positions)
+        kernels.pattern_fields(
+            np.ascontiguousarray(self.sample.clearance_rad).reshape(-1, size),
+            np.ascontiguousarray(node_factor).reshape(-1, size),
+            self.inv,
+            lag,
+            carrying,
+            compound_mm,
+            face,
+            profile,
+            sep,
+            out,
+        )
+        sep = sep.reshape((positions, pairs) + field.pinion.shape)
+        pattern = out[:size].reshape(field.pinion.shape) * 1e3
+        path_s, path_h = out[size : size + positions], out[size + positions :]
 
         # the zones measured on the refined field (gearopt.mesh.zone, every side's at once):
         # M's position and its neighbours', and the pairs whose zones make the pattern
-        kind = "normal_factor_mm" if separation == "normal" else "radius_mm"
         flat_g = g.ravel()
         with np.errstate(invalid="ignore"):  # inf - inf off the flanks
             above = flat_g - np.repeat(lag, pairs)
-        node_factor = getattr(self.sample, kind)
         largest = node_factor.reshape(len(node_factor), -1).max(axis=1)[self.inv]
         reach = np.where(np.isfinite(above), above, np.inf) * largest
         # the pairs whose zones reach within five compounds (held or about to be: the

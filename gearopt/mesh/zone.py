@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt.contact import JointField
+from gearopt.contact import JointField, kernels
 
 __all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones"]
 
@@ -53,6 +53,7 @@ ZOOM = 33
 NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 31)])
 SPREAD = np.linspace(0.0, 1.0, 32)
 
+_ZOOM_FRACTIONS = np.linspace(0.0, 1.0, ZOOM)
 _RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
 _RING = RING_MM * np.stack([np.cos(_RING_ANGLES), np.sin(_RING_ANGLES)], axis=1)
 #: least-squares map from the ring's clearance rises to (g_s, g_h, H_ss, H_sh, H_hh)
@@ -112,6 +113,7 @@ class Zones:
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
         self.last = (len(face_mm) - 2, len(profile_mm) - 2)
+        self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
         """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)``."""
@@ -170,45 +172,31 @@ class Zones:
         NDArray
             ``(K,)`` the distance from each origin to its first exit from the union of its
             zones (0 where the origin is out of them; the reach where no exit is found).
+
+        Notes
+        -----
+        Each ray is scanned at :data:`SCAN` fractions of its reach up to its first sample out
+        of every zone; each zone that held it up to there gives its separation's crossing
+        through the compound (inverse quadratic interpolation through the last samples, or
+        through a flank's boundary on a finer scan of the bracket, :data:`ZOOM` samples); the
+        farthest is the exit (:func:`gearopt.contact.kernels.union_exits`).
         """
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
-        k_rays, c = len(origins), self.compound_mm
+        order = np.argsort(ray, kind="stable")
+        start = np.searchsorted(ray[order], np.arange(len(origins) + 1))
         tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
-        f = self.along(ray, r, origins, directions, tau[ray]) - c
-        inside = f < 0.0
-        held = np.zeros((k_rays, len(SCAN)), bool)
-        np.logical_or.at(held, ray, inside)
-        first = np.argmax(~held, axis=1)  # the first sample out of every zone (0: none)
-        through = held.all(axis=1)
-        result = np.where(through, tau[:, -1], 0.0)
-        j = first[ray]
-        p_on = np.flatnonzero((j > 0) & inside[np.arange(len(ray)), np.maximum(j - 1, 0)])
-        if not p_on.size:
-            return result
-        jj = j[p_on]
-        t1, t2 = tau[ray[p_on], jj - 1], tau[ray[p_on], jj]
-        f1, f2 = f[p_on, jj - 1], f[p_on, jj]
-        t0 = tau[ray[p_on], np.maximum(jj - 2, 0)]
-        f0 = np.where(jj >= 2, f[p_on, np.maximum(jj - 2, 0)], np.nan)
-        crossing = _crossing(t0, f0, t1, f1, t2, f2)
-        # an exit through a flank's boundary: the finer scan of its bracket
-        edge = ~np.isfinite(f2)
-        if edge.any():
-            pe = p_on[edge]
-            w = np.linspace(0.0, 1.0, ZOOM)
-            tz = t1[edge, None] + (t2[edge] - t1[edge])[:, None] * w[None, :]
-            fz = self.along(ray[pe], r[pe], origins, directions, tz) - c
-            out = ~(fz < 0.0)
-            out[:, -1] = True
-            m = np.maximum(np.argmax(out, axis=1), 1)
-            at = np.arange(len(pe))
-            za, zb, fa, fb = tz[at, m - 1], tz[at, m], fz[at, m - 1], fz[at, m]
-            crossing[edge] = np.where(
-                np.isfinite(fb), _crossing(za, np.nan, za, fa, zb, fb), 0.5 * (za + zb)
-            )
-        np.maximum.at(result, ray[p_on], crossing)
-        return np.where(through, tau[:, -1], result)
+        out = np.empty(len(origins))
+        kernels.union_exits(
+            *self.tables(),
+            start,
+            r[order],
+            self.rays(origins, directions),
+            tau,
+            _ZOOM_FRACTIONS,
+            out,
+        )
+        return out
 
     def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
         """How far rays run from their origins inside the pattern the zones of rows sweep.
@@ -218,8 +206,9 @@ class Zones:
         separations refined by the parabola through it and its neighbours' (as the TE peak:
         the zones of discrete positions leave gaps that the motion fills), then the least over
         the pairs. Each ray is scanned at :data:`SPREAD` (``spread``) or :data:`NEAR` fractions
-        of the way to the grid's edge; its first exit, by inverse quadratic interpolation of
-        that field, or through a flank's boundary by a finer scan (:data:`ZOOM`).
+        of the way to the grid's edge up to its first exit, located by inverse quadratic
+        interpolation of that field, or through a flank's boundary by a finer scan
+        (:data:`ZOOM`; :func:`gearopt.contact.kernels.swept_exits`).
 
         Parameters
         ----------
@@ -238,54 +227,52 @@ class Zones:
         """
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
-        k_rays, c = len(origins), self.compound_mm
+        k_rays = len(origins)
         prev, nxt = _neighbours(ray, np.asarray(key), np.asarray(position))
         starts = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
         if np.any(np.diff(ray) < 0) or len(starts) != k_rays:
             raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
         fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
         tau = self.to_edge(origins, directions)[:, None] * fractions
+        out = np.empty(k_rays)
+        kernels.swept_exits(
+            *self.tables(),
+            np.r_[starts, len(ray)],
+            r,
+            prev,
+            nxt,
+            self.rays(origins, directions),
+            tau,
+            _ZOOM_FRACTIONS,
+            out,
+        )
+        return out
 
-        def field(t, pick=None):  # the pattern's least separation minus the compound at t
-            if pick is None:  # (K, M): every ray
-                f = self.along(ray, r, origins, directions, t[ray])
-                g = _swept(f, prev, nxt)
-            else:  # the pairs ``pick`` (whole rays) only
-                f = np.full((len(ray), t.shape[1]), np.inf)
-                f[pick] = self.along(ray[pick], r[pick], origins, directions, t[ray[pick]])
-                g = _swept(f, prev, nxt)
-            return np.minimum.reduceat(g, starts, axis=0) - c
-
-        g = field(tau)
-        inside = g < 0.0
-        first = np.argmax(~inside, axis=1)
-        result = np.where(inside.all(axis=1), tau[:, -1], 0.0)
-        k = np.flatnonzero(inside[:, 0] & ~inside.all(axis=1))
-        if not k.size:
-            return result
-        j = first[k]
-        t1, t2, f1, f2 = tau[k, j - 1], tau[k, j], g[k, j - 1], g[k, j]
-        t0 = tau[k, np.maximum(j - 2, 0)]
-        f0 = np.where(j >= 2, g[k, np.maximum(j - 2, 0)], np.nan)
-        result[k] = _crossing(t0, f0, t1, f1, t2, f2)
-        edge = k[~np.isfinite(f2)]
-        if edge.size:
-            lo, hi = tau[edge, first[edge] - 1], tau[edge, first[edge]]
-            w = np.linspace(0.0, 1.0, ZOOM)
-            for _ in range(1):
-                tz = np.zeros((k_rays, ZOOM))
-                tz[edge] = lo[:, None] + (hi - lo)[:, None] * w[None, :]
-                gz = field(tz, np.flatnonzero(np.isin(ray, edge)))[edge]
-                out = ~(gz < 0.0)
-                out[:, -1] = True
-                m = np.maximum(np.argmax(out, axis=1), 1)
-                at = np.arange(len(edge))
-                lo, hi = tz[edge, m - 1], tz[edge, m]
-                fa, fb = gz[at, m - 1], gz[at, m]
-            result[edge] = np.where(
-                np.isfinite(fb), _crossing(lo, np.nan, lo, fa, hi, fb), 0.5 * (lo + hi)
+    def tables(self) -> tuple:
+        """The compiled evaluations' tables of the rows (made once): the rows' constants, the
+        pinion's and the gear's tables (:meth:`gearopt.contact.JointField.point_tables`) and
+        the separation's (lags, node factors, the grid, the compound)."""
+        if self._tables is None:
+            rows = self.rows
+            f = rows.factor_mm
+            zone = (
+                np.ascontiguousarray(rows.lag_rad, float),
+                np.ascontiguousarray(f, float),
+                self.face0,
+                self.dface,
+                self.profile0,
+                self.dprofile,
+                float(self.last[0]),
+                float(self.last[1]),
+                self.compound_mm,
             )
-        return result
+            self._tables = (*self.joint.point_tables(rows.side, rows.phi_rad), zone)
+        return self._tables
+
+    @staticmethod
+    def rays(origins, directions) -> NDArray:
+        """``(K, 4)`` rays as the kernels take them: origin, direction."""
+        return np.ascontiguousarray(np.concatenate([origins, directions], axis=1))
 
     def to_edge(self, origins, directions) -> NDArray:
         """``(K,)`` how far rays run from their origins to the grid's edge (off it nothing is
@@ -318,40 +305,6 @@ class Zones:
         forward, back = ends[:k], ends[k:]
         middle = origins + 0.5 * (forward - back)[:, None] * axes
         return forward + back, middle
-
-
-def _crossing(t0, f0, t1, f1, t2, f2) -> NDArray:
-    """Where f crosses zero between ``(t1, f1 < 0)`` and ``(t2, f2 >= 0)``: inverse quadratic
-    interpolation through the three samples where f rises through them, else linear;
-    ``t2`` where ``f2`` is not finite (the bracket's far end is off the flanks)."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        linear = t1 + (t2 - t1) * f1 / (f1 - f2)
-        quad = (
-            t0 * f1 * f2 / ((f0 - f1) * (f0 - f2))
-            + t1 * f0 * f2 / ((f1 - f0) * (f1 - f2))
-            + t2 * f0 * f1 / ((f2 - f0) * (f2 - f1))
-        )
-    good = np.isfinite(quad) & (f0 < f1) & (quad >= t1) & (quad <= t2)
-    out = np.where(good, quad, linear)
-    return np.where(np.isfinite(f2), out, t2)
-
-
-def _swept(f, prev, nxt) -> NDArray:
-    """The separations ``f`` ``(P, M)`` of rows at their least over the motion: where a row's
-    is the least of its pair's neighbouring positions' (``prev``, ``nxt``: their rows, -1
-    without), the vertex of the parabola through the three; else its own."""
-    both = (prev >= 0) & (nxt >= 0)
-    out = f.copy()
-    if not both.any():
-        return out
-    i = np.flatnonzero(both)
-    a, b, d = f[prev[i]], f[i], f[nxt[i]]
-    with np.errstate(invalid="ignore"):
-        curv = a - 2.0 * b + d
-        low = np.isfinite(a) & np.isfinite(b) & np.isfinite(d) & (b <= a) & (b <= d) & (curv > 0)
-        vertex = b - 0.125 * (d - a) ** 2 / np.where(low, curv, 1.0)
-    out[i] = np.where(low, vertex, b)
-    return out
 
 
 def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:

@@ -1,0 +1,76 @@
+"""The contact engine's compiled kernels (:mod:`gearopt.contact.kernels`) warmed in a process:
+:func:`warm` compiles each on tables of the engine's types, or loads it from numba's disk
+cache."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gearopt.contact import kernels
+
+__all__ = ["warm"]
+
+
+def warm() -> None:
+    """Compile every kernel, or load it from the disk cache, in this process, on tables of the
+    engine's types (one cell, zero coefficients): done once before worker processes start, so
+    that they load the cache rather than compile it side by side (numba's cache is not safe
+    for concurrent writers). Nothing without the kernels."""
+    if not kernels.ENABLED:
+        return
+    ip = np.intp
+    coef, ok = np.zeros((1, 16)), np.ones(1, np.bool_)
+    gear = (0.0, 0.0, 0.0, 0.0, 1, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, coef, ok)
+    lin, const = np.zeros((5, 2)), np.zeros(5)
+    pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, ok)
+    rows = (
+        np.zeros((4, 1)),
+        np.zeros((4, 1)),
+        np.zeros(1),
+        np.ones(1),
+        np.zeros(1, ip),
+        np.zeros(1, ip),
+    )
+    side, count, index = np.zeros(1, ip), np.ones(1, ip), np.zeros((1, 1), ip)
+    xy, z = np.zeros((2, 1, 1)), np.zeros((4, 1, 1))
+    kernels.node_fields(
+        rows, side, count, index, xy, z, xy.copy(), xy.copy(), gear, np.empty((3, 1, 1))
+    )
+    kernels.clearance_at(
+        rows, np.zeros((2, 1, 1)), pinion, gear, np.empty((1, 1)), np.empty((1, 1), np.bool_)
+    )
+    kernels.point_fields(
+        rows,
+        np.zeros((1, 1, 3)),
+        np.zeros((1, 1, 3)),
+        np.zeros(4),
+        np.zeros(4),
+        gear,
+        np.empty((5, 1, 1)),
+        np.empty((1, 1), np.bool_),
+    )
+    cell = np.ones(2)
+    kernels.refine(
+        rows,
+        np.zeros(1),
+        np.zeros(1),
+        np.full(1, np.nan),
+        np.ones(1, ip),
+        np.zeros(1, ip),
+        np.zeros(1),
+        cell,
+        pinion,
+        gear,
+        np.zeros(1, np.bool_),
+    )
+    kernels.lowest_nodes(
+        np.zeros((1, 1)), np.ones((1, 1), np.bool_), side, np.empty((1, 1), ip), np.empty((1, 1))
+    )
+    maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
+    kernels.interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, ok)
+    zone = (np.zeros(1), np.zeros((1, 2, 2)), 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0)
+    start, pair_row, tau = np.array([0, 1], ip), np.zeros(1, ip), np.zeros((1, 2))
+    rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)
+    kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
+    none = np.full(1, -1, ip)
+    kernels.swept_exits(rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out)
