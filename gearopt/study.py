@@ -260,9 +260,9 @@ class Coordinator:
     State: the opened study (:class:`OpenStudy`); the trials in hand, by number
     (``pending``, sent to the pool), ``held`` (innocent trials of a broken pool, to resubmit),
     ``suspects`` (started when a worker died, run again one at a time; ``alone``: the one
-    running alone); the counters of this run (``failed``, ``evaluated``, ``worker_s``, the
-    coordinator's own ``busy_s``, ``recovered``); the pool (``executor``) and the workers'
-    start markers (``markers``)."""
+    running alone); the counters of this run (``asked``, ``failed``, ``evaluated``,
+    ``worker_s``, the coordinator's own ``busy_s`` and ``busy_cpu_s``, ``recovered``); the pool
+    (``executor``) and the workers' start markers (``markers``)."""
 
     def __init__(
         self,

@@ -82,7 +82,7 @@ def example_study(tmp_path_factory):
 def test_the_dashboard_lists_every_trials_constraints_and_a_feasible_front(example_study):
     storage = optuna.storages.RDBStorage(example_study)
     app = optuna_dashboard.wsgi(storage)
-    (study_summary,) = _get(app, "/api/studies")["studies"]
+    (study_summary,) = _get(app, "/api/studies")["study_summaries"]
     detail = _get(app, f"/api/studies/{study_summary['study_id']}")
     trials = detail["trials"]
     assert len(trials) == 6 and all(t["state"] == "Complete" for t in trials)
@@ -124,7 +124,7 @@ def test_the_dashboard_apis_best_trials_card_ignores_constraints_upstream(exampl
     # fix is upstream (filter the trials by their ``constraints`` first, as its Pareto plot
     # does). This test says when that changes.
     app = optuna_dashboard.wsgi(optuna.storages.RDBStorage(example_study))
-    (study_summary,) = _get(app, "/api/studies")["studies"]
+    (study_summary,) = _get(app, "/api/studies")["study_summaries"]
     detail = _get(app, f"/api/studies/{study_summary['study_id']}")
     trials = detail["trials"]
     unconstrained = {
