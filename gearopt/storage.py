@@ -185,29 +185,41 @@ def study_exists(spec: StudySpec, storage: str | None = None) -> bool:
     try:
         if "studies" not in sa.inspect(engine).get_table_names():
             return False
-        with engine.connect() as con:
-            query = sa.text("SELECT 1 FROM studies WHERE study_name = :n")
-            return con.execute(query, {"n": spec.name}).first() is not None
     except sqlalchemy.exc.SQLAlchemyError as exc:
         raise storage_error(url, "cannot be read", exc) from None
     finally:
         engine.dispose()
+    try:  # Optuna's schema is there: its public API reads it (and creates nothing)
+        rdb = optuna.storages.RDBStorage(
+            url, engine_kwargs=_engine_kwargs(url), skip_table_creation=True
+        )
+    except Exception as exc:
+        raise storage_error(url, "cannot be read", exc) from None
+    try:
+        return spec.name in optuna.get_all_study_names(storage=rdb)
+    finally:
+        rdb.engine.dispose()
 
 
-def rdb_storage(url: str, attempts: int = 5) -> optuna.storages.RDBStorage:
+def rdb_storage(url: str, attempts: int = 5, **heartbeat) -> optuna.storages.RDBStorage:
     """Optuna's RDB storage; a new database's schema is created by whichever coordinator comes
-    first, and one that meets another creating it at the same moment tries again."""
+    first, and one that meets another creating it at the same moment tries again.
+    ``heartbeat``: RDBStorage's ``heartbeat_interval``, ``grace_period`` and
+    ``heartbeat_stale_trial_callback`` (:mod:`gearopt.recovery`)."""
+
+    def make() -> optuna.storages.RDBStorage:
+        return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url), **heartbeat)
 
     for attempt in range(attempts - 1):
         try:
-            return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
+            return make()
         except (sqlalchemy.exc.IntegrityError, sqlalchemy.exc.ProgrammingError):
             time.sleep(0.3 * (attempt + 1))
         except sqlalchemy.exc.OperationalError as exc:  # SQLite's "table ... already exists"
             if not _schema_race(exc):
                 raise
             time.sleep(0.3 * (attempt + 1))
-    return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
+    return make()
 
 
 def _schema_race(exc: Exception) -> bool:

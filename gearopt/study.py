@@ -3,7 +3,9 @@
 One coordinator process owns the storage (Optuna discourages several processes writing one
 SQLite file): it asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to a
 joblib/loky pool of ``jobs`` workers, writes the gearopt tables (:mod:`gearopt.results`) and
-tells Optuna, in that order. Workers never touch the database.
+tells Optuna, in that order. Workers never touch the database. :class:`Coordinator` holds a
+run's state; :func:`run_study` runs one. Only Optuna's public API is used (its study, trial and
+storage methods), never its private attributes or its tables through SQL.
 
 Counting: a run ends when the study holds ``trials`` COMPLETE trials (infeasible ones count,
 FAIL ones do not), so the same command again continues a study and is a no-op on a finished one.
@@ -13,9 +15,14 @@ Crashes:
 - a worker that dies fails its trial (the one whose start marker names the dead process), which
   is re-enqueued with the same parameters, at most twice; loky fails every pending future when
   one worker dies, so the innocent trials are resubmitted as they are;
-- a coordinator that dies leaves RUNNING trials: the next coordinator fails them and re-enqueues
-  their parameters, when their coordinator is gone (same host: its process is dead; another
-  host: no heartbeat for ``STALE_AFTER_S``). Trial numbers are never reused.
+- a coordinator that dies leaves RUNNING trials: they are failed and their parameters
+  re-enqueued (:mod:`gearopt.recovery`: Optuna's heartbeat and stale-trial handling, and at
+  once for a dead coordinator of the same host). Trial numbers are never reused.
+
+Constraints: each COMPLETE trial's constraint values are stored once, as the list in the study
+file's order under Optuna's ``constraints`` system attribute (the form ``optuna-dashboard``
+reads; Optuna reads it as constraints ``"0"``, ``"1"``, ...): :func:`constraint_values` names
+them again.
 
 Reproducibility: with ``jobs = 1``, or ``deterministic``, trials are asked in synchronous batches
 of ``jobs`` and told in order, so a seeded sampler suggests the same sequence of parameters;
@@ -26,8 +33,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import datetime as dt
-import math
 import os
 import shutil
 import signal
@@ -44,15 +49,26 @@ from pathlib import Path
 from typing import Any
 
 import optuna
-import sqlalchemy as sa
-import sqlalchemy.exc
-import tomli_w
 from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from optuna.trial import TrialState
 from tqdm import tqdm
 
+from gearopt.best import CONSTRAINTS_KEY, constraint_values, pick_best, save_design
 from gearopt.errors import GearoptError, StudyError
 from gearopt.pools import JoblibBatches, Resubmit, broken_pool, worker_pool
+from gearopt.recovery import (
+    ATTEMPT,
+    COORDINATOR,
+    HEARTBEAT_S,
+    MARKERS_PREFIX,
+    MAX_ATTEMPTS,
+    STALE_AFTER_S,
+    Requeue,
+    coordinator_tag,
+    fail_and_requeue,
+    recover,
+    trial_markers,
+)
 from gearopt.results import ResultsStore
 from gearopt.storage import (
     check_integrity,
@@ -63,15 +79,19 @@ from gearopt.storage import (
     masked_url,
     rdb_storage,
     storage_error,
-    storage_tag,
 )
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 from gearopt.warmup import warm_kernels
 
 __all__ = [
+    "MARKERS_PREFIX",
+    "MAX_ATTEMPTS",
     "STALE_AFTER_S",
+    "Coordinator",
+    "OpenStudy",
     "RunSummary",
+    "constraint_values",
     "default_storage_url",
     "enqueue",
     "open_study",
@@ -80,38 +100,6 @@ __all__ = [
     "save_design",
     "trial_objective",
 ]
-
-#: a coordinator on another host whose heartbeat is older than this is taken for dead
-STALE_AFTER_S = 120.0
-#: attempts of one design: the first and two re-enqueued ones
-MAX_ATTEMPTS = 3
-_COORD = "gearopt_coordinator"
-_ATTEMPT = "gearopt_attempt"
-_COUNTS = sa.text("SELECT state, COUNT(*) FROM trials WHERE study_id = :id GROUP BY state")
-_AHEAD = sa.text(
-    "SELECT COUNT(*) FROM trials WHERE study_id = :id AND number < :n"
-    " AND state IN ('COMPLETE', 'RUNNING')"
-)
-
-
-#: the prefix of the coordinators' temporary folders (a worker's pid marker per trial)
-MARKERS_PREFIX = "gearopt-trials-"
-
-
-def _trial_markers(pid: int) -> str:
-    """A new temporary folder for the trials' markers, its owner's pid in ``owner``; first
-    the folders of coordinators of this host that are gone (killed: nothing removed them)."""
-    root = Path(tempfile.gettempdir())
-    for folder in root.glob(MARKERS_PREFIX + "*"):
-        try:
-            owner = int((folder / "owner").read_text())
-        except (OSError, ValueError):  # no owner file (yet): not ours to judge
-            continue
-        if not _alive(owner):
-            shutil.rmtree(folder, ignore_errors=True)
-    markers = tempfile.mkdtemp(prefix=MARKERS_PREFIX)
-    Path(markers, "owner").write_text(str(pid))
-    return markers
 
 
 def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
@@ -125,19 +113,43 @@ def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
     return optuna.samplers.QMCSampler(seed=seed)
 
 
+@dataclass(frozen=True, kw_only=True)
+class OpenStudy:
+    """A study opened for a coordinator: the Optuna study, its RDB storage (the public handle
+    for trial ids, attributes and heartbeats), the study's id there and the gearopt tables."""
+
+    study: optuna.Study
+    storage: optuna.storages.RDBStorage
+    study_id: int
+    results: ResultsStore
+    requeue: Requeue
+
+
 def open_study(spec: StudySpec, storage: str | None = None):
     """The Optuna study of ``spec`` (created when new) and its :class:`ResultsStore`; a new
     study gets its metric names and the study file's given designs, an existing one the given
     designs added to the file since (a design with a trial already is skipped)."""
+    opened = _open(spec, storage)
+    return opened.study, opened.results
 
+
+def _open(spec: StudySpec, storage: str | None) -> OpenStudy:
     url = storage or default_storage_url(spec)
     check_storage_url(url)
     check_integrity(url)
     if not spec.shared_storage:
         check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
+    requeue = Requeue(spec)
     try:
-        rdb = rdb_storage(url)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            rdb = rdb_storage(
+                url,
+                heartbeat_interval=HEARTBEAT_S,
+                grace_period=STALE_AFTER_S,
+                heartbeat_stale_trial_callback=requeue,
+            )
         study = optuna.create_study(
             storage=rdb,
             sampler=_sampler(spec),
@@ -163,6 +175,7 @@ def open_study(spec: StudySpec, storage: str | None = None):
         )
     fast_sqlite(rdb.engine)
     results = ResultsStore(url, engine=rdb.engine)
+    requeue.results = results
     search = {d.key: [d.low, d.high, d.log] for d in spec.search}
     first = results.register_study(spec.name, search)
     if first:
@@ -171,8 +184,9 @@ def open_study(spec: StudySpec, storage: str | None = None):
             study.set_metric_names(spec.metric_names)
     # the study file's given designs: all of them the first time, later the ones added since
     for params in spec.enqueue:
-        study.enqueue_trial(dict(params), user_attrs={_ATTEMPT: 1}, skip_if_exists=not first)
-    return study, results
+        study.enqueue_trial(dict(params), user_attrs={ATTEMPT: 1}, skip_if_exists=not first)
+    study_id = rdb.get_study_id_from_name(spec.name)
+    return OpenStudy(study=study, storage=rdb, study_id=study_id, results=results, requeue=requeue)
 
 
 def enqueue(spec: StudySpec, params: Mapping[str, float], storage: str | None = None) -> None:
@@ -180,7 +194,7 @@ def enqueue(spec: StudySpec, params: Mapping[str, float], storage: str | None = 
     params = spec.check_params(params, "enqueue")
     spec.design_for(params)  # refuse an invalid design now, not in a worker
     study, _ = open_study(spec, storage)
-    study.enqueue_trial(dict(params), user_attrs={_ATTEMPT: 1})
+    study.enqueue_trial(dict(params), user_attrs={ATTEMPT: 1})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -196,6 +210,7 @@ class RunSummary:
     worker_s: float
     kernels_s: float = 0.0  # the compiled kernels' compilation or loading, before the trials
     coordinator_s: float  # asking, telling, writing the tables, recovering: waits excluded
+    coordinator_cpu_s: float = 0.0  # the same, the coordinator thread's CPU time
     jobs: int
     best: optuna.trial.FrozenTrial | None = None
     best_design_path: str | None = None
@@ -221,70 +236,374 @@ class RunSummary:
         n = max(self.evaluated_this_run, 1)
         return 1e3 * self.coordinator_s / n
 
+    @property
+    def coordinator_cpu_ms_per_trial(self) -> float:
+        """:attr:`coordinator_ms_per_trial` in CPU time (not inflated by a busy machine)."""
+        return 1e3 * self.coordinator_cpu_s / max(self.evaluated_this_run, 1)
 
-def _alive(pid: int) -> bool:
-    """Whether process ``pid`` runs (a zombie, killed but not yet reaped, does not)."""
-    if Path("/proc/self").exists():
+
+@dataclass(kw_only=True)
+class InHand:
+    """A trial this coordinator holds: asked (RUNNING in Optuna), sent or to be sent."""
+
+    trial: optuna.Trial
+    trial_id: int  # Optuna's, from its storage's public API
+    params: dict
+    attempt: int
+    future: cf.Future | None = None
+
+
+class Coordinator:
+    """One coordinator's run of a study until it holds ``trials`` COMPLETE trials (the
+    parameters: :func:`run_study`).
+
+    State: the opened study (:class:`OpenStudy`); the trials in hand, by number
+    (``pending``, sent to the pool), ``held`` (innocent trials of a broken pool, to resubmit),
+    ``suspects`` (started when a worker died, run again one at a time; ``alone``: the one
+    running alone); the counters of this run (``asked``, ``failed``, ``evaluated``,
+    ``worker_s``, the coordinator's own ``busy_s`` and ``busy_cpu_s``, ``recovered``); the pool
+    (``executor``) and the workers' start markers (``markers``)."""
+
+    def __init__(
+        self,
+        spec: StudySpec,
+        *,
+        trials: int,
+        jobs: int,
+        storage: str | None,
+        deterministic: bool,
+        progress: bool,
+        max_failures: int | None,
+        backend: str,
+        scheduler: str | None,
+    ) -> None:
+        if not isinstance(trials, int) or trials < 1:
+            raise StudyError("--trials", trials, "must be a positive integer")
+        if not isinstance(jobs, int) or jobs < 1:
+            raise StudyError("--jobs", jobs, "must be a positive integer")
+        if backend not in ("loky", "dask"):
+            raise StudyError("--backend", backend, "must be loky or dask")
+        self.spec, self.trials, self.jobs = spec, trials, jobs
+        self.backend, self.scheduler, self.progress = backend, scheduler, progress
+        self.url = storage or default_storage_url(spec)
+        self.batch = deterministic or jobs == 1 or backend == "dask"
+        self.limit = max(10, trials) if max_failures is None else max_failures
+        self.labels = {o.label: "objective" for o in spec.objectives}
+        self.labels.update({c.label: "constraint" for c in spec.constraints})
+        self.me, self.host, self.pid = uuid.uuid4().hex, socket.gethostname(), os.getpid()
+        self.tag = coordinator_tag(self.host, self.pid, self.me)
+        self.pending: dict[int, InHand] = {}
+        self.held: list[InHand] = []
+        self.suspects: list[InHand] = []
+        self.alone: set[int] = set()
+        self.failed = self.evaluated = self.asked = 0
+        self.worker_s = self.busy_s = self.busy_cpu_s = self.kernels_s = 0.0
+        self.recovered: list[int] = []
+        self.executor: Any = None
+        self.markers = ""
+        self.bar = None
+        self.shown = self.last_beat = 0.0
+        self.opened: OpenStudy | None = None
+
+    # --- the study -----------------------------------------------------------------------
+
+    @property
+    def study(self) -> optuna.Study:
+        return self.opened.study
+
+    def counts(self) -> tuple[int, int]:
+        """COMPLETE and RUNNING trials of the study, every coordinator's (Optuna's cached
+        storage reads only the trials not finished at its last look)."""
+        complete = running = 0
+        for t in self.study.get_trials(
+            deepcopy=False, states=(TrialState.COMPLETE, TrialState.RUNNING)
+        ):
+            complete += t.state == TrialState.COMPLETE
+            running += t.state == TrialState.RUNNING
+        return complete, running
+
+    def ahead(self, number: int) -> int:
+        """COMPLETE and RUNNING trials numbered before ``number`` (every coordinator's): the
+        trials that come first when several coordinators ask for the last places at once."""
+        states = (TrialState.COMPLETE, TrialState.RUNNING)
+        return sum(t.number < number for t in self.study.get_trials(deepcopy=False, states=states))
+
+    def beat(self) -> None:
+        """The coordinator's heartbeat (gearopt's table) and its trials' (Optuna's)."""
+        self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
+        for hand in [*self.pending.values(), *self.held, *self.suspects]:
+            self.opened.storage.record_heartbeat(hand.trial_id)
+
+    def recover(self) -> None:
+        o = self.opened
+        self.recovered += recover(o.study, o.storage, o.results, self.spec, self.tag)
+
+    def fail(self, hand: InHand, reason: str, *, charge: bool) -> None:
+        """Fail a trial in hand and put its design back in the queue."""
+        frozen = self.opened.storage.get_trial(hand.trial_id)
+        requeue = (
+            self.opened.requeue if charge else Requeue(self.spec, self.opened.results, charge=False)
+        )
+        fail_and_requeue(self.study, self.opened.storage, requeue, frozen, reason)
+
+    # --- trials changing hands -----------------------------------------------------------
+
+    def submit(self, hand: InHand) -> None:
         try:
-            text = Path(f"/proc/{pid}/status").read_text()
-        except OSError:
-            return False
-        return "\nState:\tZ" not in text and "\nState:\tX" not in text
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+            hand.future = self.executor.submit(
+                work, self.spec, hand.trial.number, hand.params, self.markers
+            )
+        except Exception as exc:  # the pool broke since the last look: sorted out below
+            if not broken_pool(exc):
+                raise
+            hand.future = cf.Future()
+            hand.future.set_exception(exc)
+        self.pending[hand.trial.number] = hand
 
+    def ask(self) -> bool:
+        """Ask a trial, suggest its parameters and send it; False when the study's places
+        are taken."""
+        with _held_stops():  # asked and in hand at once
+            with warnings.catch_warnings():  # Optuna warns: heartbeats are for study.optimize
+                warnings.simplefilter("ignore", UserWarning)
+                trial = self.study.ask()
+            trial_id = trial.storage.get_trial_id_from_study_id_trial_number(
+                self.opened.study_id, trial.number
+            )
+            self.opened.storage.record_heartbeat(trial_id)
+            trial.set_user_attr(COORDINATOR, self.tag)
+            attempt = int(trial.user_attrs.get(ATTEMPT, 1))  # retries carry theirs
+            hand = InHand(trial=trial, trial_id=trial_id, params={}, attempt=attempt)
+            # another coordinator took the last place (only trials numbered from ``trials``
+            # on can find ``trials`` before them: the common case asks nothing)
+            if trial.number >= self.trials and self.ahead(trial.number) >= self.trials:
+                self.surplus(hand)
+                return False
+            hand.params = {
+                d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log)
+                for d in self.spec.search
+            }
+            self.submit(hand)
+            self.asked += 1
+            return True
 
-def _params(trial: optuna.trial.FrozenTrial, spec: StudySpec) -> dict:
-    """The trial's parameters (a given design's, or those suggested), or {} when a coordinator
-    died before suggesting them all: such a trial never reached a worker."""
-    params = {**trial.system_attrs.get("fixed_params", {}), **trial.params}
-    return params if set(params) >= set(spec.dimensions) else {}
+    def surplus(self, hand: InHand) -> None:
+        """Give back a trial asked beyond the study's count: a given design (or a retry) to
+        the queue, uncharged; a sampled one failed before it is suggested anything."""
+        reason = f"surplus: {self.trials} trials were complete or running before it"
+        if "fixed_params" in self.opened.storage.get_trial(hand.trial_id).system_attrs:
+            self.fail(hand, reason, charge=False)
+        else:
+            hand.trial.set_user_attr("gearopt_error", reason)
+            self.study.tell(hand.trial, state=TrialState.FAIL)
 
+    def tell(self, number: int, outcome: TrialOutcome) -> None:
+        with _held_stops():  # out of hand and told at once
+            self._tell(number, outcome)
 
-def _retry(study, results, spec: StudySpec, trial, reason: str, *, charge: bool = True) -> bool:
-    """Fail ``trial`` (a FrozenTrial) and re-enqueue its parameters when attempts remain (an
-    attempt is charged unless ``charge`` is False: the trial was not to blame); False when
-    another coordinator finished it first."""
-    number = trial.number
-    try:
-        study._storage.set_trial_user_attr(trial._trial_id, "gearopt_error", reason[:500])
-        study.tell(number, state=TrialState.FAIL)
-    except (RuntimeError, ValueError):
-        return False
-    results.forget(spec.name, [number])
-    attempt = int(trial.user_attrs.get(_ATTEMPT, 1)) + int(charge)
-    params = _params(trial, spec)
-    if params and attempt <= MAX_ATTEMPTS:
-        study.enqueue_trial(params, user_attrs={_ATTEMPT: attempt, "gearopt_retry_of": number})
-    return True
+    def _tell(self, number: int, outcome: TrialOutcome) -> None:
+        hand = self.pending.pop(number)
+        trial, storage = hand.trial, self.opened.storage
+        self.evaluated += 1
+        self.worker_s += outcome.seconds
+        if outcome.failed:
+            self.failed += 1
+            trial.set_user_attr("gearopt_error", (outcome.error or "")[:500])
+            self.study.tell(trial, state=TrialState.FAIL)
+            return
+        self.opened.results.write(
+            self.spec.name, outcome, attempt=hand.attempt, coordinator=self.me, labels=self.labels
+        )
+        if outcome.figures:
+            _upload(self.spec, trial, outcome.figures)
+        if outcome.constraints:
+            values = list(outcome.constraints.values())
+            storage.set_trial_system_attr(hand.trial_id, CONSTRAINTS_KEY, values)
+        if outcome.warnings:
+            trial.set_user_attr("gearopt_warnings", outcome.warnings[:20])
+        self.study.tell(trial, list(outcome.values))
+        if self.bar is not None:
+            self.bar.update(1)
+            if time.monotonic() - self.shown > 1.0:  # reading every trial costs: once a second
+                _best_postfix(self.bar, self.study, self.spec)
+                self.shown = time.monotonic()
 
+    def worker_died(self) -> None:
+        """Sort the trials of a broken pool. loky fails every pending future and stops every
+        worker when one dies, so a dead process does not say whose trial killed it: a trial
+        that had not started is innocent (resubmitted); of those that had started, a lone one
+        is guilty (failed and re-enqueued); several are run again one at a time, and the one
+        that breaks the pool alone is guilty."""
+        if self.backend == "loky":
+            self.executor = worker_pool(self.jobs)
+        broken = {
+            n: self.pending.pop(n)
+            for n, hand in list(self.pending.items())
+            if hand.future.done()
+            and hand.future.exception() is not None
+            and broken_pool(hand.future.exception())
+        }
+        started = [n for n in broken if Path(self.markers, f"{n}.pid").exists()]
+        for number, hand in broken.items():
+            Path(self.markers, f"{number}.pid").unlink(missing_ok=True)
+            killer = type(hand.future.exception()).__name__ == "KilledWorker"  # Dask names it
+            if killer or number in self.alone or started == [number]:
+                self.failed += 1
+                self.fail(hand, "its worker process died", charge=True)
+            elif number in started:
+                self.suspects.append(hand)
+            else:
+                self.held.append(hand)
+        self.alone.clear()
 
-def recover(study, results, spec: StudySpec, me: str) -> list[int]:
-    """Fail and re-enqueue the RUNNING trials whose coordinator is gone; their numbers."""
-    host = socket.gethostname()
-    now = dt.datetime.now(dt.UTC).replace(tzinfo=None)
+    def refill(self, free: int) -> None:
+        if self.suspects:
+            if not self.pending:
+                with _held_stops():
+                    hand = self.suspects.pop(0)
+                    self.alone.add(hand.trial.number)
+                    self.submit(hand)
+            return
+        # busy workers: the pending trials not finished (finished ones are told after this)
+        busy = sum(not h.future.done() for h in self.pending.values())
+        while self.held and busy < self.jobs:
+            with _held_stops():
+                self.submit(self.held.pop(0))
+            busy += 1
+        if self.batch and self.pending and not self.held:
+            return
+        for _ in range(min(self.jobs - busy, max(free, 0))):
+            if not self.ask():
+                break
 
-    def alive(known) -> bool:
-        o_host, o_pid, beat = known
-        fresh = (now - beat).total_seconds() < STALE_AFTER_S
-        return fresh and (o_host != host or _alive(o_pid))
+    # --- the run -------------------------------------------------------------------------
 
-    living = {c for c, known in results.coordinators().items() if c != me and alive(known)}
-    done = []
-    for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
-        owner = trial.user_attrs.get(_COORD)
-        if owner == me or owner in living:
-            continue
-        if owner is None and living and (now - trial.datetime_start).total_seconds() < 60:
-            continue  # asked a moment ago by a live coordinator, not yet marked as its own
-        if _retry(study, results, spec, trial, f"coordinator {owner} died"):
-            done.append(trial.number)
-    return done
+    def run(self, *, save_best: bool = True) -> RunSummary:
+        start = time.perf_counter()
+        self.opened = _open(self.spec, self.url)
+        self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
+        self.recover()
+        self.markers = trial_markers(self.pid)
+        # the compiled kernels compiled (or loaded) here once, before the workers start (they
+        # load the cache rather than compile it side by side) and before the trials' clock
+        self.kernels_s = warm_kernels(announce=self.progress)
+        self.bar = _progress(self.progress, self.trials, self.spec)
+        self.last_beat = time.monotonic()
+        self.executor = worker_pool(self.jobs, self.backend, self.scheduler)
+        try:
+            self._loop()
+        except BaseException as exc:
+            self._stop(exc)
+            raise
+        finally:
+            if self.bar is not None:
+                if self.evaluated:
+                    _best_postfix(self.bar, self.study, self.spec)
+                self.bar.close()
+            if isinstance(self.executor, JoblibBatches):
+                self.executor.client.close()
+            shutil.rmtree(self.markers, ignore_errors=True)
+        complete, _ = self.counts()
+        best = pick_best(self.study, self.spec)
+        path = save_design(self.spec, best, self.url) if (save_best and best is not None) else None
+        return RunSummary(
+            study=self.spec.name,
+            storage=masked_url(self.url),
+            complete=complete,
+            failed_this_run=self.failed,
+            evaluated_this_run=self.evaluated,
+            wall_s=time.perf_counter() - start,
+            kernels_s=self.kernels_s,
+            worker_s=self.worker_s,
+            coordinator_s=self.busy_s,
+            coordinator_cpu_s=self.busy_cpu_s,
+            jobs=self.jobs,
+            best=best,
+            best_design_path=path,
+            recovered=self.recovered,
+        )
+
+    def _stop(self, exc: BaseException) -> None:
+        """Stopping (an error, Ctrl-C): the trials in hand go back to the queue as they are,
+        and the workers are stopped; only a killed coordinator leaves RUNNING trials."""
+        if self.backend == "loky":
+            self.executor.shutdown(wait=False, kill_workers=True)
+        reason = f"the coordinator stopped: {type(exc).__name__}: {exc}"
+        for hand in [*self.pending.values(), *self.held, *self.suspects]:
+            self.fail(hand, reason, charge=False)
+
+    def _loop(self) -> None:
+        # the coordinator's own time, waits excluded (wall, and this thread's CPU time)
+        mark, cpu = time.perf_counter(), time.thread_time()
+        while True:
+            if time.monotonic() - self.last_beat > HEARTBEAT_S:
+                self.beat()
+                self.recover()
+                self.last_beat = time.monotonic()
+            if self.failed > self.limit:
+                raise StudyError(
+                    "study",
+                    self.spec.name,
+                    f"{self.failed} trials failed in this run (limit {self.limit})",
+                )
+            complete, running = self.counts()
+            free = self.trials - complete - running
+            if not (self.pending or self.held or self.suspects):
+                if complete >= self.trials:
+                    break
+                if free <= 0:  # the rest runs on other coordinators
+                    time.sleep(0.5)
+                    mark, cpu = time.perf_counter(), time.thread_time()
+                    continue
+            asked = self.asked
+            if not self.batch or not self.pending:
+                self.refill(free)
+            futures = [h.future for h in self.pending.values()]
+            self.busy_s += time.perf_counter() - mark
+            self.busy_cpu_s += time.thread_time() - cpu
+            if hasattr(self.executor, "flush"):
+                self.executor.flush()
+            # wake every few seconds to keep the heartbeats fresh while long trials run
+            until = "ALL_COMPLETED" if self.batch else "FIRST_COMPLETED"
+            while futures and (
+                not cf.wait(futures, timeout=HEARTBEAT_S, return_when=until).done
+                or (self.batch and not all(f.done() for f in futures))
+            ):
+                self.beat()
+            mark, cpu = time.perf_counter(), time.thread_time()
+            if not self.batch and not self.suspects:
+                # keep the workers busy first: the next trials are asked and sent before the
+                # finished ones are told (TPE's constant liar counts those as pending)
+                # (the counts read above, less the trials asked since: a trial asked for a
+                # place another coordinator took meanwhile is given back by ``ask``)
+                self.refill(free - (self.asked - asked))
+            self._collect()
+
+    def _collect(self) -> None:
+        """Tell the finished trials (in order when in batches); sort a broken pool's."""
+        broken = False
+        for number in sorted(self.pending):
+            future = self.pending[number].future
+            if not future.done():
+                if self.batch:
+                    break  # told in order
+                continue
+            exc = future.exception()
+            if exc is None:
+                self.tell(number, future.result())
+            elif isinstance(exc, Resubmit):
+                with _held_stops():
+                    self.held.append(self.pending.pop(number))
+            elif broken_pool(exc):
+                broken = True
+                if self.batch:
+                    break
+            else:  # pickling or pool errors: the trial fails, the run goes on
+                outcome = TrialOutcome(number=number, error=f"{type(exc).__name__}: {exc}")
+                self.tell(number, outcome)
+        if broken:
+            with _held_stops():
+                self.worker_died()
 
 
 def run_study(
@@ -300,7 +619,7 @@ def run_study(
     backend: str = "loky",
     scheduler: str | None = None,
 ) -> RunSummary:
-    """Run ``spec`` until its study holds ``trials`` COMPLETE trials.
+    """Run ``spec`` until its study holds ``trials`` COMPLETE trials (a :class:`Coordinator`).
 
     Parameters
     ----------
@@ -323,264 +642,18 @@ def run_study(
         dask backend to the Dask cluster at ``scheduler`` (default: a local cluster of
         ``jobs`` workers), in synchronous batches of ``jobs`` trials.
     """
-    if not isinstance(trials, int) or trials < 1:
-        raise StudyError("--trials", trials, "must be a positive integer")
-    if not isinstance(jobs, int) or jobs < 1:
-        raise StudyError("--jobs", jobs, "must be a positive integer")
-    if backend not in ("loky", "dask"):
-        raise StudyError("--backend", backend, "must be loky or dask")
-    start = time.perf_counter()
-    url = storage or default_storage_url(spec)
-    study, results = open_study(spec, url)
-    me, host, pid = uuid.uuid4().hex, socket.gethostname(), os.getpid()
-    results.heartbeat(me, spec.name, host, pid)
-    recovered = recover(study, results, spec, me)
-    labels = {o.label: "objective" for o in spec.objectives}
-    labels.update({c.label: "constraint" for c in spec.constraints})
-    limit = max(10, trials) if max_failures is None else max_failures
-    batch = deterministic or jobs == 1 or backend == "dask"
-    markers = _trial_markers(pid)
-    pending: dict[int, tuple[Any, cf.Future, dict, int]] = {}
-    failed = evaluated = 0
-    worker_s = 0.0
-    # the compiled kernels compiled (or loaded) here once, before the workers start (they load
-    # the cache rather than compile it side by side) and before the clock of the trials
-    kernels_s = warm_kernels(announce=progress)
-    bar = _progress(progress, trials, spec)
-    shown = [0.0]  # when the bar last showed the best value
-    last_beat = time.monotonic()
-
-    def counts() -> tuple[int, int]:
-        """COMPLETE and RUNNING trials of the study, every coordinator's (one small query)."""
-        with results.engine.connect() as con:
-            rows = dict(con.execute(_COUNTS, {"id": study._study_id}).all())
-        return rows.get("COMPLETE", 0), rows.get("RUNNING", 0)
-
-    def submit(trial, params, attempt):
-        try:
-            future = executor.submit(work, spec, trial.number, params, markers)
-        except Exception as exc:  # the pool broke since the last look: sorted out below
-            if not broken_pool(exc):
-                raise
-            future = cf.Future()
-            future.set_exception(exc)
-        pending[trial.number] = (trial, future, params, attempt)
-
-    def ask() -> bool:
-        with _held_stops():  # asked and in hand at once
-            trial = study.ask()
-            trial.set_user_attr(_COORD, me)
-            if ahead(trial.number) >= trials:  # another coordinator took the last place
-                surplus(trial)
-                return False
-            attempt = int(trial.user_attrs.get(_ATTEMPT, 1))  # retries carry theirs
-            params = {
-                d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search
-            }
-            submit(trial, params, attempt)
-            return True
-
-    def ahead(number: int) -> int:
-        """COMPLETE and RUNNING trials numbered before ``number`` (every coordinator's): the
-        trials that come first when several coordinators ask for the last places at once."""
-        with results.engine.connect() as con:
-            return con.execute(_AHEAD, {"id": study._study_id, "n": number}).scalar_one()
-
-    def surplus(trial) -> None:
-        """Give back a trial asked beyond the study's count: a given design (or a retry) to
-        the queue, uncharged; a sampled one failed before it is suggested anything."""
-        frozen = study._storage.get_trial(trial._trial_id)
-        reason = f"surplus: {trials} trials were complete or running before it"
-        if "fixed_params" in frozen.system_attrs:
-            _retry(study, results, spec, frozen, reason, charge=False)
-        else:
-            trial.set_user_attr("gearopt_error", reason)
-            study.tell(trial, state=TrialState.FAIL)
-
-    def tell(number: int, outcome: TrialOutcome) -> None:
-        with _held_stops():  # out of hand and told at once
-            _tell(number, outcome)
-
-    def _tell(number: int, outcome: TrialOutcome) -> None:
-        nonlocal failed, evaluated, worker_s
-        trial, _, params, attempt = pending.pop(number)
-        evaluated += 1
-        worker_s += outcome.seconds
-        if outcome.failed:
-            failed += 1
-            trial.set_user_attr("gearopt_error", (outcome.error or "")[:500])
-            study.tell(trial, state=TrialState.FAIL)
-        else:
-            results.write(spec.name, outcome, attempt=attempt, coordinator=me, labels=labels)
-            if outcome.figures:
-                _upload(spec, study, trial, outcome.figures)
-            for label, value in outcome.constraints.items():
-                trial.set_constraint(label, value)
-            if outcome.warnings:
-                trial.set_user_attr("gearopt_warnings", outcome.warnings[:20])
-            study.tell(trial, list(outcome.values))
-            if bar is not None:
-                bar.update(1)
-                if time.monotonic() - shown[0] > 1.0:  # reading every trial costs: once a second
-                    _best_postfix(bar, study, spec)
-                    shown[0] = time.monotonic()
-
-    held: list[tuple[Any, dict, int]] = []  # innocent trials to resubmit
-    suspects: list[tuple[Any, dict, int]] = []  # started when a worker died: run each alone
-    alone: set[int] = set()
-
-    def worker_died() -> None:
-        """Sort the trials of a broken pool. loky fails every pending future and stops every
-        worker when one dies, so a dead process does not say whose trial killed it: a trial
-        that had not started is innocent (resubmitted); of those that had started, a lone one
-        is guilty (failed and re-enqueued); several are run again one at a time, and the one
-        that breaks the pool alone is guilty."""
-        nonlocal executor, failed
-        if backend == "loky":
-            executor = worker_pool(jobs)
-        broken = {
-            n: pending.pop(n)
-            for n in list(pending)
-            if pending[n][1].done()
-            and pending[n][1].exception() is not None
-            and broken_pool(pending[n][1].exception())
-        }
-        started = [n for n in broken if Path(markers, f"{n}.pid").exists()]
-        for number, (trial, future, params, attempt) in broken.items():
-            Path(markers, f"{number}.pid").unlink(missing_ok=True)
-            killer = type(future.exception()).__name__ == "KilledWorker"  # Dask names it
-            if killer or number in alone or started == [number]:
-                failed += 1
-                frozen = study._storage.get_trial(trial._trial_id)
-                _retry(study, results, spec, frozen, "its worker process died")
-            elif number in started:
-                suspects.append((trial, params, attempt))
-            else:
-                held.append((trial, params, attempt))
-        alone.clear()
-
-    def refill(free: int) -> None:
-        if suspects:
-            if not pending:
-                with _held_stops():
-                    trial, params, attempt = suspects.pop(0)
-                    alone.add(trial.number)
-                    submit(trial, params, attempt)
-            return
-        # busy workers: the pending trials not finished (finished ones are told after this)
-        busy = sum(not p[1].done() for p in pending.values())
-        while held and busy < jobs:
-            with _held_stops():
-                submit(*held.pop(0))
-            busy += 1
-        if batch and pending and not held:
-            return
-        for _ in range(min(jobs - busy, max(free, 0))):
-            if not ask():
-                break
-
-    executor = worker_pool(jobs, backend, scheduler)
-    busy_s, mark = 0.0, time.perf_counter()  # the coordinator's own time, waits excluded
-    try:
-        while True:
-            if time.monotonic() - last_beat > 5.0:
-                results.heartbeat(me, spec.name, host, pid)
-                recovered += recover(study, results, spec, me)
-                last_beat = time.monotonic()
-            if failed > limit:
-                raise StudyError(
-                    "study", spec.name, f"{failed} trials failed in this run (limit {limit})"
-                )
-            complete, running = counts()
-            free = trials - complete - running
-            if not (pending or held or suspects):
-                if complete >= trials:
-                    break
-                if free <= 0:  # the rest runs on other coordinators
-                    time.sleep(0.5)
-                    mark = time.perf_counter()
-                    continue
-            if not batch or not pending:
-                refill(free)
-            futures = [p[1] for p in pending.values()]
-            busy_s += time.perf_counter() - mark
-            if hasattr(executor, "flush"):
-                executor.flush()
-            # wake every few seconds to keep the heartbeat fresh while long trials run
-            until = "ALL_COMPLETED" if batch else "FIRST_COMPLETED"
-            while futures and (
-                not cf.wait(futures, timeout=5.0, return_when=until).done
-                or (batch and not all(f.done() for f in futures))
-            ):
-                results.heartbeat(me, spec.name, host, pid)
-            mark = time.perf_counter()
-            if not batch and not suspects:
-                # keep the workers busy first: the next trials are asked and sent before the
-                # finished ones are told (TPE's constant liar counts those as pending)
-                complete, running = counts()
-                refill(trials - complete - running)
-            broken = False
-            for number in sorted(pending):
-                future = pending[number][1]
-                if not future.done():
-                    if batch:
-                        break  # told in order
-                    continue
-                exc = future.exception()
-                if exc is None:
-                    tell(number, future.result())
-                elif isinstance(exc, Resubmit):
-                    with _held_stops():
-                        trial, _, params, attempt = pending.pop(number)
-                        held.append((trial, params, attempt))
-                elif broken_pool(exc):
-                    broken = True
-                    if batch:
-                        break
-                else:  # pickling or pool errors: the trial fails, the run goes on
-                    outcome = TrialOutcome(number=number, error=f"{type(exc).__name__}: {exc}")
-                    tell(number, outcome)
-            if broken:
-                with _held_stops():
-                    worker_died()
-    except BaseException as exc:
-        # stopping (an error, Ctrl-C): the trials in hand go back to the queue as they are,
-        # and the workers are stopped; only a killed coordinator leaves RUNNING trials
-        if backend == "loky":
-            executor.shutdown(wait=False, kill_workers=True)
-        mine = [p[0] for p in pending.values()] + [h[0] for h in held + suspects]
-        reason = f"the coordinator stopped: {type(exc).__name__}: {exc}"
-        for trial in mine:
-            frozen = study._storage.get_trial(trial._trial_id)
-            _retry(study, results, spec, frozen, reason, charge=False)
-        raise
-    finally:
-        if bar is not None:
-            if evaluated:
-                _best_postfix(bar, study, spec)
-            bar.close()
-        if isinstance(executor, JoblibBatches):
-            executor.client.close()
-        shutil.rmtree(markers, ignore_errors=True)
-    complete, _ = counts()
-    best = pick_best(study, spec)
-    path = save_design(spec, best, url) if (save_best and best is not None) else None
-    wall = time.perf_counter() - start
-    return RunSummary(
-        study=spec.name,
-        storage=masked_url(url),
-        complete=complete,
-        failed_this_run=failed,
-        evaluated_this_run=evaluated,
-        wall_s=wall,
-        kernels_s=kernels_s,
-        worker_s=worker_s,
-        coordinator_s=busy_s,
+    coordinator = Coordinator(
+        spec,
+        trials=trials,
         jobs=jobs,
-        best=best,
-        best_design_path=path,
-        recovered=recovered,
+        storage=storage,
+        deterministic=deterministic,
+        progress=progress,
+        max_failures=max_failures,
+        backend=backend,
+        scheduler=scheduler,
     )
+    return coordinator.run(save_best=save_best)
 
 
 _STOPS = (signal.SIGINT, signal.SIGTERM)
@@ -628,8 +701,7 @@ def artifact_dir(spec: StudySpec) -> Path:
     return spec.folder / f"{spec.name}_artifacts"
 
 
-def _upload(spec: StudySpec, study, trial, figures) -> None:
-
+def _upload(spec: StudySpec, trial, figures) -> None:
     base = artifact_dir(spec)
     base.mkdir(parents=True, exist_ok=True)
     store = FileSystemArtifactStore(str(base))
@@ -660,65 +732,6 @@ def _best_postfix(bar, study, spec: StudySpec) -> None:
         bar.set_postfix_str(f"best {text}")
 
 
-def _feasible(trial: optuna.trial.FrozenTrial) -> bool:
-    return all(c <= 0.0 for c in trial.constraints.values())
-
-
-def pick_best(study, spec: StudySpec) -> optuna.trial.FrozenTrial | None:
-    """The best feasible COMPLETE trial; for several objectives the Pareto design the study's
-    ``pick`` rule chooses: ``utopia`` (least distance to the front's ideal point, each
-    objective scaled by its range on the front) or ``objective:<label>`` (the front's best of
-    that objective). None when no feasible trial exists."""
-    done = [
-        t
-        for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
-        if _feasible(t) and t.values is not None
-    ]
-    if not done:
-        return None
-    signs = [1.0 if d == "minimize" else -1.0 for d in spec.directions]
-    if len(signs) == 1:
-        return min(done, key=lambda t: (signs[0] * t.values[0], t.number))
-    scored = [[s * v for s, v in zip(signs, t.values, strict=True)] for t in done]
-    front = [
-        i
-        for i, a in enumerate(scored)
-        if not any(all(x <= y for x, y in zip(b, a, strict=True)) and b != a for b in scored)
-    ]
-    if spec.pick.startswith("objective:"):
-        k = spec.metric_names.index(spec.pick.removeprefix("objective:"))
-        return done[min(front, key=lambda i: (scored[i][k], done[i].number))]
-    lows = [min(scored[i][k] for i in front) for k in range(len(signs))]
-    highs = [max(scored[i][k] for i in front) for k in range(len(signs))]
-
-    def distance(i: int) -> float:
-        return math.hypot(
-            *[
-                (scored[i][k] - lows[k]) / (highs[k] - lows[k]) if highs[k] > lows[k] else 0.0
-                for k in range(len(signs))
-            ]
-        )
-
-    return done[min(front, key=lambda i: (distance(i), done[i].number))]
-
-
-def save_design(
-    spec: StudySpec, trial: optuna.trial.FrozenTrial, storage: str | None = None
-) -> str:
-    """Write the trial's design beside the study file as ``<study name>_best.toml`` (the
-    study's default storage) or ``<study name>_best_<storage>.toml`` (another storage: its
-    SQLite file's stem, or a digest of its URL), so that a run on another storage never
-    overwrites the default study's best design."""
-
-    data = dict(spec.design_for(trial.params).source)
-    meta = data.setdefault("meta", {})
-    meta["name"] = f"{spec.name}_best"
-    meta["source"] = f"study {spec.name}, trial {trial.number}"
-    path = spec.folder / f"{spec.name}_best{storage_tag(spec, storage)}.toml"
-    path.write_text(tomli_w.dumps(data), encoding="utf-8")
-    return str(path)
-
-
 def trial_objective(spec: StudySpec) -> Callable[[optuna.trial.Trial], Any]:
     """An Optuna objective function of ``spec`` for ``study.optimize`` in one process (a
     notebook, a debugger): it suggests the searched keys, evaluates the trial in this process,
@@ -730,8 +743,12 @@ def trial_objective(spec: StudySpec) -> Callable[[optuna.trial.Trial], Any]:
         outcome = evaluate_trial(spec, trial.number, params)
         if outcome.failed:
             raise StudyError(f"trial {trial.number}", params, outcome.error or "failed")
-        for label, value in outcome.constraints.items():
-            trial.set_constraint(label, value)
+        if outcome.constraints:  # once, as a list: what optuna-dashboard reads
+            storage = trial.storage
+            study_id = storage.get_study_id_from_name(trial.study.study_name)
+            trial_id = storage.get_trial_id_from_study_id_trial_number(study_id, trial.number)
+            values = list(outcome.constraints.values())
+            storage.set_trial_system_attr(trial_id, CONSTRAINTS_KEY, values)
         values = outcome.values
         return values[0] if len(values) == 1 else values
 

@@ -32,7 +32,7 @@ def _interrupt(signum, frame) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from gearopt.study import run_study
+    from gearopt.study import constraint_values, run_study
 
     spec = load_study_spec(args.study)
     # a polite stop (a scheduler's SIGTERM) is a Ctrl-C: the trials in hand go back to the queue
@@ -64,12 +64,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "trials_per_s": round(summary.trials_per_s, 4),
         "worker_efficiency": round(summary.worker_efficiency, 4),
         "coordinator_ms_per_trial": round(summary.coordinator_ms_per_trial, 2),
+        "coordinator_cpu_ms_per_trial": round(summary.coordinator_cpu_ms_per_trial, 2),
         "best": None
         if best is None
         else {
             "trial": best.number,
             "values": dict(zip(spec.metric_names, best.values, strict=True)),
-            "constraints": best.constraints,
+            "constraints": constraint_values(spec, best),
             "params": best.params,
             "design": summary.best_design_path,
         },
@@ -91,7 +92,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(f"best trial {best.number} (feasible, rule {spec.pick!r}):")
     for name, value in zip(spec.metric_names, best.values, strict=True):
         print(f"  {name} = {value:.6g}")
-    for name, value in best.constraints.items():
+    for name, value in constraint_values(spec, best).items():
         print(f"  {name} = {value:.6g} (constraint, feasible <= 0)")
     for key, value in best.params.items():
         print(f"  {key} = {value:.6g}")
