@@ -407,10 +407,13 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``gearopt`` command; returns the exit status."""
+def main(
+    argv: Sequence[str] | None = None, *, plugin_manager: pluggy.PluginManager | None = None
+) -> int:
+    """Entry point of the ``gearopt`` command; returns the exit status. ``plugin_manager``
+    gives the plugins whose commands it offers (default: every installed plugin)."""
     try:
-        parser = build_parser()
+        parser = build_parser(plugin_manager)
     except GearoptError as exc:  # a plugin that fails to load or clashes
         print(f"gearopt: error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
