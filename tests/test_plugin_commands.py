@@ -13,14 +13,16 @@ import subprocess
 import sys
 import tokenize
 from importlib import metadata
+from pathlib import Path
 
 import pytest
 
 import gearopt
 from gearopt.bench import CORE_BENCHMARKS, all_benchmarks
+from gearopt.chains import machine as chains_machine
 from gearopt.cli import main
 from gearopt.commands import BaseCommand, Benchmark
-from gearopt.errors import PluginError
+from gearopt.errors import DesignError, PluginError
 from gearopt.plugins import benchmarks, commands, get_plugin_manager, list_plugins
 
 from .conftest import ROOT, STUDIES
@@ -201,6 +203,33 @@ def test_a_third_party_command_and_benchmark_through_the_cli(toy_site):
     assert failed.stderr.strip().splitlines() == [
         "gearopt: error: DesignError: machine.model = 'cyclo-palloid': must be 'toy-planer'"
     ]
+
+
+def test_machine_files_come_from_the_entry_point_group(tmp_path, monkeypatch):
+    shipped = chains_machine.load_machine("zftkk250x5")
+    folder = tmp_path / "my_machines" / "files"
+    folder.mkdir(parents=True)
+    (folder.parent / "__init__.py").write_text("")
+    (folder / "copy250.toml").write_text(Path(shipped.path).read_text())
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delenv(chains_machine.MACHINE_PATH_ENV, raising=False)
+    group = chains_machine.MACHINE_FILES_GROUP
+    entries = [metadata.EntryPoint(name="mine", value="my_machines:files", group=group)]
+
+    def entry_points(*, group):
+        return entries if group == chains_machine.MACHINE_FILES_GROUP else []
+
+    monkeypatch.setattr(chains_machine.metadata, "entry_points", entry_points)
+    assert chains_machine.machine_dirs() == [folder]
+    assert chains_machine.machine_names() == ["copy250"]
+    assert chains_machine.load_machine("copy250").change_gears == shipped.change_gears
+    # the core knows no machine folder of its own
+    with pytest.raises(DesignError, match="unknown machine"):
+        chains_machine.load_machine("zftkk250x5")
+    entries[:] = [metadata.EntryPoint(name="broken", value="no_such_package_0:files", group=group)]
+    with pytest.raises(PluginError, match="'broken'.*cannot be imported"):
+        chains_machine.machine_dirs()
+    sys.modules.pop("my_machines", None)
 
 
 # -- the core names no built-in plugin ----------------------------------------------------------
