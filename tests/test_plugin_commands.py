@@ -243,7 +243,9 @@ def _builtin_modules() -> tuple[set[str], set[str]]:
             packages.add(entry.module.split(".")[0])
     for path in (ROOT / "plugins").rglob("*.py"):
         parts = path.relative_to(ROOT / "plugins").with_suffix("").parts
-        if parts[-1] != "__init__":
+        if parts[-1] == "__init__":  # a package: its folder's name
+            parts = parts[:-1]
+        if parts:
             modules.add(".".join(parts))
     return packages, modules
 
