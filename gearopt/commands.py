@@ -2,8 +2,9 @@
 
 A plugin contributes a subcommand (``gearopt chain ...``) by returning a :class:`BaseCommand`
 from its ``gearopt_commands`` hook, and a benchmark of ``gearopt bench`` by returning a
-:class:`Benchmark` from its ``gearopt_benchmarks`` hook (:mod:`gearopt.hookspecs`). The core's
-own commands and benchmarks are written the same way; nothing in the core names a plugin's.
+:class:`Benchmark` from its ``gearopt_benchmarks`` hook (:mod:`gearopt.hookspecs`); the core's
+own benchmarks are :class:`Benchmark` objects too (``gearopt.bench.CORE_BENCHMARKS``), and
+nothing in the core names a plugin's command or benchmark.
 :func:`text_table` prints the plain-text tables the core's commands print, and
 :func:`time_call_ms` times a kernel as the core's benchmarks do.
 """
