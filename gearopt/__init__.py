@@ -6,6 +6,7 @@ plugin contract (:data:`hookimpl`, the ``Base*`` classes), the plugin registries
 """
 
 from gearopt.blank import Blank, compute_blank
+from gearopt.commands import BaseCommand, Benchmark
 from gearopt.design import Design, Meta, Misalignment, PairData
 from gearopt.design_files import load_design, loads_design, parse_design, with_overrides
 from gearopt.errors import (
@@ -49,9 +50,11 @@ def generate_flanks(
 
 
 __all__ = [
+    "BaseCommand",
     "BaseEvaluator",
     "BaseMachineModel",
     "BaseObjective",
+    "Benchmark",
     "Blank",
     "Design",
     "DesignError",

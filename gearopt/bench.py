@@ -1,10 +1,13 @@
 """Benchmarks for ``gearopt bench``: medians over fresh processes on one thread.
 
-Each benchmark is a function ``() -> (milliseconds, info)`` that times one run of its kernel
-(after any warm-up it needs) and returns extra facts to print beside the time (grid size, set
-size). :func:`run_benchmarks` runs every repeat in a fresh interpreter with the BLAS/OpenMP
-thread counts set to 1 and reports the median, so import caches, allocator state and a second
-core do not flatter the numbers. Timings are never asserted in tests.
+Each benchmark is a :class:`gearopt.commands.Benchmark`: a name and a module-level function
+``() -> (milliseconds, info)`` that times one run of its kernel (after any warm-up it needs)
+and returns extra facts to print beside the time (grid size, set size). The core's benchmarks
+(:data:`CORE_BENCHMARKS`) time the framework's kernels; plugins add theirs through the
+``gearopt_benchmarks`` hook (:func:`all_benchmarks`). :func:`run_benchmarks` runs every repeat
+in a fresh interpreter, which imports the benchmark's function by its module and name, with the
+BLAS/OpenMP thread counts set to 1, and reports the median, so import caches, allocator state
+and a second core do not flatter the numbers. Timings are never asserted in tests.
 """
 
 from __future__ import annotations
@@ -14,13 +17,13 @@ import os
 import statistics
 import subprocess
 import sys
-import time
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from importlib import import_module
 from importlib.metadata import version as package_version
 from pathlib import Path
 
 import numpy as np
+import pluggy
 
 from gearopt.analysis import (
     AnalysisOptions,
@@ -29,34 +32,20 @@ from gearopt.analysis import (
     pair_backlash,
     pair_loaded_contact,
 )
+from gearopt.commands import Benchmark, time_call_ms
 from gearopt.contact import kernels as contact_kernels
 from gearopt.design_files import loads_design, with_overrides
-from gearopt.errors import GearoptError, NotAvailableError
+from gearopt.errors import GearoptError, NotAvailableError, PluginError
 from gearopt.flank import FlankGrid
 from gearopt.load_options import LoadOptions
 from gearopt.loaded.compliance import DEFAULT_MESH, member_compliance
 from gearopt.loaded.pair import member_flanks
 from gearopt.newton_tca import newton_tca
-from gearopt.plugins import get_machine_model
+from gearopt.plugins import get_machine_model, list_plugins
 from gearopt.studyfile import load_study_spec
 from gearopt.trial import evaluate_trial
 
-__all__ = ["BENCHMARKS", "run_benchmarks", "time_call_ms"]
-
-# name -> "module:function"; the function returns (milliseconds, info dict)
-BENCHMARKS: dict[str, str] = {
-    "basic_settings_ms": "gearopt.bench:bench_basic_settings",
-    "change_gears_ms": "gearopt_plugins.chain_error:bench_change_gears",
-    "flank_generation_ms": "gearopt.bench:bench_flank_generation",
-    "thickness_solve_ms": "gearopt.bench:bench_thickness_solve",
-    "tca_ms": "gearopt.bench:bench_tca",
-    "backlash_ms": "gearopt.bench:bench_backlash",
-    "tca_newton_ms": "gearopt.bench:bench_tca_newton",
-    "study_trial_ms": "gearopt.bench:bench_study_trial",
-    "ltca_setup_ms": "gearopt.bench:bench_ltca_setup",
-    "ltca_ms": "gearopt.bench:bench_ltca",
-    "ltca_sweep_ms": "gearopt.bench:bench_ltca_sweep",
-}
+__all__ = ["CORE_BENCHMARKS", "all_benchmarks", "run_benchmarks", "time_call_ms"]
 
 ONE_THREAD = {
     name: "1"
@@ -69,14 +58,6 @@ ONE_THREAD = {
         "VECLIB_MAXIMUM_THREADS",
     )
 }
-
-
-def time_call_ms(func: Callable[[], object], *, number: int = 1) -> float:
-    """Wall time of ``number`` calls of ``func`` divided by ``number``, in milliseconds."""
-    start = time.perf_counter()
-    for _ in range(number):
-        func()
-    return (time.perf_counter() - start) * 1e3 / number
 
 
 def bench_basic_settings() -> tuple[float, dict]:
@@ -285,9 +266,52 @@ def _study_text(name: str) -> str:
     return _study_path(name).read_text()
 
 
-def _run_one(name: str) -> None:
-    module, func = BENCHMARKS[name].split(":")
-    ms, info = getattr(import_module(module), func)()
+#: the framework's own benchmarks, in the order ``gearopt bench`` runs them (then the plugins')
+CORE_BENCHMARKS: tuple[Benchmark, ...] = tuple(
+    Benchmark(name=name, function=function, description=(function.__doc__ or "").split("\n")[0])
+    for name, function in (
+        ("basic_settings_ms", bench_basic_settings),
+        ("flank_generation_ms", bench_flank_generation),
+        ("thickness_solve_ms", bench_thickness_solve),
+        ("tca_ms", bench_tca),
+        ("backlash_ms", bench_backlash),
+        ("tca_newton_ms", bench_tca_newton),
+        ("study_trial_ms", bench_study_trial),
+        ("ltca_setup_ms", bench_ltca_setup),
+        ("ltca_ms", bench_ltca),
+        ("ltca_sweep_ms", bench_ltca_sweep),
+    )
+)
+
+
+def all_benchmarks(plugin_manager: pluggy.PluginManager | None = None) -> dict[str, Benchmark]:
+    """The core's benchmarks, then every plugin's (``gearopt_benchmarks``), by name.
+
+    Raises :class:`PluginError` when a plugin's benchmark takes a core benchmark's name (two
+    plugins' are refused by the registry).
+    """
+    found = {b.name: b for b in CORE_BENCHMARKS}
+    entries = {e.name: e for e in list_plugins(plugin_manager, "benchmark")}
+    for name, entry in sorted(entries.items()):
+        if name in found:
+            raise PluginError(
+                f"benchmark name {name!r}",
+                rule=f"provided by both the core (gearopt.bench) and plugin {entry.plugin!r}",
+            )
+        found[name] = entry.obj
+    return found
+
+
+def _run_one(target: str) -> None:
+    """Run a benchmark once, given as ``module:qualified.name`` of its function (or by its
+    name); print its JSON record."""
+    if ":" not in target:
+        target = all_benchmarks()[target].target
+    module, qualname = target.split(":")
+    function = import_module(module)
+    for part in qualname.split("."):
+        function = getattr(function, part)
+    ms, info = function()
     print(json.dumps({"ms": ms, "info": info}))
 
 
@@ -296,16 +320,17 @@ def run_benchmarks(names: Iterable[str] | None = None, *, repeats: int = 5) -> d
 
     Returns ``{name: {"median_ms", "runs_ms", "info"}}``.
     """
-    names = list(names or BENCHMARKS)
+    known = all_benchmarks()
+    names = list(names or known)
     env = {**os.environ, **ONE_THREAD}
     results = {}
     for name in names:
-        if name not in BENCHMARKS:
-            raise GearoptError("benchmark", name, f"unknown; known: {sorted(BENCHMARKS)}")
+        if name not in known:
+            raise GearoptError("benchmark", name, f"unknown; known: {sorted(known)}")
         runs, info = [], {}
         for _ in range(repeats):
             out = subprocess.run(
-                [sys.executable, "-m", "gearopt.bench", name],
+                [sys.executable, "-m", "gearopt.bench", known[name].target],
                 env=env,
                 capture_output=True,
                 text=True,

@@ -4,41 +4,36 @@
 ``gearopt settings DESIGN.toml`` prints the blank and the basic machine-tool settings;
 ``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
-``gearopt realise-te DESIGN.toml --out NEW.toml`` fits the settings to its ``[te_target]``;
-``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
-``gearopt change-gears MACHINE --ratio R`` the best change gears of its set;
-``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`).
-Errors in the input are printed as one line naming the parameter, its value and the rule
-(exit status 2).
+``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`);
+``gearopt bench`` times the kernels. Plugins add commands of their own through the
+``gearopt_commands`` hook (:class:`gearopt.commands.BaseCommand`). Errors in the input are
+printed as one line naming the parameter, its value and the rule (exit status 2), the plugins'
+commands' errors too.
 """
 
 from __future__ import annotations
 
 import argparse
-import copy
-import dataclasses
 import json
 import os
 import sys
 from collections.abc import Sequence
 from importlib import metadata
-from pathlib import Path
 from typing import Any
 
-import pandas as pd
-import tomli_w
+import pluggy
 
 from gearopt.analysis import AnalysisOptions, analysed_flanks
 from gearopt.bench import run_benchmarks
 from gearopt.blank_cli import add_blank_parser
-from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
+from gearopt.commands import text_table as _table
 from gearopt.design_files import load_design
-from gearopt.errors import DesignError, GearoptError
+from gearopt.errors import DesignError, GearoptError, PluginError
 from gearopt.flank import FLANKS, MEMBERS
 from gearopt.flank_cli import add_flank_parser, parse_grid, print_warnings
 from gearopt.plausibility import caught, contact_findings, flank_findings
 from gearopt.plots import plot_analysis
-from gearopt.plugins import evaluators, get_machine_model, list_plugins
+from gearopt.plugins import default_plugin_manager, evaluators, get_machine_model, list_plugins
 from gearopt.study_cli import add_study_parser
 from gearopt.thickness import design_chordal_thickness
 
@@ -51,28 +46,6 @@ def _format_value(value: Any) -> str:
     if isinstance(value, list | tuple):
         return ", ".join(_format_value(v) for v in value)
     return str(value)
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell.split(",")[0])
-    except ValueError:
-        return False
-    return True
-
-
-def _table(rows: list[tuple[str, ...]], header: tuple[str, ...]) -> str:
-    """Plain-text table: first column and text left-aligned, numbers right-aligned."""
-    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
-    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True)).rstrip()]
-    lines.append("  ".join("-" * w for w in widths))
-    for row in rows:
-        cells = [row[0].ljust(widths[0])] + [
-            c.rjust(w) if _is_number(c) else c.ljust(w)
-            for c, w in zip(row[1:], widths[1:], strict=True)
-        ]
-        lines.append("  ".join(cells).rstrip())
-    return "\n".join(lines)
 
 
 def _cmd_plugins(args: argparse.Namespace) -> int:
@@ -103,31 +76,6 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
         if rows
         else "no plugins found"
     )
-    return 0
-
-
-def _cmd_realise_te(args: argparse.Namespace) -> int:
-
-    design = load_design(args.design)
-    table, report = get_machine_model(design.model).realise_te_target(design, side=args.side)
-    data = copy.deepcopy(dict(design.source))
-    data.pop("synthesis", None)
-    data["machine"] = {"model": design.model, **table}
-    header = (
-        f"# {Path(args.design).name} with the pinion's {report.get('pinion_flank', '')} roll "
-        f"fitted to [te_target] by `gearopt realise-te` (inverse TCA).\n"
-        + "".join(f"# {k}: {v}\n" for k, v in report.items() if k not in ("before", "after"))
-        + "\n"
-    )
-    if args.out:
-        Path(args.out).write_text(header + tomli_w.dumps(data), encoding="utf-8")
-        report["written"] = str(args.out)
-    if args.json or not args.out:
-        print(json.dumps(report, indent=2))
-    else:
-        print(
-            f"wrote {args.out}: " + ", ".join(f"{k} = {v:.6g}" for k, v in report["after"].items())
-        )
     return 0
 
 
@@ -225,138 +173,6 @@ def _cmd_flanks(args: argparse.Namespace) -> int:
 def _row_mm(profile_mm) -> float:
     """The profile spacing of a FlankMap grid (mm)."""
     return float(profile_mm[1] - profile_mm[0])
-
-
-def _parse_teeth(text: str, option: str, *, count: int | None = None) -> list[int]:
-    rule = "must be tooth counts separated by commas"
-    if count == 4:
-        rule = "must be four tooth counts a,b,c,d (a/b x c/d)"
-    try:
-        teeth = [int(part) for part in text.replace(" ", "").split(",") if part]
-    except ValueError:
-        raise DesignError(option, text, rule) from None
-    if count is not None and len(teeth) != count:
-        raise DesignError(option, text, rule)
-    return teeth
-
-
-def _chain_text(name: str, out: dict[str, Any]) -> str:
-
-    summary = [
-        (key, f"{out[key]:.8g}" if out[key] is not None else "-")
-        for key in (
-            "input_angle_deg",
-            "theoretical_ratio",
-            "max_ratio",
-            "min_ratio",
-            "ratio_error",
-            "ratio_error_plus",
-            "ratio_error_minus",
-            "ratio_error_percent",
-            "angle_error_deg",
-            "pitch_error_um",
-        )
-    ]
-    gears = ", ".join(f"{k}={v}" for k, v in out["gears"].items())
-    lines = [f"{name} chain of {out['machine']!r} (change gears {gears or 'none'})"]
-    if "change_gears" in out:
-        choice = out["change_gears"]
-        how = "chosen from the set" if choice["chosen"] else "given"
-        line = f"quadrant {choice['gears']} ({how}): ratio {choice['ratio']:.8f}"
-        if choice["required_ratio"] is not None:
-            line += f" for {choice['required_ratio']:.8f} (error {choice['error']:+.3e})"
-        lines.append(line)
-    lines += ["", _table(summary, ("result", "value")), ""]
-    columns = {
-        "revolutions": "n",
-        "odd_teeth": "zk",
-        "fi_um": "fi_um",
-        "fpr_um": "Fpr_um",
-        "error_um": "F_um",
-        "pitch_diameter_mm": "D_mm",
-        "angle_error_deg": "dphi_deg",
-        "max_rotation_deg": "max_deg",
-        "min_rotation_deg": "min_deg",
-    }
-    frame = pd.DataFrame(out["elements"]).set_index("element")[list(columns)]
-    frame = frame.rename(columns=columns)
-    lines.append(frame.to_string(float_format=lambda v: f"{v:.4f}"))
-    lines.append("")
-    meshes = pd.DataFrame(out["meshes"])
-    lines.append(meshes.to_string(index=False, float_format=lambda v: f"{v:.6f}"))
-    return "\n".join(lines)
-
-
-def _cmd_chain(args: argparse.Namespace) -> int:
-
-    machine = load_machine(args.machine)
-    work = WorkGear(
-        teeth=args.work_teeth,
-        normal_module_mm=args.normal_module_mm,
-        spiral_angle_deg=args.spiral_angle_deg,
-    )
-    gears = {
-        chain: _parse_teeth(text, f"--{chain}-gears", count=4)
-        for chain, text in (("indexing", args.indexing_gears), ("envelope", args.envelope_gears))
-        if text is not None
-    }
-    swing = {} if args.cradle_swing_deg is None else {"envelope": args.cradle_swing_deg}
-    result = evaluate_machine(
-        machine, work=work, crown_teeth=args.crown_teeth, gears=gears, input_angles_deg=swing
-    )
-    out: dict[str, Any] = {}
-    for name, chain in result.chains.items():
-        out[name] = chain.as_dict()
-        out[name]["work"] = dataclasses.asdict(work)
-        if name in result.quadrants:
-            out[name]["change_gears"] = result.quadrants[name].as_dict()
-    if args.json:
-        print(json.dumps(out, indent=2))
-        return 0
-    print(
-        f"work gear: z = {work.teeth}, m_n = {work.normal_module_mm:g} mm, "
-        f"beta = {work.spiral_angle_deg:g} deg"
-    )
-    for name, chain_out in out.items():
-        print()
-        print(_chain_text(name, chain_out))
-    return 0
-
-
-def _cmd_change_gears(args: argparse.Namespace) -> int:
-
-    machine = load_machine(args.machine)
-    reserved = [] if args.reserve is None else _parse_teeth(args.reserve, "--reserve")
-    choices = select_change_gears(
-        args.ratio, machine.change_gears, top_k=args.top_k, reserved=reserved
-    )
-    best = choices[0].as_dict()
-    gear_set = machine.change_gears
-    out = {
-        "machine": machine.name,
-        **best,
-        "candidates": [c.as_dict() for c in choices],
-        "set_size": len(gear_set.teeth),
-        "rule": f"a + b >= c + {gear_set.clearance_teeth}, c + d >= b + {gear_set.clearance_teeth}",
-    }
-    if args.json:
-        print(json.dumps(out, indent=2))
-        return 0
-    print(
-        f"change gears a/b x c/d of {machine.name!r} for ratio {args.ratio:g} "
-        f"({len(gear_set.teeth)} gears; {out['rule']})"
-    )
-    rows = [
-        (
-            "/".join(str(g) for g in c.gears),
-            f"{c.ratio:.8f}",
-            f"{c.error:+.3e}",
-            f"{c.error_percent:+.5f}",
-        )
-        for c in choices
-    ]
-    print(_table(rows, ("a/b/c/d", "ratio", "error", "error %")))
-    return 0
 
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
@@ -519,8 +335,28 @@ def _version() -> str:
         return "unknown"
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``gearopt`` command."""
+def add_plugin_commands(sub, plugin_manager: pluggy.PluginManager | None = None) -> None:
+    """Add the plugins' commands (the ``gearopt_commands`` hook) to the CLI's subparsers.
+
+    Raises :class:`PluginError` when a plugin's command takes a name the core already uses
+    (two plugins' are refused by the registry).
+    """
+    core = set(sub.choices)
+    for entry in list_plugins(plugin_manager, "command"):
+        if entry.name in core:
+            raise PluginError(
+                f"command name {entry.name!r}",
+                rule=f"provided by both the core (gearopt.cli) and plugin {entry.plugin!r}",
+            )
+        command = entry.obj
+        p = sub.add_parser(command.name, help=command.help)
+        command.add_arguments(p)
+        p.set_defaults(func=command.run)
+
+
+def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse.ArgumentParser:
+    """The argument parser of the ``gearopt`` command: the core's commands, then the commands
+    of the plugins of ``plugin_manager`` (default: every installed plugin)."""
     parser = argparse.ArgumentParser(
         prog="gearopt",
         description="Spiral bevel gear design: machine settings, TCA, Optuna studies.",
@@ -534,15 +370,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("design", help="design TOML file")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_settings)
-    p = sub.add_parser(
-        "realise-te",
-        help="fit the machine settings to the design's [te_target] (inverse TCA)",
-    )
-    p.add_argument("design", help="design TOML file with a [te_target] table")
-    p.add_argument("--side", default="drive", choices=("drive", "coast"))
-    p.add_argument("--out", help="write the design with the fitted settings here")
-    p.add_argument("--json", action="store_true", help="print the report as JSON")
-    p.set_defaults(func=_cmd_realise_te)
     p = sub.add_parser("flanks", help="generate the flanks of a design and measure them")
     p.add_argument("design", help="design TOML file")
     p.add_argument("--grid", default="25,13", help="FlankMap grid n_face,n_profile")
@@ -573,39 +400,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--repeats", type=int, default=5, help="fresh processes per benchmark")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_bench)
-    p = sub.add_parser(
-        "chain", help="errors of a machine's indexing and envelope chains (seed 000)"
-    )
-    p.add_argument("machine", help="machine name (e.g. zftkk250x5) or machine TOML file")
-    p.add_argument("--work-teeth", type=int, required=True, help="teeth of the gear being cut")
-    p.add_argument("--normal-module-mm", type=float, required=True, help="mean normal module")
-    p.add_argument("--spiral-angle-deg", type=float, required=True, help="mean spiral angle")
-    p.add_argument("--indexing-gears", help="a,b,c,d of the indexing quadrant (default: best)")
-    p.add_argument("--envelope-gears", help="a,b,c,d of the envelope quadrant")
-    p.add_argument(
-        "--crown-teeth", type=float, help="crown gear teeth, to choose the envelope gears"
-    )
-    p.add_argument(
-        "--cradle-swing-deg", type=float, help="cradle swing per cycle (default: the machine's)"
-    )
-    p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=_cmd_chain)
-    p = sub.add_parser("change-gears", help="best change gears a/b x c/d for a ratio")
-    p.add_argument("machine", help="machine name (e.g. zftkk250x5) or machine TOML file")
-    p.add_argument("--ratio", type=float, required=True, help="required ratio a c / (b d)")
-    p.add_argument("--top-k", type=int, default=5, help="how many quadrants to list")
-    p.add_argument("--reserve", help="gears already in use, e.g. 48,45,60,60")
-    p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=_cmd_change_gears)
     add_flank_parser(sub)
     add_blank_parser(sub)
     add_study_parser(sub)
+    add_plugin_commands(sub, plugin_manager or default_plugin_manager())
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``gearopt`` command; returns the exit status."""
-    args = build_parser().parse_args(argv)
+def main(
+    argv: Sequence[str] | None = None, *, plugin_manager: pluggy.PluginManager | None = None
+) -> int:
+    """Entry point of the ``gearopt`` command; returns the exit status. ``plugin_manager``
+    gives the plugins whose commands it offers (default: every installed plugin)."""
+    try:
+        parser = build_parser(plugin_manager)
+    except GearoptError as exc:  # a plugin that fails to load or clashes
+        print(f"gearopt: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 2
+    args = parser.parse_args(argv)
     try:
         return args.func(args)
     except GearoptError as exc:

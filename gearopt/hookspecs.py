@@ -24,6 +24,10 @@ in the coordinator and in each worker process; return fresh, stateless, picklabl
 no expensive work at import or call time. Names are unique across all plugins: a duplicate is a
 :class:`~gearopt.errors.PluginError` naming both plugins. Prove your objects with the contract
 suites of :mod:`gearopt.testing`.
+
+A hook passes its arguments by name, and a hookimpl takes only those it needs (pluggy's rule):
+``def gearopt_commands():`` and ``def gearopt_commands(plugin_manager):`` both implement
+:func:`gearopt_commands`.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from typing import TYPE_CHECKING
 import pluggy
 
 if TYPE_CHECKING:
+    from gearopt.commands import BaseCommand, Benchmark
     from gearopt.evaluation import BaseEvaluator, BaseObjective
     from gearopt.machine import BaseMachineModel
 
@@ -103,4 +108,74 @@ def gearopt_objectives() -> list[BaseObjective]:
     Notes
     -----
     Called once per plugin manager; all answers are collected; names are unique across plugins.
+    """
+
+
+@hookspec
+def gearopt_commands(plugin_manager: pluggy.PluginManager) -> list[BaseCommand]:
+    """Return the subcommands of ``gearopt`` this plugin provides (as pytest plugins add
+    options).
+
+    Parameters
+    ----------
+    plugin_manager
+        The manager ``gearopt`` was built from. A command that looks up machine models,
+        evaluators or objectives keeps it and passes it on
+        (``gearopt.get_machine_model(name, plugin_manager=...)``, ``gearopt.evaluators(...)``),
+        so that it sees the plugins the command line was built with.
+
+    Returns
+    -------
+    list of gearopt.commands.BaseCommand
+        Instances; ``name`` is the subcommand (``gearopt <name> ...``), ``help`` its one line
+        in ``gearopt --help``, ``add_arguments(parser)`` fills its own argparse parser and
+        ``run(args) -> int`` runs it and returns the exit status. A
+        :class:`~gearopt.errors.GearoptError` raised by ``run`` is printed as one line with
+        exit status 2, exactly as the core's commands report errors. Example::
+
+            class Hello(gearopt.BaseCommand):
+                name = "hello"
+                help = "greet a design"
+
+                def add_arguments(self, parser):
+                    parser.add_argument("design")
+
+                def run(self, args):
+                    print(f"hello {gearopt.load_design(args.design).name}")
+                    return 0
+
+            @gearopt.hookimpl
+            def gearopt_commands():
+                return [Hello()]
+
+    Notes
+    -----
+    Called once per plugin manager, when ``gearopt`` builds its argument parser (so every run
+    of ``gearopt``, whichever command it runs); all answers are collected. A name that the core
+    (``settings``, ``analyze``, ``study``, ...) or another plugin already uses raises
+    :class:`gearopt.errors.PluginError` naming both.
+    """
+
+
+@hookspec
+def gearopt_benchmarks() -> list[Benchmark]:
+    """Return the benchmarks of ``gearopt bench`` this plugin provides.
+
+    Returns
+    -------
+    list of gearopt.commands.Benchmark
+        ``Benchmark(name=..., function=..., description=...)``: ``name`` is the key of the
+        median time in ``gearopt bench --json`` (``"change_gears_ms"``); ``function`` is a
+        module-level function ``() -> (milliseconds, info)`` that warms up, times its kernel
+        with :func:`gearopt.commands.time_call_ms` and returns JSON-ready facts to print beside
+        the time (keys prefixed with its subject, as they share one JSON object with every
+        other benchmark's). ``gearopt bench`` runs each repeat in a fresh one-thread process
+        that imports ``function`` by its module and qualified name, so it must be importable
+        without the plugin manager.
+
+    Notes
+    -----
+    Called once per plugin manager; all answers are collected. A name that the core's
+    benchmarks (``gearopt.bench``) or another plugin already uses raises
+    :class:`gearopt.errors.PluginError` naming both. Never assert timings in tests.
     """

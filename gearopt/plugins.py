@@ -1,7 +1,7 @@
 """The plugin manager factory and the registries built from it.
 
-Built-in plugins (``gearopt_plugins.*``) and third-party plugins are all found through the
-entry-point group ``gearopt``; nothing special-cases the built-ins. The manager is built by
+Built-in plugins and third-party plugins are all found through the entry-point group
+``gearopt``; nothing special-cases the built-ins. The manager is built by
 :func:`get_plugin_manager`, never at import time, so every worker process can rebuild it.
 """
 
@@ -16,6 +16,7 @@ from typing import Any
 import pluggy
 
 from gearopt import hookspecs
+from gearopt.commands import BaseCommand, Benchmark
 from gearopt.errors import DesignError, PluginError
 from gearopt.evaluation import BaseEvaluator, BaseObjective
 from gearopt.machine import BaseMachineModel
@@ -29,6 +30,8 @@ __all__ = [
     "machine_models",
     "evaluators",
     "objectives",
+    "commands",
+    "benchmarks",
     "get_machine_model",
 ]
 
@@ -38,6 +41,8 @@ _KINDS: dict[str, tuple[str, type]] = {
     "machine-model": ("gearopt_machine_models", BaseMachineModel),
     "evaluator": ("gearopt_evaluators", BaseEvaluator),
     "objective": ("gearopt_objectives", BaseObjective),
+    "command": ("gearopt_commands", BaseCommand),
+    "benchmark": ("gearopt_benchmarks", Benchmark),
 }
 
 
@@ -104,7 +109,8 @@ _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def list_plugins(
     pm: pluggy.PluginManager | None = None, kind: str | None = None
 ) -> list[PluginEntry]:
-    """Every machine model, evaluator and objective, with the distribution that provides it.
+    """Every machine model, evaluator, objective, command and benchmark, with the distribution
+    that provides it.
 
     The hooks are called once per manager and set of registered plugins; the answer is cached.
     Raises :class:`PluginError` when a hook returns something that is not a list of the right
@@ -121,11 +127,13 @@ def list_plugins(
 
 def _collect(pm: pluggy.PluginManager) -> list[PluginEntry]:
     dists = _distributions(pm)
+    # the hooks' arguments (gearopt.hookspecs), by name: each hookimpl takes those it names
+    arguments = {"plugin_manager": pm}
     entries: list[PluginEntry] = []
     for this_kind, (hook_name, base) in _KINDS.items():
         seen: dict[str, str] = {}
         for impl in getattr(pm.hook, hook_name).get_hookimpls():
-            result = impl.function()
+            result = impl.function(**{name: arguments[name] for name in impl.argnames})
             if result is None:
                 continue
             if not isinstance(result, list | tuple):
@@ -182,6 +190,16 @@ def evaluators(pm: pluggy.PluginManager | None = None) -> dict[str, BaseEvaluato
 def objectives(pm: pluggy.PluginManager | None = None) -> dict[str, BaseObjective]:
     """Objectives and constraints by name."""
     return _registry("objective", pm)
+
+
+def commands(pm: pluggy.PluginManager | None = None) -> dict[str, BaseCommand]:
+    """The plugins' subcommands of ``gearopt`` by name."""
+    return _registry("command", pm)
+
+
+def benchmarks(pm: pluggy.PluginManager | None = None) -> dict[str, Benchmark]:
+    """The plugins' benchmarks of ``gearopt bench`` by name."""
+    return _registry("benchmark", pm)
 
 
 def get_machine_model(

@@ -77,6 +77,7 @@ LAYERS = (
         "plugin API",
         (
             "gearopt.hookspecs",
+            "gearopt.commands",
             "gearopt.machine",
             "gearopt.evaluation",
             "gearopt.plausibility",

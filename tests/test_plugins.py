@@ -23,10 +23,19 @@ TOY = Path(__file__).parent / "toy_plugin"
 
 def test_hookspecs_are_documented_and_prefixed():
     specs = [name for name, obj in vars(hookspecs).items() if name.startswith("gearopt_")]
-    assert sorted(specs) == ["gearopt_evaluators", "gearopt_machine_models", "gearopt_objectives"]
+    assert sorted(specs) == [
+        "gearopt_benchmarks",
+        "gearopt_commands",
+        "gearopt_evaluators",
+        "gearopt_machine_models",
+        "gearopt_objectives",
+    ]
     for name in specs:
         doc = inspect.getdoc(getattr(hookspecs, name))
         assert doc and "Returns" in doc and "Notes" in doc, name
+        # every argument a hook passes is documented
+        for argument in inspect.signature(getattr(hookspecs, name)).parameters:
+            assert "Parameters" in doc and f"\n{argument}\n" in doc, (name, argument)
 
 
 def test_factory_builds_a_fresh_manager_each_time():

@@ -2,10 +2,11 @@
 
 :class:`Machine` joins the parts of :mod:`gearopt.chains.model` and checks that every chain runs
 from its input shaft through its meshes, shaft by shaft, to the work spindle. A machine file is a
-TOML description of one machine (see ``plugins/chain_error/data/zftkk250x5.toml``):
-:func:`parse_machine` builds a :class:`Machine` from its parsed tables, :func:`loads_machine`
-from its text and :func:`load_machine` by name (looked up in :func:`machine_dirs`: the folders of
-``GEAROPT_MACHINE_PATH``, then ``gearopt_plugins/chain_error/data``) or by path.
+TOML description of one machine (see ``plugins/chain_error/data/zftkk250x5.toml``): :func:`parse_machine`
+builds a :class:`Machine` from its parsed tables, :func:`loads_machine` from its text and
+:func:`load_machine` by name (looked up in :func:`machine_dirs`: the folders of
+``GEAROPT_MACHINE_PATH``, then those the installed distributions name in the entry-point group
+``gearopt.machine_files``) or by path.
 """
 
 from __future__ import annotations
@@ -15,18 +16,19 @@ import tomllib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from importlib import resources
+from importlib import metadata, resources
 from pathlib import Path
 from typing import Any
 
 from gearopt.chains.change_gears import check_quadrant
 from gearopt.chains.model import Chain, ChangeGearSet, ChangeGearSlot, Element, Shaft
 from gearopt.chains.parsing import name_ok
-from gearopt.errors import DesignError
+from gearopt.errors import DesignError, PluginError
 from gearopt.validate import check_keys, read_table
 
 __all__ = [
     "MACHINE_PATH_ENV",
+    "MACHINE_FILES_GROUP",
     "Machine",
     "parse_machine",
     "loads_machine",
@@ -36,6 +38,8 @@ __all__ = [
 ]
 
 MACHINE_PATH_ENV = "GEAROPT_MACHINE_PATH"
+#: the entry-point group through which a distribution ships machine files
+MACHINE_FILES_GROUP = "gearopt.machine_files"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -320,15 +324,32 @@ def machine_dirs() -> list[Path]:
     """Where machine files are looked up by name, in order.
 
     The directories of the environment variable ``GEAROPT_MACHINE_PATH`` (``os.pathsep``
-    separated), then the data folder of the built-in chain-error plugin
-    (``gearopt_plugins/chain_error/data``).
+    separated), then the folders that installed distributions ship through the entry-point
+    group ``gearopt.machine_files``, in the order of the entries' names. An entry's value
+    ``package:folder`` names a folder of package data inside an importable package (dots
+    separate nested folders; ``package`` alone is the package's own folder)::
+
+        [project.entry-points."gearopt.machine_files"]
+        my-machines = "my_package:machines"    # my_package/machines/*.toml
+
+    A :class:`PluginError` names an entry whose package cannot be imported.
     """
     dirs = [Path(p) for p in os.environ.get(MACHINE_PATH_ENV, "").split(os.pathsep) if p]
-    try:
-        builtin = resources.files("gearopt_plugins.chain_error") / "data"
-    except ModuleNotFoundError:  # gearopt without its built-in plugins
-        return dirs
-    return [*dirs, Path(str(builtin))]
+    for entry in sorted(metadata.entry_points(group=MACHINE_FILES_GROUP), key=lambda e: e.name):
+        try:
+            folder = resources.files(entry.module)
+        except ModuleNotFoundError as exc:
+            raise PluginError(
+                f"entry point {entry.name!r} of group {MACHINE_FILES_GROUP!r}",
+                entry.value,
+                f"names a package that cannot be imported: {exc}",
+            ) from None
+        for part in (entry.attr or "").split("."):
+            folder = folder.joinpath(part) if part else folder
+        path = Path(str(folder))
+        if path not in dirs:
+            dirs.append(path)
+    return dirs
 
 
 def machine_names() -> list[str]:

@@ -28,24 +28,32 @@ Metrics per chain ``<c>`` (finite floats): ``<c>_theoretical_ratio``, ``<c>_max_
 ``<c>_min_ratio``, ``<c>_ratio_error``, ``<c>_ratio_error_percent``, ``<c>_angle_error_deg``,
 ``<c>_pitch_error_um``, ``<c>_change_gear_error`` (quadrant ratio minus required) and
 ``<c>_change_gear_error_percent``.
+
+The plugin also adds two commands, ``gearopt chain MACHINE ...`` (the errors of a machine's
+chains, with per-element and per-mesh tables) and ``gearopt change-gears MACHINE --ratio R``
+(the best change gears of its set), and the benchmark ``change_gears_ms`` of ``gearopt bench``.
 """
 
 from __future__ import annotations
 
+import argparse
+import dataclasses
+import json
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from gearopt import hookimpl
-from gearopt.bench import time_call_ms
 from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
+from gearopt.commands import BaseCommand, Benchmark, text_table, time_call_ms
 from gearopt.design import MEMBERS, Design
 from gearopt.errors import DesignError
 from gearopt.evaluation import BaseEvaluator, Evaluation
 from gearopt.validate import check_integer, check_keys, check_number
 
-__all__ = ["ChainErrorEvaluator", "bench_change_gears"]
+__all__ = ["ChainCommand", "ChainErrorEvaluator", "ChangeGearsCommand", "bench_change_gears"]
 
 DEFAULT_MACHINE = "zftkk250x5"
 METRICS = (
@@ -180,6 +188,182 @@ def gearopt_evaluators() -> list[BaseEvaluator]:
     return [ChainErrorEvaluator()]
 
 
+def _parse_teeth(text: str, option: str, *, count: int | None = None) -> list[int]:
+    rule = "must be tooth counts separated by commas"
+    if count == 4:
+        rule = "must be four tooth counts a,b,c,d (a/b x c/d)"
+    try:
+        teeth = [int(part) for part in text.replace(" ", "").split(",") if part]
+    except ValueError:
+        raise DesignError(option, text, rule) from None
+    if count is not None and len(teeth) != count:
+        raise DesignError(option, text, rule)
+    return teeth
+
+
+def _chain_text(name: str, out: dict[str, Any]) -> str:
+
+    summary = [
+        (key, f"{out[key]:.8g}" if out[key] is not None else "-")
+        for key in (
+            "input_angle_deg",
+            "theoretical_ratio",
+            "max_ratio",
+            "min_ratio",
+            "ratio_error",
+            "ratio_error_plus",
+            "ratio_error_minus",
+            "ratio_error_percent",
+            "angle_error_deg",
+            "pitch_error_um",
+        )
+    ]
+    gears = ", ".join(f"{k}={v}" for k, v in out["gears"].items())
+    lines = [f"{name} chain of {out['machine']!r} (change gears {gears or 'none'})"]
+    if "change_gears" in out:
+        choice = out["change_gears"]
+        how = "chosen from the set" if choice["chosen"] else "given"
+        line = f"quadrant {choice['gears']} ({how}): ratio {choice['ratio']:.8f}"
+        if choice["required_ratio"] is not None:
+            line += f" for {choice['required_ratio']:.8f} (error {choice['error']:+.3e})"
+        lines.append(line)
+    lines += ["", text_table(summary, ("result", "value")), ""]
+    columns = {
+        "revolutions": "n",
+        "odd_teeth": "zk",
+        "fi_um": "fi_um",
+        "fpr_um": "Fpr_um",
+        "error_um": "F_um",
+        "pitch_diameter_mm": "D_mm",
+        "angle_error_deg": "dphi_deg",
+        "max_rotation_deg": "max_deg",
+        "min_rotation_deg": "min_deg",
+    }
+    frame = pd.DataFrame(out["elements"]).set_index("element")[list(columns)]
+    frame = frame.rename(columns=columns)
+    lines.append(frame.to_string(float_format=lambda v: f"{v:.4f}"))
+    lines.append("")
+    meshes = pd.DataFrame(out["meshes"])
+    lines.append(meshes.to_string(index=False, float_format=lambda v: f"{v:.6f}"))
+    return "\n".join(lines)
+
+
+class ChainCommand(BaseCommand):
+    """``gearopt chain MACHINE ...``: the errors of a machine's indexing and envelope chains."""
+
+    name = "chain"
+    help = "errors of a machine's indexing and envelope chains (seed 000)"
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        p = parser
+        p.add_argument("machine", help="machine name (e.g. zftkk250x5) or machine TOML file")
+        p.add_argument("--work-teeth", type=int, required=True, help="teeth of the gear being cut")
+        p.add_argument("--normal-module-mm", type=float, required=True, help="mean normal module")
+        p.add_argument("--spiral-angle-deg", type=float, required=True, help="mean spiral angle")
+        p.add_argument("--indexing-gears", help="a,b,c,d of the indexing quadrant (default: best)")
+        p.add_argument("--envelope-gears", help="a,b,c,d of the envelope quadrant")
+        p.add_argument(
+            "--crown-teeth", type=float, help="crown gear teeth, to choose the envelope gears"
+        )
+        p.add_argument(
+            "--cradle-swing-deg", type=float, help="cradle swing per cycle (default: the machine's)"
+        )
+        p.add_argument("--json", action="store_true", help="print JSON")
+
+    def run(self, args: argparse.Namespace) -> int:
+        machine = load_machine(args.machine)
+        work = WorkGear(
+            teeth=args.work_teeth,
+            normal_module_mm=args.normal_module_mm,
+            spiral_angle_deg=args.spiral_angle_deg,
+        )
+        gears = {
+            chain: _parse_teeth(text, f"--{chain}-gears", count=4)
+            for chain, text in (
+                ("indexing", args.indexing_gears),
+                ("envelope", args.envelope_gears),
+            )
+            if text is not None
+        }
+        swing = {} if args.cradle_swing_deg is None else {"envelope": args.cradle_swing_deg}
+        result = evaluate_machine(
+            machine, work=work, crown_teeth=args.crown_teeth, gears=gears, input_angles_deg=swing
+        )
+        out: dict[str, Any] = {}
+        for name, chain in result.chains.items():
+            out[name] = chain.as_dict()
+            out[name]["work"] = dataclasses.asdict(work)
+            if name in result.quadrants:
+                out[name]["change_gears"] = result.quadrants[name].as_dict()
+        if args.json:
+            print(json.dumps(out, indent=2))
+            return 0
+        print(
+            f"work gear: z = {work.teeth}, m_n = {work.normal_module_mm:g} mm, "
+            f"beta = {work.spiral_angle_deg:g} deg"
+        )
+        for name, chain_out in out.items():
+            print()
+            print(_chain_text(name, chain_out))
+        return 0
+
+
+class ChangeGearsCommand(BaseCommand):
+    """``gearopt change-gears MACHINE --ratio R``: the best change gears of a machine's set."""
+
+    name = "change-gears"
+    help = "best change gears a/b x c/d for a ratio"
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        p = parser
+        p.add_argument("machine", help="machine name (e.g. zftkk250x5) or machine TOML file")
+        p.add_argument("--ratio", type=float, required=True, help="required ratio a c / (b d)")
+        p.add_argument("--top-k", type=int, default=5, help="how many quadrants to list")
+        p.add_argument("--reserve", help="gears already in use, e.g. 48,45,60,60")
+        p.add_argument("--json", action="store_true", help="print JSON")
+
+    def run(self, args: argparse.Namespace) -> int:
+        machine = load_machine(args.machine)
+        reserved = [] if args.reserve is None else _parse_teeth(args.reserve, "--reserve")
+        choices = select_change_gears(
+            args.ratio, machine.change_gears, top_k=args.top_k, reserved=reserved
+        )
+        best = choices[0].as_dict()
+        gear_set = machine.change_gears
+        clearance = gear_set.clearance_teeth
+        out = {
+            "machine": machine.name,
+            **best,
+            "candidates": [c.as_dict() for c in choices],
+            "set_size": len(gear_set.teeth),
+            "rule": f"a + b >= c + {clearance}, c + d >= b + {clearance}",
+        }
+        if args.json:
+            print(json.dumps(out, indent=2))
+            return 0
+        print(
+            f"change gears a/b x c/d of {machine.name!r} for ratio {args.ratio:g} "
+            f"({len(gear_set.teeth)} gears; {out['rule']})"
+        )
+        rows = [
+            (
+                "/".join(str(g) for g in c.gears),
+                f"{c.ratio:.8f}",
+                f"{c.error:+.3e}",
+                f"{c.error_percent:+.5f}",
+            )
+            for c in choices
+        ]
+        print(text_table(rows, ("a/b/c/d", "ratio", "error", "error %")))
+        return 0
+
+
+@hookimpl
+def gearopt_commands() -> list[BaseCommand]:
+    """``gearopt chain`` and ``gearopt change-gears``."""
+    return [ChainCommand(), ChangeGearsCommand()]
+
+
 def bench_change_gears() -> tuple[float, dict]:
     """Top-5 change gears for seed 000's envelope ratio 0.745356 from the shipped set."""
 
@@ -193,3 +377,15 @@ def bench_change_gears() -> tuple[float, dict]:
         "change_gears_ratio": ratio,
         "change_gears_top_k": 5,
     }
+
+
+@hookimpl
+def gearopt_benchmarks() -> list[Benchmark]:
+    """``change_gears_ms``: the change-gear selection."""
+    return [
+        Benchmark(
+            name="change_gears_ms",
+            function=bench_change_gears,
+            description="top-5 change gears for a ratio from the zftkk250x5 set",
+        )
+    ]

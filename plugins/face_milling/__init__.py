@@ -157,6 +157,7 @@ from typing import Any
 import numpy as np
 
 from gearopt import hookimpl
+from gearopt.commands import BaseCommand
 from gearopt.design import MEMBERS, Design, PairData
 from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
@@ -170,7 +171,7 @@ from gearopt_plugins.face_milling.family import (
     CutterFlank,
     design_family,
 )
-from gearopt_plugins.face_milling.inverse import inverse_tca
+from gearopt_plugins.face_milling.inverse import RealiseTECommand, inverse_tca
 from gearopt_plugins.face_milling.synthesis import SIDES
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
@@ -769,3 +770,9 @@ def _tooth_turn_rad(design: Design, member: str, flank: str, teeth: int) -> floa
 def gearopt_machine_models() -> list[BaseMachineModel]:
     """The face-milling machine model."""
     return [FaceMilling()]
+
+
+@hookimpl
+def gearopt_commands(plugin_manager) -> list[BaseCommand]:
+    """``gearopt realise-te``: the settings realising a designed TE (inverse TCA)."""
+    return [RealiseTECommand(plugin_manager=plugin_manager)]

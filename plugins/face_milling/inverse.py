@@ -20,29 +20,43 @@ meshing equation of the generation involves the roll's derivative, so the fit is
 data (phi_p, phi_c) are fitted by phi_c = c0 + c1 phi_p + ... + c6 phi_p^6 (least squares), the
 fit's derivative goes back into f_p, until the coefficients stop moving. c0 is a change of the
 cradle angle setting; c1 ... c6 replace the flank's roll terms.
+
+:class:`RealiseTECommand` is ``gearopt realise-te DESIGN.toml``, which the face-milling plugin
+adds to the command line: the design's machine model realises its ``[te_target]``
+(:meth:`gearopt.BaseMachineModel.realise_te_target`) and the design is written with the fitted
+settings.
 """
 
 from __future__ import annotations
 
+import argparse
+import copy
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+import pluggy
+import tomli_w
 from numpy.typing import NDArray
 
+from gearopt.commands import BaseCommand
 from gearopt.contact import Placement
 from gearopt.design import Design
+from gearopt.design_files import load_design
 from gearopt.errors import SettingsError
 from gearopt.flank import cone_coordinates
 from gearopt.kinematics import rot_z
 from gearopt.mesh import ToothFrame
+from gearopt.plugins import get_machine_model
 from gearopt.solve import complex_step_jacobian, newton
 from gearopt.te_target import ARCSEC, TETarget
 from gearopt_plugins.face_milling.family import design_family
 from gearopt_plugins.face_milling.local import hand_sign, mirrored, solve_nodes
 from gearopt_plugins.face_milling.synthesis import SIDES
 
-__all__ = ["InverseTCA", "inverse_tca"]
+__all__ = ["InverseTCA", "RealiseTECommand", "inverse_tca"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -378,3 +392,43 @@ def _interval_end(pair, solve, coef, u, x, way: int, step: float = 0.01) -> floa
         else:
             u_out = middle
     return 0.5 * (u_in + u_out)
+
+
+class RealiseTECommand(BaseCommand):
+    """``gearopt realise-te DESIGN.toml [--out NEW.toml] [--side drive|coast] [--json]``: the
+    machine settings fitted to the design's ``[te_target]`` by its machine model."""
+
+    name = "realise-te"
+    help = "fit the machine settings to the design's [te_target] (inverse TCA)"
+
+    def __init__(self, *, plugin_manager: pluggy.PluginManager | None = None) -> None:
+        self.plugin_manager = plugin_manager
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("design", help="design TOML file with a [te_target] table")
+        parser.add_argument("--side", default="drive", choices=("drive", "coast"))
+        parser.add_argument("--out", help="write the design with the fitted settings here")
+        parser.add_argument("--json", action="store_true", help="print the report as JSON")
+
+    def run(self, args: argparse.Namespace) -> int:
+        design = load_design(args.design, plugin_manager=self.plugin_manager)
+        model = get_machine_model(design.model, plugin_manager=self.plugin_manager)
+        table, report = model.realise_te_target(design, side=args.side)
+        data = copy.deepcopy(dict(design.source))
+        data.pop("synthesis", None)
+        data["machine"] = {"model": design.model, **table}
+        header = (
+            f"# {Path(args.design).name} with the pinion's {report.get('pinion_flank', '')} roll "
+            f"fitted to [te_target] by `gearopt realise-te` (inverse TCA).\n"
+            + "".join(f"# {k}: {v}\n" for k, v in report.items() if k not in ("before", "after"))
+            + "\n"
+        )
+        if args.out:
+            Path(args.out).write_text(header + tomli_w.dumps(data), encoding="utf-8")
+            report["written"] = str(args.out)
+        if args.json or not args.out:
+            print(json.dumps(report, indent=2))
+        else:
+            after = report["after"]
+            print(f"wrote {args.out}: " + ", ".join(f"{k} = {v:.6g}" for k, v in after.items()))
+        return 0
