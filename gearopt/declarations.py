@@ -34,6 +34,7 @@ __all__ = [
     "SIDES",
     "check_options",
     "declared",
+    "describe",
     "pattern_outline",
     "report_metrics",
 ]
@@ -301,4 +302,38 @@ def report_metrics(evaluator: Any, report: Mapping[str, Any]) -> dict[str, float
                     break
             if isinstance(value, bool) or _number(value):
                 out[name] = float(value)
+    return out
+
+
+def describe(plugin: Any) -> dict[str, Any]:
+    """JSON-ready declarations of an evaluator or objective (``gearopt plugins --json``): its
+    options and, for an evaluator, its metrics (full names), curves and pattern."""
+    out: dict[str, Any] = {}
+    options = getattr(plugin, "options", None)
+    if options is not None and not isinstance(options, str):
+        out["options"] = [o.as_dict() for o in options if isinstance(o, Option)]
+    if hasattr(plugin, "sections"):
+        out["metrics"] = [
+            {"name": name, "unit": m.unit, "description": m.description, "always": m.always}
+            for m in plugin.metrics
+            for name in metric_names(plugin, m)
+        ]
+        out["curves"] = [
+            {
+                "name": c.name,
+                "x": c.x,
+                "y": c.y,
+                "x_unit": c.x_unit,
+                "y_unit": c.y_unit,
+                "sides": list(c.sides),
+                "description": c.description,
+            }
+            for c in plugin.curves
+        ]
+        pattern = plugin.pattern
+        out["pattern"] = (
+            None
+            if pattern is None
+            else {"sides": list(pattern.sides), "description": pattern.description}
+        )
     return out

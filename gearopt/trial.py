@@ -22,7 +22,8 @@ import numpy as np
 from gearopt.declarations import pattern_outline
 from gearopt.errors import GearoptError
 from gearopt.plausibility import caught
-from gearopt.plots import plot_evaluations
+from gearopt.plots import DEDICATED_FIGURES, plot_evaluations
+from gearopt.plots_declared import plot_declared
 from gearopt.plugins import evaluators, get_machine_model, objectives
 from gearopt.studyfile import StudySpec
 
@@ -94,10 +95,14 @@ def _settings(design) -> list[tuple[str, str, float]]:
 
 
 def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:
-    """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`) as (name, bytes)."""
+    """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`, and
+    :func:`gearopt.plots_declared.plot_declared` for the other evaluators) as (name, bytes)."""
 
+    title = f"{spec.name}: {design.name}"
+    rest = {k: e for k, e in evaluations.items() if e.evaluator not in DEDICATED_FIGURES}
     with tempfile.TemporaryDirectory() as folder:
-        paths = plot_evaluations(evaluations, folder, f"{spec.name}: {design.name}")
+        paths = plot_evaluations(evaluations, folder, title)
+        paths += plot_declared(rest, evaluators(), folder, title=title)
         return [(p.name, p.read_bytes()) for p in paths]
 
 

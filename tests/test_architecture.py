@@ -67,7 +67,15 @@ LAYERS = (
             "gearopt.chains",
         ),
     ),
-    ("design", ("gearopt.design", "gearopt.analysis_options", "gearopt.load_options")),
+    (
+        "design",
+        (
+            "gearopt.design",
+            "gearopt.declarations",
+            "gearopt.analysis_options",
+            "gearopt.load_options",
+        ),
+    ),
     (
         "plugin API",
         (
@@ -81,7 +89,10 @@ LAYERS = (
         ),
     ),
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
-    ("analysis", ("gearopt.analysis", "gearopt.plots", "gearopt.warmup")),
+    (
+        "analysis",
+        ("gearopt.analysis", "gearopt.plots", "gearopt.plots_declared", "gearopt.warmup"),
+    ),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
     (
         "study",
