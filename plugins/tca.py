@@ -90,6 +90,28 @@ TCA_METRICS = (
 )
 
 
+#: the metrics' names before gearopt 0.2 (``coast_`` prefixed the coast side), by their names
+#: now: for old queries of the ``gearopt_metrics`` table (docs/declarations.md)
+RENAMED = {
+    f"{section}.{new}": f"{prefix}{old}"
+    for prefix, section in (("", "tca"), ("coast_", "tca_coast"))
+    for old, new in (
+        ("te_peak_to_peak_arcsec", "te_peak_to_peak_arcsec"),
+        ("contact_ratio", "contact_ratio"),
+        ("pattern_width_mm", "pattern.width_mm"),
+        ("pattern_bias_mm", "pattern.bias_mm"),
+        ("pattern_center_offset_face_mm", "pattern.center_offset_mm.0"),
+        ("pattern_center_offset_profile_mm", "pattern.center_offset_mm.1"),
+        ("edge_contact", "pattern.edge_contact"),
+    )
+} | {
+    "tca.te_target_max_deviation_arcsec": "te_target_max_deviation_arcsec",
+    "tca.te_target_rms_deviation_arcsec": "te_target_rms_deviation_arcsec",
+    "ease_off.drive.max_um": "ease_off_max_um",
+    "ease_off.coast.max_um": "coast_ease_off_max_um",
+}
+
+
 class TcaEvaluator(BaseEvaluator):
     """Unloaded TCA of both sides: TE, contact path and pattern (seed 001 section 5)."""
 
