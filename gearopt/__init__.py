@@ -6,6 +6,7 @@ plugin contract (:data:`hookimpl`, the ``Base*`` classes), the plugin registries
 """
 
 from gearopt.blank import Blank, compute_blank
+from gearopt.declarations import Curve, Metric, Option, OptionError, Pattern
 from gearopt.design import Design, Meta, Misalignment, PairData
 from gearopt.design_files import load_design, loads_design, parse_design, with_overrides
 from gearopt.errors import (
@@ -49,6 +50,11 @@ def generate_flanks(
 
 
 __all__ = [
+    "Curve",
+    "Metric",
+    "Option",
+    "OptionError",
+    "Pattern",
     "BaseEvaluator",
     "BaseMachineModel",
     "BaseObjective",
