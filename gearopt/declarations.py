@@ -168,11 +168,12 @@ class Option:
             "description": self.description,
         }
 
-    def check(self, value: Any, where: str) -> None:
-        """Raise :class:`OptionError` naming ``where``, the value and the rule if ``value``
-        breaks this declaration."""
+    def check(self, value: Any, where: str, key: str | None = None) -> None:
+        """Raise :class:`OptionError` naming ``where``, the option (``key``, the given name
+        of a ``*`` declaration), the value and the rule if ``value`` breaks this
+        declaration."""
         if not _accepts(self, value):
-            raise OptionError(f"{where}.{self.name}", value, f"must be {self.rule}")
+            raise OptionError(f"{where}.{key or self.name}", value, f"must be {self.rule}")
 
 
 def _number(value: Any) -> bool:
@@ -229,7 +230,7 @@ def check_options(
         if option is None:
             known = [o.name for o in declared]
             raise OptionError(where, key, f"is not an option; known: {known}")
-        option.check(value, where)
+        option.check(value, where, key)
         out[key] = value
     for option in declared:
         if "*" in option.name or option.name in out:
