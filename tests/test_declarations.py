@@ -14,6 +14,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -100,12 +101,13 @@ def test_a_study_file_with_a_bad_option_fails_before_any_trial():
     text = (STUDIES / "cyclo_palloid_contact.toml").read_text()
     for old, new, parameter in [
         ("[evaluations.tca]", "[evaluations.tca]\nconditions = {cycles = 9.0}", "cycles"),
-        ('name = "worst_te"', 'name = "worst_te"\nside = "left"', "side"),
+        ('side = "both"', 'side = "left"', "side"),
         ("min_um = ", "min_uum = 1.0\nmin_um = ", "min_uum"),
     ]:
         assert old in text
         with pytest.raises(StudyError, match=parameter) as info:
-            parse_study_spec(text.replace(old, new, 1), base=STUDIES)
+            data = tomllib.loads(text.replace(old, new, 1))
+            parse_study_spec(data, path=STUDIES / "cyclo_palloid_contact.toml")
         assert parameter in str(info.value), info.value
 
 
