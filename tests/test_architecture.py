@@ -106,6 +106,7 @@ LAYERS = (
             "gearopt.blank_cli",
             "gearopt.study_cli",
             "gearopt.bench",
+            "gearopt.json_schemas",
             "gearopt",
         ),
     ),

@@ -24,9 +24,11 @@ import sqlalchemy as sa
 import gearopt
 from gearopt.declarations import Option, OptionError, check_options, declared
 from gearopt.errors import GearoptError, StudyError
+from gearopt.json_schemas import json_schema
 from gearopt.studyfile import parse_study_spec
 
 from .conftest import STUDIES
+from .test_json_schemas import validate
 
 HERE = Path(__file__).parent
 TOY_EVALUATOR = HERE / "toy_evaluator"
@@ -59,6 +61,16 @@ def _gearopt(args, site, **kw) -> subprocess.CompletedProcess:
     )
     assert run.returncode == 0, f"gearopt {args}:\n{run.stdout}\n{run.stderr}"
     return run
+
+
+def _schema_at(schema, dotted: str) -> dict:
+    """The part of the analyze schema that describes a metric's dotted place."""
+    node = schema
+    for part in dotted.split("."):
+        while "$ref" in node:
+            node = schema["$defs"][node["$ref"].rsplit("/", 1)[1]]
+        node = node["items"] if part.isdigit() else node["properties"][part]
+    return node
 
 
 def _at(document, dotted: str):
@@ -128,6 +140,8 @@ def test_the_metrics_are_the_places_of_the_analyze_json(capsys):
     design_path = STUDIES / "seed001_section5_3.toml"
     assert main(["analyze", str(design_path), "--json", *SMALL]) == 0
     document = json.loads(capsys.readouterr().out)
+    validate(document, "analyze")
+    schema = json_schema("analyze")
     design = gearopt.load_design(design_path)
     conditions = {"grid": [13, 9], "positions": 9}
     registry = gearopt.evaluators()
@@ -139,6 +153,8 @@ def test_the_metrics_are_the_places_of_the_analyze_json(capsys):
             assert declared(evaluator, metric) is not None, metric
             # the same numbers, read back from the JSON (booleans as 0/1)
             assert float(_at(document, metric)) == pytest.approx(value, rel=1e-12, abs=1e-12)
+            # and the schema describes that place (a number, or 0/1 as a boolean)
+            assert _schema_at(schema, metric)["type"] in ("number", "integer", "boolean")
             seen.add(metric)
     # issue 25: every figure analyze reports is a metric, the coast side under tca_coast
     for metric in (
@@ -190,6 +206,7 @@ def test_a_third_party_evaluator_reaches_analyze_json_and_plot(toy_evaluator_sit
         ["analyze", design, "--json", "--plot", tmp_path / "plots", *SMALL], toy_evaluator_site
     )
     document = json.loads(out.stdout)
+    validate(document, "analyze")
     blank = gearopt.load_design(design).blank
     area = document["toy_depth"]["box_area_mm2"]
     face = blank.outer_cone_distance_mm - blank.inner_cone_distance_mm
@@ -229,7 +246,12 @@ def test_a_third_party_evaluator_reaches_the_study_tables(toy_evaluator_site, tm
     shutil.copy(STUDIES / "seed001_section5_3.toml", tmp_path)
     study = tmp_path / "toy_depth.toml"
     study.write_text(TOY_DEPTH_STUDY)
-    _gearopt(["study", "run", study, "--trials", "2", "--no-progress"], toy_evaluator_site)
+    out = _gearopt(
+        ["study", "run", study, "--trials", "2", "--no-progress", "--json"], toy_evaluator_site
+    )
+    summary = json.loads(out.stdout)
+    validate(summary, "study-run")
+    assert summary["complete"] == 2 and summary["best"]["values"]["toy-box-area"] < 0
     engine = sa.create_engine(f"sqlite:///{tmp_path / 'toy_depth.db'}")
     with engine.connect() as con:
         metrics = con.execute(
