@@ -12,8 +12,8 @@ to draw a gear engineer's plots, keyed by study name and Optuna trial number:
 ``gearopt_settings``     the machine settings of each member (member, key, value)
 ``gearopt_curves``       the evaluators' declared curves: TE, contact path, backlash, ...
                          (evaluation, curve, side, idx, x, y)
-``gearopt_patterns``     the declared contact-pattern outlines, closed polygons (evaluation, side, idx,
-                         face_mm, profile_mm)
+``gearopt_patterns``     the declared contact-pattern outlines, closed polygons
+                         (evaluation, side, idx, face_mm, profile_mm)
 ``gearopt_studies``      one row per study (the study file's search space as JSON)
 ``gearopt_coordinators`` the coordinators that ran a study, with their last heartbeat (UTC)
 
