@@ -27,6 +27,17 @@ SEPARATIONS = ("normal", "circumferential")
 #: cells and the contact refinement must stay above them.
 TCA_GRID = FlankGrid(n_face=25, n_profile=21)
 
+
+def _misalignment(value: Any, where: str) -> None:
+    """A ``misalignment`` condition: a table of the ``[misalignment]`` keys."""
+    Misalignment.from_table(value, where)
+
+
+def _positive(value: Any, where: str) -> None:
+    if not value > 0.0:
+        raise GearoptError(where, value, "must be > 0")
+
+
 _FROM_DESIGN = "; default: the design's [analysis] table, else "
 
 #: the contact evaluators' options (their conditions), as ``gearopt plugins --options`` lists
@@ -65,6 +76,7 @@ ANALYSIS_OPTIONS = (
         lower=0.0,
         upper=100.0,
         description="marking-compound thickness of the pattern, > 0 (um)" + _FROM_DESIGN + "6.5",
+        validate=_positive,
     ),
     Option(
         name="separation",
@@ -85,6 +97,7 @@ ANALYSIS_OPTIONS = (
         default=None,
         kind="table",
         description="the assembly, a table of [misalignment] keys; default: the design's",
+        validate=_misalignment,
     ),
 )
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import fnmatch
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -128,6 +128,10 @@ class Option:
         The key must be given.
     description
         One line for ``gearopt plugins --options``.
+    validate
+        A module-level function ``(value, where)`` raising a
+        :class:`~gearopt.errors.GearoptError` for a rule beyond the kind and bounds (the keys of
+        a table), called after them.
     """
 
     name: str
@@ -138,6 +142,7 @@ class Option:
     choices: tuple[Any, ...] = ()
     required: bool = False
     description: str = ""
+    validate: Callable[[Any, str], Any] | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -174,6 +179,8 @@ class Option:
         declaration."""
         if not _accepts(self, value):
             raise OptionError(f"{where}.{key or self.name}", value, f"must be {self.rule}")
+        if self.validate is not None:
+            self.validate(value, f"{where}.{key or self.name}")
 
 
 def _number(value: Any) -> bool:
