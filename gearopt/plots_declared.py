@@ -17,10 +17,11 @@ import numpy as np
 
 from gearopt.errors import GearoptError, NotAvailableError
 
-__all__ = ["plot_declared"]
+__all__ = ["plot_declared", "pyplot"]
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib.pyplot on the Agg backend; :class:`NotAvailableError` without matplotlib."""
     try:
         import matplotlib
 
@@ -61,7 +62,7 @@ def plot_declared(
             todo.append((label, evaluator, evaluation, panels, pattern))
     if not todo:
         return []
-    plt = _pyplot()
+    plt = pyplot()
     out = Path(directory)
     try:
         out.mkdir(parents=True, exist_ok=True)
