@@ -151,6 +151,8 @@ class TcaEvaluator(BaseEvaluator):
     pattern = Pattern(description="contact pattern at the marking compound", sides=SIDES)
     options = ANALYSIS_OPTIONS
     analysis = True
+    #: the metrics' names before gearopt 0.2 by their names now (docs/declarations.md)
+    renamed = RENAMED
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)

@@ -395,12 +395,11 @@ def test_uniform_depth_output_is_mains(conjugate):
     # about 1e-7 mm)
     # (the pattern's width and M are measured on the refined field since issue 19: not
     # the reference's node-counted figures, so not compared)
-    # (the reference names the metrics as gearopt 0.1 did: RENAMED maps today's names)
-    from gearopt_plugins.tca import RENAMED
-
-    metrics = gearopt.evaluators()["tca"].evaluate(conjugate, None).metrics
+    # (the reference names the metrics as gearopt 0.1 did: ``renamed`` maps today's names)
+    tca = gearopt.evaluators()["tca"]
+    metrics = tca.evaluate(conjugate, None).metrics
     for new, value in metrics.items():
-        name = RENAMED.get(new)
+        name = tca.renamed.get(new)
         if name is None or name.endswith("pattern_width_mm") or "pattern_center_offset" in name:
             continue
         atol = 1e-6
