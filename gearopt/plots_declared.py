@@ -95,7 +95,8 @@ def plot_declared(
             ax.set_title(evaluator.pattern.description or "contact pattern")
             ax.set_aspect("equal", adjustable="datalim")
             ax.legend(fontsize=8)
-        fig.suptitle(f"{title}: {label} ({evaluator.name})" if title else label)
+        name = label if label == evaluator.name else f"{label} ({evaluator.name})"
+        fig.suptitle(f"{title}: {name}" if title else name)
         fig.tight_layout()
         path = out / f"{label}.png"
         try:
