@@ -7,6 +7,7 @@ plugin contract (:data:`hookimpl`, the ``Base*`` classes), the plugin registries
 
 from gearopt.blank import Blank, compute_blank
 from gearopt.commands import BaseCommand, Benchmark
+from gearopt.declarations import Curve, Metric, Option, OptionError, Pattern
 from gearopt.design import Design, Meta, Misalignment, PairData
 from gearopt.design_files import load_design, loads_design, parse_design, with_overrides
 from gearopt.errors import (
@@ -51,6 +52,11 @@ def generate_flanks(
 
 __all__ = [
     "BaseCommand",
+    "Curve",
+    "Metric",
+    "Option",
+    "OptionError",
+    "Pattern",
     "BaseEvaluator",
     "BaseMachineModel",
     "BaseObjective",

@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from gearopt.assembly import Misalignment
+from gearopt.declarations import Option
 from gearopt.errors import GearoptError
 from gearopt.flank import FlankGrid
 
-__all__ = ["SEPARATIONS", "TCA_GRID", "AnalysisOptions", "check_options"]
+__all__ = ["ANALYSIS_OPTIONS", "SEPARATIONS", "TCA_GRID", "AnalysisOptions", "check_options"]
 
 #: how the pattern's separations are measured: along the surface normal, or between two points
 #: at equal radius (seed 003 section 5)
@@ -25,6 +26,80 @@ SEPARATIONS = ("normal", "circumferential")
 #: finely than the flank default because the pinion's fold spoils interpolation in its lowest
 #: cells and the contact refinement must stay above them.
 TCA_GRID = FlankGrid(n_face=25, n_profile=21)
+
+
+def _misalignment(value: Any, where: str) -> None:
+    """A ``misalignment`` condition: a table of the ``[misalignment]`` keys."""
+    Misalignment.from_table(value, where)
+
+
+def _positive(value: Any, where: str) -> None:
+    if not value > 0.0:
+        raise GearoptError(where, value, "must be > 0")
+
+
+_FROM_DESIGN = "; default: the design's [analysis] table, else "
+
+#: the contact evaluators' options (their conditions), as ``gearopt plugins --options`` lists
+#: them; :meth:`AnalysisOptions.from_conditions` checks the rules that join two of them
+ANALYSIS_OPTIONS = (
+    Option(
+        name="positions",
+        default=21,
+        kind="integer",
+        lower=3,
+        upper=401,
+        description="contact positions over the mesh cycles, at least 2 cycles + 1"
+        + _FROM_DESIGN
+        + "21",
+    ),
+    Option(
+        name="pairs",
+        default=3,
+        kind="integer",
+        lower=2,
+        upper=7,
+        description="tooth pairs at each position" + _FROM_DESIGN + "3",
+    ),
+    Option(
+        name="cycles",
+        default=2.0,
+        kind="number",
+        lower=1.0,
+        upper=5.0,
+        description="mesh cycles analysed" + _FROM_DESIGN + "2",
+    ),
+    Option(
+        name="compound_um",
+        default=6.5,
+        kind="number",
+        lower=0.0,
+        upper=100.0,
+        description="marking-compound thickness of the pattern, > 0 (um)" + _FROM_DESIGN + "6.5",
+        validate=_positive,
+    ),
+    Option(
+        name="separation",
+        default="normal",
+        kind="string",
+        choices=SEPARATIONS,
+        description="how the pattern's separation is measured" + _FROM_DESIGN + "normal",
+    ),
+    Option(
+        name="grid",
+        default=[TCA_GRID.n_face, TCA_GRID.n_profile],
+        kind="numbers",
+        lower=2,
+        description="FlankMap grid [n_face, n_profile] of both members",
+    ),
+    Option(
+        name="misalignment",
+        default=None,
+        kind="table",
+        description="the assembly, a table of [misalignment] keys; default: the design's",
+        validate=_misalignment,
+    ),
+)
 
 
 @dataclass(frozen=True, kw_only=True)

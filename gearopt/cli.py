@@ -27,12 +27,14 @@ from gearopt.analysis import AnalysisOptions, analysed_flanks
 from gearopt.bench import run_benchmarks
 from gearopt.blank_cli import add_blank_parser
 from gearopt.commands import text_table as _table
+from gearopt.declarations import Option, declared, describe, metric_names
 from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError, PluginError
 from gearopt.flank import FLANKS, MEMBERS
 from gearopt.flank_cli import add_flank_parser, parse_grid, print_warnings
 from gearopt.plausibility import caught, contact_findings, flank_findings
-from gearopt.plots import plot_analysis
+from gearopt.plots import DEDICATED_FIGURES, plot_analysis
+from gearopt.plots_declared import plot_declared
 from gearopt.plugins import default_plugin_manager, evaluators, get_machine_model, list_plugins
 from gearopt.study_cli import add_study_parser
 from gearopt.thickness import design_chordal_thickness
@@ -61,6 +63,7 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
                         "distribution": e.distribution,
                         "version": e.version,
                         "description": e.description,
+                        **describe(e.obj),
                     }
                     for e in entries
                 ],
@@ -76,6 +79,21 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
         if rows
         else "no plugins found"
     )
+    if args.options:
+        rows = [
+            (
+                e.name,
+                o.name,
+                "(required)" if o.required else _format_value(o.default),
+                o.rule,
+                o.description,
+            )
+            for e in entries
+            for o in getattr(e.obj, "options", None) or ()
+            if isinstance(o, Option)
+        ]
+        print()
+        print(_table(rows, ("plugin", "option", "default", "rule", "description")))
     return 0
 
 
@@ -175,6 +193,47 @@ def _row_mm(profile_mm) -> float:
     return float(profile_mm[1] - profile_mm[0])
 
 
+def _analysis_conditions(evaluator, conditions: dict, torques) -> dict:
+    """The command line's conditions an evaluator declares (``torque_nm`` too, when given)."""
+    declared = {o.name for o in evaluator.options or ()}
+    given = {k: v for k, v in conditions.items() if k in declared}
+    if torques is not None and "torque_nm" in declared:
+        given["torque_nm"] = torques
+    return given
+
+
+def _metric_rows(evaluator, evaluation) -> list[tuple[str, ...]]:
+    """Text rows (metric, unit, value per side or one value) of an evaluation's declared
+    metrics; the sides' columns follow the evaluator's ``sections``."""
+    rows = []
+    for metric in evaluator.metrics:
+        names = metric_names(evaluator, metric)
+        values = [evaluation.metrics.get(n) for n in names]
+        if "*" in metric.name:
+            rows += [
+                (name, metric.unit, f"{value:.6g}")
+                for name, value in evaluation.metrics.items()
+                if declared(evaluator, name) is metric
+            ]
+        elif any(v is not None for v in values):
+            cells = ["-" if v is None else f"{v:.6g}" for v in values]
+            rows.append((metric.name, metric.unit, *cells))
+    return rows
+
+
+def _print_analysis(registry, results: dict) -> None:
+    """Each evaluation's declared metrics as a table, one column per side."""
+    for name, evaluation in results.items():
+        evaluator = registry[name]
+        sides = list(evaluator.sections) if evaluator.sections else ["value"]
+        rows = _metric_rows(evaluator, evaluation)
+        width = max((len(r) for r in rows), default=3)
+        rows = [r + ("",) * (width - len(r)) for r in rows]
+        header = ("metric", "unit", *sides[: width - 2], *("",) * (width - 2 - len(sides)))
+        print(f"\n{name}: {evaluator.description}")
+        print(_table(rows, header) if rows else "(no metrics)")
+
+
 def _cmd_analyze(args: argparse.Namespace) -> int:
 
     design = load_design(args.design)
@@ -191,15 +250,27 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     }
     options = AnalysisOptions.from_conditions(conditions, design=design)
     registry = evaluators()
+    torques = _torques(args.torque_nm)
+    chosen = {
+        name: evaluator
+        for name, evaluator in registry.items()
+        if evaluator.in_analysis(design)
+        or (torques is not None and any(o.name == "torque_nm" for o in evaluator.options or ()))
+    }
+    for name in args.evaluator or ():
+        if name not in registry:
+            raise GearoptError("--evaluator", name, f"unknown; installed: {sorted(registry)}")
+        chosen[name] = registry[name]
     out: dict[str, Any] = {"design": design.name, "model": design.model}
     out["conditions"] = options.as_dict()
     results = {}
-    torques = _torques(args.torque_nm)
     with caught() as numerical:
-        for name in ("tca", "backlash", "ease-off"):
-            evaluation = registry[name].evaluate(design, conditions)
+        for name, evaluator in chosen.items():
+            given = _analysis_conditions(evaluator, conditions, torques)
+            evaluator.check_conditions(design, given)
+            evaluation = evaluator.evaluate(design, given)
             results[name] = evaluation
-            out.update(evaluation.report)
+            out.update(evaluation.report or {name: dict(evaluation.metrics)})
         found = [
             text
             for member, maps in zip(MEMBERS, analysed_flanks(design, options), strict=True)
@@ -209,16 +280,12 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
             )
         ]
         found += contact_findings(out)
-        if torques is not None or design.load.get("torque_nm") is not None:
-            load_conditions = dict(conditions)
-            if torques is not None:
-                load_conditions["torque_nm"] = torques
-            evaluation = registry["ltca"].evaluate(design, load_conditions)
-            results["ltca"] = evaluation
-            out.update(evaluation.report)
     out["warnings"] = found + numerical
     if args.plot:
-        out["plots"] = [str(p) for p in plot_analysis(design, results, args.plot)]
+        paths = plot_analysis(design, results, args.plot)
+        rest = {k: v for k, v in results.items() if k not in DEDICATED_FIGURES}
+        paths += plot_declared(rest, registry, args.plot, title=design.name)
+        out["plots"] = [str(p) for p in paths]
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
@@ -228,68 +295,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         f"{options.positions} positions, compound {options.compound_um:g} um "
         f"({options.separation} separation)"
     )
-    rows = []
-    for key in ("tca", "tca_coast"):
-        side = out[key]
-        pattern = side["pattern"]
-        rows.append(
-            (
-                side["side"],
-                f"{side['te_peak_to_peak_arcsec']:.4f}",
-                f"{side['contact_ratio']:.3f}",
-                f"{pattern['width_mm']:.2f}",
-                f"{pattern['bias_mm']:.2f}",
-                f"{pattern['center_offset_mm'][0]:.2f}, {pattern['center_offset_mm'][1]:.2f}",
-                "yes" if pattern["edge_contact"] else "no",
-            )
-        )
-    print()
-    header = (
-        "side",
-        "TE p-p (arcsec)",
-        "contact ratio",
-        "width (mm)",
-        "bias (mm)",
-        "M - C face, profile (mm)",
-        "edge contact",
-    )
-    print(_table(rows, header))
-    b = out["backlash"]
-    print(
-        f"\nbacklash (circumferential, at r = {b['radius_mm']:.3f} mm): min {b['min_um']:.2f}, "
-        f"mean {b['mean_um']:.2f}, max {b['max_um']:.2f} um"
-        + ("  INTERFERENCE" if b["interference"] else "")
-    )
-    e = out["ease_off"]
-    print(
-        f"ease-off (pinion, from the surface conjugate to the gear): drive max "
-        f"{e['drive']['max_um']:.2f} um, coast max {e['coast']['max_um']:.2f} um"
-    )
-    if "ltca" in out:
-        rows = [
-            (
-                side["side"] if "side" in side else name,
-                f"{side['torque_nm']:g}",
-                f"{side['lte_peak_to_peak_arcsec']:.3f}",
-                f"{side['max_contact_pressure_mpa']:.0f}",
-                f"{side['max_line_load_n_per_mm']:.1f}",
-                f"{side['mesh_stiffness_n_per_mm_um']:.2f}",
-                "yes" if side["edge_loading"] else "no",
-            )
-            for name, key in (("drive", "ltca"), ("coast", "ltca_coast"))
-            for side in out[key]
-        ]
-        header = (
-            "side",
-            "torque (N m)",
-            "LTE p-p (arcsec)",
-            "p max (MPa)",
-            "line load (N/mm)",
-            "mesh stiffness (N/(mm um))",
-            "edge loading",
-        )
-        print()
-        print(_table(rows, header))
+    _print_analysis(registry, results)
     for path in out.get("plots", []):
         print(f"wrote {path}")
     return 0
@@ -364,7 +370,10 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     parser.add_argument("--version", action="version", version=f"gearopt {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("plugins", help="list machine models, evaluators and objectives")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--json", action="store_true", help="print JSON (with the declarations)")
+    p.add_argument(
+        "--options", action="store_true", help="also list the evaluators' and objectives' options"
+    )
     p.set_defaults(func=_cmd_plugins)
     p = sub.add_parser("settings", help="basic machine-tool settings of a design")
     p.add_argument("design", help="design TOML file")
@@ -391,6 +400,12 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
         "--torque-nm",
         help="loaded TCA at these output torques (N m on the gear, comma-separated); "
         "default: the design's [load] torque_nm, if any",
+    )
+    p.add_argument(
+        "--evaluator",
+        action="append",
+        metavar="NAME",
+        help="run this installed evaluator too (repeatable; `gearopt plugins` lists them)",
     )
     # defaults: the design's [analysis] table, else gearopt.analysis.AnalysisOptions
     p.set_defaults(func=_cmd_analyze)

@@ -75,11 +75,14 @@ def gearopt_evaluators() -> list[BaseEvaluator]:
     list of gearopt.BaseEvaluator
         Instances; ``evaluate(design, conditions)`` returns a :class:`gearopt.Evaluation` with
         finite scalar ``metrics`` named with units, optional ``arrays``, the ``conditions``
-        that produced them and an optional ``report`` (JSON-ready details keyed by section,
-        which ``gearopt analyze --json`` prints for the built-in ``tca``, ``backlash`` and
-        ``ease-off``). Evaluators run in worker processes and must not touch storage. The
-        contact engine (:mod:`gearopt.contact`, :mod:`gearopt.mesh`) works on any machine
-        model's FlankMaps, so a contact evaluator needs no machine knowledge.
+        that produced them, an optional ``report`` (JSON-ready details keyed by section, which
+        ``gearopt analyze --json`` prints) and the ``curves`` and ``patterns`` it declares. An
+        evaluator declares its metrics (named by their places in the report), curves, pattern
+        and options as class attributes (:class:`gearopt.BaseEvaluator`, docs/declarations.md);
+        the study tables, ``gearopt analyze`` and ``gearopt plugins`` read them. Evaluators
+        run in worker processes and must not touch storage. The contact engine
+        (:mod:`gearopt.contact`, :mod:`gearopt.mesh`) works on any machine model's FlankMaps,
+        so a contact evaluator needs no machine knowledge.
 
     Notes
     -----
@@ -99,8 +102,9 @@ def gearopt_objectives() -> list[BaseObjective]:
         (``[evaluations.<label>]``, a label defaulting to the evaluator's name); ``options`` are
         the other keys of the study file's ``[[objectives]]`` or ``[[constraints]]`` entry.
         ``reads(**options)`` says which labels ``value`` reads and of which evaluator each must
-        be, and refuses bad options with a :class:`gearopt.errors.StudyError`: a study calls it
-        when its file is read, before any trial. ``kind = "constraint"`` values are feasible
+        be, and refuses bad options with a :class:`gearopt.errors.GearoptError` (the default
+        checks the declared ``options``, :class:`gearopt.Option`): a study calls it when its
+        file is read, before any trial. ``kind = "constraint"`` values are feasible
         when <= 0 (the study passes them to ``trial.set_constraint``); objectives are
         minimised unless ``direction = "maximize"``. The built-ins are in
         ``gearopt_plugins.objectives``.

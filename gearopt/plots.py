@@ -20,7 +20,11 @@ import numpy as np
 
 from gearopt.errors import GearoptError, NotAvailableError
 
-__all__ = ["plot_analysis"]
+__all__ = ["DEDICATED_FIGURES", "plot_analysis"]
+
+#: the evaluators :func:`plot_analysis` draws; any other evaluator's declared curves and pattern
+#: are drawn by :func:`gearopt.plots_declared.plot_declared`
+DEDICATED_FIGURES = frozenset({"tca", "backlash", "ease-off", "ltca"})
 
 
 def _pyplot():

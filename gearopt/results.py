@@ -5,12 +5,15 @@ them). Beside them, in the same database, gearopt writes with SQLAlchemy what a 
 to draw a gear engineer's plots, keyed by study name and Optuna trial number:
 
 ``gearopt_trials``       one row per evaluated trial: attempt, seconds, worker pid, coordinator
-``gearopt_metrics``      every evaluator metric, long format (evaluation, metric, value)
+``gearopt_metrics``      every metric the evaluators declare, long format (evaluation, metric,
+                         value), named by its place in ``gearopt analyze --json``
+                         (``tca_coast.te_peak_to_peak_arcsec``; :mod:`gearopt.declarations`)
 ``gearopt_objectives``   objective and constraint values by label (kind: objective/constraint)
 ``gearopt_settings``     the machine settings of each member (member, key, value)
-``gearopt_curves``       TE, contact path and backlash curves (evaluation, curve, side, idx, x, y)
-``gearopt_patterns``     contact-pattern outlines, closed polygons (evaluation, side, idx,
-                         face_mm, profile_mm)
+``gearopt_curves``       the evaluators' declared curves: TE, contact path, backlash, ...
+                         (evaluation, curve, side, idx, x, y)
+``gearopt_patterns``     the declared contact-pattern outlines, closed polygons
+                         (evaluation, side, idx, face_mm, profile_mm)
 ``gearopt_studies``      one row per study (the study file's search space as JSON)
 ``gearopt_coordinators`` the coordinators that ran a study, with their last heartbeat (UTC)
 

@@ -19,10 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from gearopt.analysis import AnalysisOptions
+from gearopt.declarations import pattern_outline
 from gearopt.errors import GearoptError
 from gearopt.plausibility import caught
-from gearopt.plots import plot_evaluations
+from gearopt.plots import DEDICATED_FIGURES, plot_evaluations
+from gearopt.plots_declared import plot_declared
 from gearopt.plugins import evaluators, get_machine_model, objectives
 from gearopt.studyfile import StudySpec
 
@@ -60,49 +61,12 @@ class TrialOutcome:
         return self.values is None
 
 
-def pattern_outline(
-    pattern_um: np.ndarray, face_mm: np.ndarray, profile_mm: np.ndarray, compound_um: float
-) -> np.ndarray:
-    """The contact pattern's outline as a closed polygon ``(k, 2)`` of (face, profile) mm: the
-    lowest and highest marked node of each marked face column, toe to heel along the root side
-    and back along the top side (empty when nothing is marked)."""
-    marked = np.isfinite(pattern_um) & (pattern_um <= compound_um)
-    cols = np.flatnonzero(marked.any(axis=1))
-    if cols.size == 0:
-        return np.zeros((0, 2))
-    rows = marked[cols]
-    low = profile_mm[np.argmax(rows, axis=1)]
-    high = profile_mm[rows.shape[1] - 1 - np.argmax(rows[:, ::-1], axis=1)]
-    face = face_mm[cols]
-    return np.concatenate(
-        [np.column_stack([face, low]), np.column_stack([face[::-1], high[::-1]])], axis=0
-    )
-
-
-#: the sides of the contact evaluators' arrays: drive unprefixed, coast ``coast_``
-_SIDES = (("drive", ""), ("coast", "coast_"))
-
-
 def _curves(label: str, evaluation) -> list[tuple]:
-    """Rows of the curves table: the curves an evaluation carries by the array names the
-    built-in evaluators use, and those it names itself
-    (:attr:`gearopt.evaluation.Evaluation.curves`); non-finite points left out."""
-    pairs = {
-        "te": ("phi1_deg", "te_arcsec"),
-        "path": ("path_face_mm", "path_profile_mm"),
-        "backlash": ("phi1_deg", "circumferential_um"),
-    }
-    arrays = evaluation.arrays
-    found: dict[str, dict] = {}
-    for curve, (xk, yk) in pairs.items():
-        for side, prefix in _SIDES:
-            x, y = arrays.get(prefix + xk), arrays.get(prefix + yk)
-            if x is not None and y is not None and np.shape(x) == np.shape(y):
-                found.setdefault(curve, {})[side] = (x, y)
+    """Rows of the curves table: the curves the evaluation carries (its evaluator's declared
+    :attr:`~gearopt.evaluation.BaseEvaluator.curves`), non-finite points left out."""
     return [
         (label, curve, side, i, float(a), float(b))
-        for named in (found, evaluation.curves)
-        for curve, by_side in named.items()
+        for curve, by_side in evaluation.curves.items()
         for side, (x, y) in by_side.items()
         for i, (a, b) in enumerate(zip(np.ravel(x), np.ravel(y), strict=True))
         if math.isfinite(a) and math.isfinite(b)
@@ -110,22 +74,13 @@ def _curves(label: str, evaluation) -> list[tuple]:
 
 
 def _patterns(label: str, evaluation) -> list[tuple]:
-    """Pattern outlines of an evaluation that carries the ``tca`` evaluator's pattern arrays,
-    at the marking compound of its conditions."""
-
-    arrays = evaluation.arrays
-    if "face_mm" not in arrays or "profile_mm" not in arrays:
-        return []
-    compound_um = float(evaluation.conditions.get("compound_um", AnalysisOptions.compound_um))
-    rows = []
-    for side, prefix in _SIDES:
-        if prefix + "pattern_um" not in arrays:
-            continue
-        outline = pattern_outline(
-            arrays[prefix + "pattern_um"], arrays["face_mm"], arrays["profile_mm"], compound_um
-        )
-        rows += [(label, side, i, float(f), float(p)) for i, (f, p) in enumerate(outline)]
-    return rows
+    """Rows of the patterns table: the pattern outline of each side the evaluation carries
+    (its evaluator's declared :attr:`~gearopt.evaluation.BaseEvaluator.pattern`)."""
+    return [
+        (label, side, i, float(f), float(p))
+        for side, outline in evaluation.patterns.items()
+        for i, (f, p) in enumerate(np.asarray(outline, float))
+    ]
 
 
 def _settings(design) -> list[tuple[str, str, float]]:
@@ -140,10 +95,14 @@ def _settings(design) -> list[tuple[str, str, float]]:
 
 
 def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:
-    """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`) as (name, bytes)."""
+    """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`, and
+    :func:`gearopt.plots_declared.plot_declared` for the other evaluators) as (name, bytes)."""
 
+    title = f"{spec.name}: {design.name}"
+    rest = {k: e for k, e in evaluations.items() if e.evaluator not in DEDICATED_FIGURES}
     with tempfile.TemporaryDirectory() as folder:
-        paths = plot_evaluations(evaluations, folder, f"{spec.name}: {design.name}")
+        paths = plot_evaluations(evaluations, folder, title)
+        paths += plot_declared(rest, evaluators(), folder, title=title)
         return [(p.name, p.read_bytes()) for p in paths]
 
 

@@ -72,7 +72,15 @@ LAYERS = (
             "gearopt.chains",
         ),
     ),
-    ("design", ("gearopt.design", "gearopt.analysis_options", "gearopt.load_options")),
+    (
+        "design",
+        (
+            "gearopt.design",
+            "gearopt.declarations",
+            "gearopt.analysis_options",
+            "gearopt.load_options",
+        ),
+    ),
     (
         "plugin API",
         (
@@ -87,7 +95,10 @@ LAYERS = (
         ),
     ),
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
-    ("analysis", ("gearopt.analysis", "gearopt.plots", "gearopt.warmup")),
+    (
+        "analysis",
+        ("gearopt.analysis", "gearopt.plots", "gearopt.plots_declared", "gearopt.warmup"),
+    ),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
     (
         "study",
@@ -109,6 +120,7 @@ LAYERS = (
             "gearopt.blank_cli",
             "gearopt.study_cli",
             "gearopt.bench",
+            "gearopt.json_schemas",
             "gearopt",
         ),
     ),

@@ -362,8 +362,8 @@ def _max_kinematic_error_arcsec(design, overrides) -> float:
     at the solved hand-over between pairs (the TE maximum is 0 by convention)."""
     tca = gearopt.evaluators()["tca"]
     evaluation = tca.evaluate(gearopt.with_overrides(design, overrides), SEED003_ANALYSIS)
-    assert evaluation.metrics["edge_contact"] == 0.0
-    return -evaluation.metrics["te_peak_to_peak_arcsec"]
+    assert evaluation.metrics["tca.pattern.edge_contact"] == 0.0
+    return -evaluation.metrics["tca.te_peak_to_peak_arcsec"]
 
 
 def test_table5_maximum_kinematic_error_against_the_blade_radius(case_a, seed_cases):
@@ -475,9 +475,9 @@ def test_tables_5_6_bias_is_the_contact_lines_extension(case_a, overrides, publi
     trial = gearopt.with_overrides(case_a, overrides)
     bias = gearopt.evaluators()["tca"].evaluate(trial, SEED003_BIAS_ANALYSIS).metrics
     if published >= case_a.pair.face_width_mm:
-        assert bias["pattern_bias_mm"] >= 52.5
+        assert bias["tca.pattern.bias_mm"] >= 52.5
     else:
-        assert bias["pattern_bias_mm"] == pytest.approx(published, abs=1.0)
+        assert bias["tca.pattern.bias_mm"] == pytest.approx(published, abs=1.0)
 
 
 def test_contact_interval_ends_where_the_tangency_point_leaves_the_flanks(case_a):
@@ -543,4 +543,4 @@ def test_tables_5_6_bias_at_the_implied_tip_height(case_a, overrides, published)
     tips = {"pair.outer_addendum_mm": [IMPLIED_ADDENDUM_MM, IMPLIED_ADDENDUM_MM]}
     trial = gearopt.with_overrides(case_a, {**overrides, **tips})
     bias = gearopt.evaluators()["tca"].evaluate(trial, SEED003_BIAS_ANALYSIS).metrics
-    assert bias["pattern_bias_mm"] == pytest.approx(published, abs=0.01)
+    assert bias["tca.pattern.bias_mm"] == pytest.approx(published, abs=0.01)

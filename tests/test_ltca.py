@@ -338,12 +338,12 @@ def test_analyze_json_and_the_objectives(tmp_path):
     )
     assert fluctuation.value({"ltca": evaluation}) == pytest.approx(pp.max())
     pressure = objectives["max_contact_pressure"]
-    p_max = evaluation.metrics["max_contact_pressure_mpa"]
+    p_max = evaluation.metrics["ltca.max_contact_pressure_mpa"]
     assert pressure.value({"ltca": evaluation}, limit_mpa=1500.0) == pytest.approx(p_max - 1500)
     with pytest.raises(GearoptError, match="limit_mpa"):
         pressure.reads()
     assert objectives["edge_loading"].value({"ltca": evaluation}) == pytest.approx(
-        evaluation.metrics["edge_loading"] - 0.5
+        evaluation.metrics["ltca.edge_loading"] - 0.5
     )
 
 
@@ -376,7 +376,7 @@ def test_the_lte_study_evaluates_a_trial():
     weighted = sum(w * pp for w, (_, _, pp) in zip((0.2, 0.5, 0.3), fluctuation, strict=True))
     assert value == pytest.approx(weighted, rel=1e-12)
     metrics = {(label, name) for label, name, _ in outcome.metrics}
-    assert ("ltca", "lte_peak_to_peak_arcsec") in metrics
+    assert ("ltca", "ltca.lte_peak_to_peak_arcsec") in metrics
 
 
 def test_the_section_5_4_misalignment_moves_the_loaded_pattern_and_raises_the_pressure(

@@ -238,8 +238,20 @@ def _tca(**metrics):
         "edge_contact": 0.0,
     }
     base.update(metrics)
-    base.update({"coast_" + k: v for k, v in base.items() if not k.startswith("coast_")})
-    return Evaluation(evaluator="tca", metrics=base)
+    # the metrics' names since gearopt 0.2: their places in `gearopt analyze --json`
+    names = {
+        "te_peak_to_peak_arcsec": "te_peak_to_peak_arcsec",
+        "pattern_center_offset_face_mm": "pattern.center_offset_mm.0",
+        "pattern_center_offset_profile_mm": "pattern.center_offset_mm.1",
+        "pattern_bias_mm": "pattern.bias_mm",
+        "edge_contact": "pattern.edge_contact",
+    }
+    return Evaluation(
+        evaluator="tca",
+        metrics={
+            f"{section}.{names[k]}": v for k, v in base.items() for section in ("tca", "tca_coast")
+        },
+    )
 
 
 def test_objectives_read_the_labelled_evaluations():
@@ -277,10 +289,10 @@ def test_backlash_window_is_a_constraint_in_um(low, high, interference, expected
     backlash = Evaluation(
         evaluator="backlash",
         metrics={
-            "backlash_min_um": 200.0,
-            "backlash_mean_um": 210.0,
-            "backlash_max_um": 240.0,
-            "interference": interference,
+            "backlash.min_um": 200.0,
+            "backlash.mean_um": 210.0,
+            "backlash.max_um": 240.0,
+            "backlash.interference": interference,
         },
     )
     window = gearopt.objectives()["backlash_window"]
@@ -711,7 +723,7 @@ def test_seed003_table5_sweep_through_the_queue_fills_the_tables(tmp_path, seed_
     query = sa.text(
         "SELECT p.value, m.value FROM gearopt_trial_params p JOIN gearopt_trial_metrics m"
         " ON m.study = p.study AND m.trial_number = p.trial_number"
-        " WHERE m.metric = 'te_peak_to_peak_arcsec' AND m.evaluation = 'tca'"
+        " WHERE m.metric = 'tca.te_peak_to_peak_arcsec' AND m.evaluation = 'tca'"
     )
     with engine.connect() as con:
         ours = {rb: -te for rb, te in con.execute(query)}

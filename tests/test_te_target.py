@@ -181,12 +181,13 @@ def test_te_target_objective_and_evaluator_metrics():
 
     design = gearopt.load_design(CASES / "case3.toml")
     evaluation = evaluators()["tca"].evaluate(design, {"grid": [31, 21]})
-    assert evaluation.metrics["te_target_max_deviation_arcsec"] < 0.1
+    assert evaluation.metrics["tca.te_target_max_deviation_arcsec"] < 0.1
     report = evaluation.report["tca"]
     assert len(report["te_target_arcsec"]) == len(report["te_arcsec"])
     objective = objectives()["te_target"]
     assert (
-        objective.value({"tca": evaluation}) == evaluation.metrics["te_target_rms_deviation_arcsec"]
+        objective.value({"tca": evaluation})
+        == evaluation.metrics["tca.te_target_rms_deviation_arcsec"]
     )
     # a design without [te_target] cannot be compared
     plain = parse_design({k: v for k, v in design.source.items() if k != "te_target"})

@@ -2,9 +2,9 @@
 
 :class:`Machine` joins the parts of :mod:`gearopt.chains.model` and checks that every chain runs
 from its input shaft through its meshes, shaft by shaft, to the work spindle. A machine file is a
-TOML description of one machine (see ``plugins/chain_error/data/zftkk250x5.toml``): :func:`parse_machine`
-builds a :class:`Machine` from its parsed tables, :func:`loads_machine` from its text and
-:func:`load_machine` by name (looked up in :func:`machine_dirs`: the folders of
+TOML description of one machine (see ``plugins/chain_error/data/zftkk250x5.toml``):
+:func:`parse_machine` builds a :class:`Machine` from its parsed tables, :func:`loads_machine`
+from its text and :func:`load_machine` by name (looked up in :func:`machine_dirs`: the folders of
 ``GEAROPT_MACHINE_PATH``, then those the installed distributions name in the entry-point group
 ``gearopt.machine_files``) or by path.
 """

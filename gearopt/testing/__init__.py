@@ -23,10 +23,27 @@ penetration)::
 
     class TestMyMachine(FlankContract): ...
 
-The built-in machine models run the same suites in gearopt's own tests.
+An evaluator proves itself with :class:`EvaluatorContract` (fixtures ``evaluator``,
+``design_text`` and, optionally, small ``conditions``): it evaluates what it declares (every
+metric, curve and pattern), its metrics are the places of its report, it checks its declared
+options and pickles. An objective with :class:`ObjectiveContract` (fixtures ``objective``,
+``options`` and ``evaluations``, the labelled evaluations it reads)::
+
+    class TestMyEvaluator(EvaluatorContract):
+        @pytest.fixture
+        def evaluator(self):
+            return MyEvaluator()
+
+        @pytest.fixture
+        def design_text(self):
+            return open("tests/my_design.toml").read()
+
+The built-in machine models, evaluators and objectives run the same suites in gearopt's own
+tests.
 """
 
+from gearopt.testing.evaluators import EvaluatorContract, ObjectiveContract
 from gearopt.testing.flanks import FlankContract
 from gearopt.testing.machine_models import MachineModelContract
 
-__all__ = ["FlankContract", "MachineModelContract"]
+__all__ = ["EvaluatorContract", "FlankContract", "MachineModelContract", "ObjectiveContract"]

@@ -48,6 +48,7 @@ import pandas as pd
 from gearopt import hookimpl
 from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
 from gearopt.commands import BaseCommand, Benchmark, text_table, time_call_ms
+from gearopt.declarations import Metric, Option
 from gearopt.design import MEMBERS, Design
 from gearopt.errors import DesignError
 from gearopt.evaluation import BaseEvaluator, Evaluation
@@ -65,6 +66,7 @@ METRICS = (
     "angle_error_deg",
     "pitch_error_um",
 )
+_UNITS = {"angle_error_deg": "deg", "pitch_error_um": "um", "ratio_error_percent": "%"}
 _FIXED_KEYS = (
     "machine",
     "member",
@@ -101,10 +103,40 @@ class ChainErrorEvaluator(BaseEvaluator):
 
     name = "chain-error"
     description = "kinematic-chain (indexing, envelope) ratio and pitch errors, seed 000"
+    metrics = (
+        *(
+            Metric(name=f"*_{key}", unit=_UNITS.get(key, ""), description=f"each chain's {key}")
+            for key in METRICS
+        ),
+        Metric(name="*_change_gear_error", description="quadrant ratio minus required"),
+        Metric(
+            name="*_change_gear_error_percent",
+            unit="%",
+            description="quadrant ratio minus required, of the required ratio",
+        ),
+    )
+    options = (
+        Option(name="machine", default=DEFAULT_MACHINE, kind="string", description="machine"),
+        Option(
+            name="member",
+            default="pinion",
+            kind="string",
+            choices=MEMBERS,
+            description="the member being cut",
+        ),
+        Option(name="work_teeth", kind="integer", lower=1, description="default: the member's"),
+        Option(name="normal_module_mm", kind="number", description="default: the pair's mean"),
+        Option(name="spiral_angle_deg", kind="number", description="default: the pair's mean"),
+        Option(name="crown_teeth", kind="number", description="default: the pair's"),
+        Option(name="cradle_swing_deg", kind="number", description="envelope input angle"),
+        Option(name="candidates", default=50, kind="integer", lower=1, upper=10_000),
+        Option(name="*_gears", kind="numbers", description="a chain's change-gear quadrant"),
+        Option(name="*_input_angle_deg", kind="number", description="a chain's input angle"),
+    )
 
     def check_conditions(self, design: Design, conditions: Mapping[str, Any]) -> None:
-        """The machine, the keys it knows and the member (the values are checked by a
-        trial)."""
+        """The declared options, then the keys the machine knows (its chains')."""
+        super().check_conditions(design, conditions)
         _machine_keys(dict(conditions))
 
     def evaluate(self, design: Design, conditions: Mapping[str, Any] | None = None) -> Evaluation:

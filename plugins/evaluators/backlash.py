@@ -7,8 +7,9 @@ flanks) is a negative backlash with ``interference`` = 1, never NaN.
 
 Conditions: as the ``tca`` evaluator (:class:`gearopt.analysis.AnalysisOptions`).
 
-Metrics: ``backlash_min_um``, ``backlash_mean_um``, ``backlash_max_um``, ``interference``
-(0/1). Arrays: ``phi1_deg``, ``circumferential_um``.
+Metrics (the report's places, :mod:`gearopt.declarations`): ``backlash.min_um``,
+``backlash.mean_um``, ``backlash.max_um``, ``backlash.interference`` (0/1),
+``backlash.radius_mm``. Curve ``backlash``. Arrays: ``phi1_deg``, ``circumferential_um``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from typing import Any
 
 from gearopt import hookimpl
 from gearopt.analysis import AnalysisOptions, meshed_pair, pair_backlash
+from gearopt.analysis_options import ANALYSIS_OPTIONS
+from gearopt.declarations import Curve, Metric, report_metrics
 from gearopt.evaluation import BaseEvaluator, Evaluation
 from gearopt.plausibility import contact_findings
 
@@ -27,27 +30,39 @@ class BacklashEvaluator(BaseEvaluator):
 
     name = "backlash"
     description = "circumferential backlash along the mesh, interference flagged"
-
-    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
-        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
-        AnalysisOptions.from_conditions(conditions, design=design)
+    section = "backlash"
+    metrics = (
+        Metric(name="min_um", unit="um", description="least circumferential backlash"),
+        Metric(name="mean_um", unit="um", description="mean circumferential backlash"),
+        Metric(name="max_um", unit="um", description="largest circumferential backlash"),
+        Metric(name="interference", description="overlapping flanks somewhere (0/1)"),
+        Metric(name="radius_mm", unit="mm", description="radius the backlash is measured at"),
+    )
+    curves = (
+        Curve(
+            name="backlash",
+            x="phi1_deg",
+            y="circumferential_um",
+            x_unit="deg",
+            y_unit="um",
+            description="circumferential backlash at the drive side's positions",
+        ),
+    )
+    options = ANALYSIS_OPTIONS
+    analysis = True
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
         result = pair_backlash(meshed_pair(design, options), options)
-        report = result.as_dict()
+        report = {"backlash": result.as_dict()}
         return Evaluation(
             evaluator=self.name,
-            metrics={
-                "backlash_min_um": report["min_um"],
-                "backlash_mean_um": report["mean_um"],
-                "backlash_max_um": report["max_um"],
-                "interference": float(result.interference),
-            },
+            metrics=report_metrics(self, report),
             arrays={"phi1_deg": result.phi1_deg, "circumferential_um": result.circumferential_um},
             conditions=options.as_dict(),
-            report={"backlash": report},
-            warnings=tuple(contact_findings({"backlash": report}, strict=False)),
+            report=report,
+            curves={"backlash": {"drive": (result.phi1_deg, result.circumferential_um)}},
+            warnings=tuple(contact_findings(report, strict=False)),
         )
 
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
@@ -44,21 +44,73 @@ from gearopt.analysis import (
     meshed_pair,
     pair_loaded_contact,
 )
+from gearopt.analysis_options import ANALYSIS_OPTIONS
+from gearopt.declarations import SIDES, Curve, Metric, Option
 from gearopt.errors import GearoptError, StudyError
 from gearopt.evaluation import BaseEvaluator, BaseObjective, Evaluation
 from gearopt.load_options import LOAD_KEYS, LoadOptions
 
+#: the keys of the ``[load]`` table an ``ltca`` evaluation's conditions may override
+LOAD_OPTIONS = (
+    Option(
+        name="torque_nm",
+        description="output torque or torques (N m on the gear); default: the design's [load]",
+    ),
+    Option(name="youngs_modulus_mpa", description="Young's modulus (MPa), or per member"),
+    Option(name="poisson_ratio", description="Poisson's ratio, or per member"),
+    Option(name="fe_mesh", description="the compliance's finite-element mesh"),
+    Option(name="patches", description="the contact patches' options"),
+    Option(name="reach_um", description="separations counted as the potential contact (um)"),
+)
 
-def load_metrics(results, prefix: str = "") -> dict[str, float]:
-    """The scalar metrics of one side's loaded TCA over its torques."""
+
+#: the report section of each side (``gearopt analyze --json``'s keys), before each metric
+SECTIONS = {"drive": "ltca", "coast": "ltca_coast"}
+#: the metrics of one side, each the worst over the torques (the mean for the stiffness)
+LTCA_METRICS = (
+    Metric(
+        name="lte_peak_to_peak_arcsec",
+        unit="arcsec",
+        description="LTE peak-to-peak, the largest over the torques",
+        per_side=True,
+    ),
+    Metric(
+        name="max_contact_pressure_mpa",
+        unit="MPa",
+        description="largest contact pressure over the torques",
+        per_side=True,
+    ),
+    Metric(
+        name="max_line_load_n_per_mm",
+        unit="N/mm",
+        description="largest line load over the torques",
+        per_side=True,
+    ),
+    Metric(
+        name="mesh_stiffness_n_per_mm_um",
+        unit="N/(mm um)",
+        description="mesh stiffness, the mean over the torques",
+        per_side=True,
+    ),
+    Metric(
+        name="edge_loading",
+        description="a loaded patch on a flank's boundary at some torque (0/1)",
+        per_side=True,
+    ),
+)
+
+
+def load_metrics(results, section: str) -> dict[str, float]:
+    """The scalar metrics of one side's loaded TCA over its torques (names after
+    ``section``: the worst over the report's list of torques)."""
     return {
-        f"{prefix}lte_peak_to_peak_arcsec": max(r.lte_peak_to_peak_arcsec for r in results),
-        f"{prefix}max_contact_pressure_mpa": max(r.max_contact_pressure_mpa for r in results),
-        f"{prefix}max_line_load_n_per_mm": max(r.max_line_load_n_per_mm for r in results),
-        f"{prefix}mesh_stiffness_n_per_mm_um": float(
+        f"{section}.lte_peak_to_peak_arcsec": max(r.lte_peak_to_peak_arcsec for r in results),
+        f"{section}.max_contact_pressure_mpa": max(r.max_contact_pressure_mpa for r in results),
+        f"{section}.max_line_load_n_per_mm": max(r.max_line_load_n_per_mm for r in results),
+        f"{section}.mesh_stiffness_n_per_mm_um": float(
             np.mean([r.mesh_stiffness_n_per_mm_um for r in results])
         ),
-        f"{prefix}edge_loading": float(any(r.edge_loading for r in results)),
+        f"{section}.edge_loading": float(any(r.edge_loading for r in results)),
     }
 
 
@@ -83,9 +135,39 @@ class LtcaEvaluator(BaseEvaluator):
         "loaded TCA of drive and coast: LTE and its fluctuation per torque, load sharing, "
         "contact pressure, mesh stiffness, edge loading"
     )
+    section = "ltca"
+    sections = SECTIONS
+    metrics = LTCA_METRICS
+    curves = (
+        Curve(
+            name="lte_*nm",
+            x="phi1_deg",
+            y="lte_arcsec",
+            x_unit="deg",
+            y_unit="arcsec",
+            description="loaded TE over the positions at one torque (lte_100nm: 100 N m)",
+            sides=SIDES,
+        ),
+        Curve(
+            name="lte_fluctuation",
+            x="torque_nm",
+            y="lte_peak_to_peak_arcsec",
+            x_unit="N m",
+            y_unit="arcsec",
+            description="LTE peak-to-peak over the torques",
+            sides=SIDES,
+        ),
+    )
+    options = (*ANALYSIS_OPTIONS, *LOAD_OPTIONS)
+    analysis = True
+
+    def in_analysis(self, design) -> bool:
+        """With a torque: the design's ``[load]`` gives one (or ``--torque-nm``)."""
+        return design.load.get("torque_nm") is not None
 
     def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
-        """The load's keys and the contact analyses' options."""
+        """The declared options, then the load's keys over the design's ``[load]``."""
+        super().check_conditions(design, conditions)
         _load_and_options(design, conditions)
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
@@ -115,40 +197,34 @@ class LtcaEvaluator(BaseEvaluator):
             arrays[f"{prefix}pressure_mpa"] = top.pattern_pressure_mpa
         return Evaluation(
             evaluator=self.name,
-            metrics={**load_metrics(drive), **load_metrics(coast, "coast_")},
+            metrics={
+                **load_metrics(drive, SECTIONS["drive"]),
+                **load_metrics(coast, SECTIONS["coast"]),
+            },
             arrays=arrays,
             conditions={**options.as_dict(), "load": load.as_dict()},
             report={
-                "ltca": [r.as_dict() for r in drive],
-                "ltca_coast": [r.as_dict() for r in coast],
+                SECTIONS["drive"]: [r.as_dict() for r in drive],
+                SECTIONS["coast"]: [r.as_dict() for r in coast],
             },
             curves=curves,
         )
 
 
-_PREFIXES = {"drive": ("",), "coast": ("coast_",), "both": ("", "coast_")}
+_PREFIXES = {"drive": ("ltca.",), "coast": ("ltca_coast.",), "both": ("ltca.", "ltca_coast.")}
+_ON = Option(name="on", default="ltca", kind="label", description="label of the ltca evaluation")
+_SIDE = Option(
+    name="side",
+    default="drive",
+    kind="string",
+    choices=tuple(_PREFIXES),
+    description="the flank side read; both: the larger",
+)
 
 
 class _LoadedObjective(BaseObjective):
     requires = ("ltca",)
-    options: ClassVar[tuple[str, ...]] = ("on", "side")
-
-    def reads(self, **options: Any) -> dict[str, str]:
-        unknown = sorted(set(options) - set(self.options))
-        if unknown:
-            raise StudyError(
-                f"{self.kind} {self.name}", unknown, f"unknown options; known: {self.options}"
-            )
-        if options.get("side", "drive") not in _PREFIXES:
-            raise StudyError(
-                f"{self.kind} {self.name}.side",
-                options["side"],
-                f"must be one of {list(_PREFIXES)}",
-            )
-        label = options.get("on", "ltca")
-        if not isinstance(label, str):
-            raise StudyError(f"{self.kind} {self.name}.on", label, "must be a label")
-        return {label: "ltca"}
+    options = (_ON, _SIDE)
 
     @staticmethod
     def _prefixes(options) -> tuple[str, ...]:
@@ -158,27 +234,33 @@ class _LoadedObjective(BaseObjective):
 class LteFluctuation(_LoadedObjective):
     name = "lte_fluctuation"
     description = "LTE peak-to-peak over a duty cycle (weighted mean over the torques, or worst)"
-    options: ClassVar[tuple[str, ...]] = ("on", "side", "weights")
+    options = (
+        _ON,
+        _SIDE,
+        Option(
+            name="weights",
+            kind="numbers",
+            lower=0.0,
+            description="one weight per torque of the evaluation (a duty cycle); default: worst",
+        ),
+    )
 
     def reads(self, **options: Any) -> dict[str, str]:
+        labels = super().reads(**options)
         weights = options.get("weights")
-        if weights is not None:
-            ok = isinstance(weights, list | tuple) and weights
-            ok = ok and all(
-                isinstance(w, int | float) and not isinstance(w, bool) and w >= 0 for w in weights
+        if weights is not None and not math.fsum(weights) > 0.0:
+            raise StudyError(
+                f"objective {self.name}.weights", weights, "must be non-negative numbers"
             )
-            if not ok or not math.fsum(weights) > 0.0:
-                raise StudyError(
-                    f"objective {self.name}.weights", weights, "must be non-negative numbers"
-                )
-        return super().reads(**options)
+        return labels
 
     def value(self, evaluations, **options):
         evaluation = evaluations[options.get("on", "ltca")]
         weights = options.get("weights")
         worst = 0.0
         for prefix in self._prefixes(options):
-            pp = np.asarray(evaluation.arrays[f"{prefix}lte_peak_to_peak_arcsec"], float)
+            array = "" if prefix == "ltca." else "coast_"
+            pp = np.asarray(evaluation.arrays[f"{array}lte_peak_to_peak_arcsec"], float)
             if weights is None:
                 worst = max(worst, float(pp.max()))
                 continue
@@ -197,13 +279,17 @@ class MaxContactPressure(_LoadedObjective):
     name = "max_contact_pressure"
     description = "largest contact pressure less limit_mpa (constraint)"
     kind = "constraint"
-    options: ClassVar[tuple[str, ...]] = ("on", "side", "limit_mpa")
-
-    def reads(self, **options: Any) -> dict[str, str]:
-        limit = options.get("limit_mpa")
-        if not (isinstance(limit, int | float) and not isinstance(limit, bool) and limit > 0):
-            raise StudyError(f"constraint {self.name}.limit_mpa", limit, "is required (MPa > 0)")
-        return super().reads(**options)
+    options = (
+        _ON,
+        _SIDE,
+        Option(
+            name="limit_mpa",
+            kind="number",
+            lower=1e-9,
+            required=True,
+            description="the largest contact pressure allowed (MPa > 0)",
+        ),
+    )
 
     def value(self, evaluations, **options):
         evaluation = evaluations[options.get("on", "ltca")]

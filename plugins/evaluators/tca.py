@@ -14,18 +14,21 @@ Conditions (all optional; :class:`gearopt.analysis.AnalysisOptions`)::
     grid = [25, 21]           # FlankMap grid [n_face, n_profile]
     misalignment = {offset_mm = 0.1, ...}   # default: the design's [misalignment]
 
-``tca`` metrics (drive side; the coast side the same names prefixed ``coast_``):
-``te_peak_to_peak_arcsec``, ``pattern_width_mm``, ``pattern_bias_mm``,
-``pattern_center_offset_face_mm``, ``pattern_center_offset_profile_mm``, ``edge_contact``
-(0/1), ``contact_ratio``. Arrays: ``phi1_deg``, ``te_arcsec``, ``path_face_mm``,
-``path_profile_mm``, ``pattern_um`` (the least separation of each pinion node over the
-mesh, inf off the flanks), ``flank_mask`` (generated pinion nodes), ``face_mm`` and
-``profile_mm`` (pattern coordinates of the grid), and the ``coast_*`` of each. With a
-``[te_target]`` in the design (drive side): metrics ``te_target_max_deviation_arcsec`` and
-``te_target_rms_deviation_arcsec``, array ``te_target_arcsec`` (:func:`gearopt.te_target.compare`).
+``tca`` metrics: the report's places (:mod:`gearopt.declarations`), ``tca.`` for the drive
+side and ``tca_coast.`` for the coast: ``te_peak_to_peak_arcsec``, ``contact_ratio``,
+``pattern.width_mm``, ``pattern.bias_mm``, ``pattern.center_offset_mm.0`` (face) and ``.1``
+(profile), ``pattern.edge_contact`` (0/1), ... (``TcaEvaluator.metrics`` lists them). Curves
+``te``, ``path`` (and ``te_target``); the pattern's outline per side. Arrays: ``phi1_deg``,
+``te_arcsec``, ``path_face_mm``, ``path_profile_mm``, ``pattern_um`` (the least separation
+of each pinion node over the mesh, inf off the flanks), ``flank_mask`` (generated pinion
+nodes), ``face_mm`` and ``profile_mm`` (pattern coordinates of the grid), and the
+``coast_*`` of each. With a
+``[te_target]`` in the design (drive side): metrics ``tca.te_target_max_deviation_arcsec`` and
+``tca.te_target_rms_deviation_arcsec``, array ``te_target_arcsec``
+(:func:`gearopt.te_target.compare`).
 
-``ease-off`` metrics: ``ease_off_max_um`` and ``coast_ease_off_max_um`` (the largest ease-off
-over the flank where it is defined); arrays ``ease_off_um`` and ``coast_ease_off_um``. The
+``ease-off`` metrics: ``ease_off.drive.max_um`` and ``ease_off.coast.max_um`` (the largest
+ease-off over the flank where it is defined); arrays ``ease_off_um`` and ``coast_ease_off_um``. The
 ease-off is a property of the flanks: it is measured in the nominal assembly whatever the
 ``misalignment`` condition says.
 """
@@ -43,24 +46,70 @@ from gearopt.analysis import (
     meshed_pair,
     pair_ease_off,
 )
+from gearopt.analysis_options import ANALYSIS_OPTIONS
+from gearopt.declarations import SIDES, Curve, Metric, Pattern, pattern_outline, report_metrics
 from gearopt.design import Misalignment
 from gearopt.evaluation import BaseEvaluator, Evaluation
-from gearopt.mesh import ToothContact
 from gearopt.plausibility import contact_findings
 from gearopt.te_target import compare
 
+#: the report section of each side (``gearopt analyze --json``'s keys), before each metric
+SECTIONS = {"drive": "tca", "coast": "tca_coast"}
 
-def contact_metrics(result: ToothContact, prefix: str = "") -> dict[str, float]:
-    """The scalar metrics of one side's TCA."""
-    return {
-        f"{prefix}te_peak_to_peak_arcsec": result.te_peak_to_peak_arcsec,
-        f"{prefix}pattern_width_mm": result.width_mm,
-        f"{prefix}pattern_bias_mm": result.bias_mm,
-        f"{prefix}pattern_center_offset_face_mm": result.center_offset_mm[0],
-        f"{prefix}pattern_center_offset_profile_mm": result.center_offset_mm[1],
-        f"{prefix}edge_contact": float(result.edge_contact),
-        f"{prefix}contact_ratio": result.contact_ratio,
-    }
+
+def _per_side(name: str, unit: str, description: str) -> Metric:
+    return Metric(name=name, unit=unit, description=description, per_side=True)
+
+
+TCA_METRICS = (
+    _per_side("te_peak_to_peak_arcsec", "arcsec", "TE peak-to-peak (gear rotation)"),
+    _per_side("contact_ratio", "", "mean number of pairs in contact"),
+    _per_side("pattern.width_mm", "mm", "pattern width across the path"),
+    _per_side("pattern.ellipse_major_axis_mm", "mm", "largest contact ellipse's major axis"),
+    _per_side("pattern.ellipse_minor_axis_mm", "mm", "its minor axis"),
+    _per_side("pattern.path_angle_deg", "deg", "contact path's angle to the root line"),
+    _per_side("pattern.bias_mm", "mm", "face coordinate of the path's end minus its start"),
+    _per_side("pattern.center_offset_mm.0", "mm", "mean point M minus centre C, face"),
+    _per_side("pattern.center_offset_mm.1", "mm", "mean point M minus centre C, profile"),
+    _per_side("pattern.mean_point_mm.0", "mm", "mean contact point M, face"),
+    _per_side("pattern.mean_point_mm.1", "mm", "mean contact point M, profile"),
+    _per_side("pattern.edge_contact", "", "contact on a flank's boundary (0/1)"),
+    _per_side("pattern.compound_um", "um", "marking compound of the pattern"),
+    Metric(
+        name="te_target_max_deviation_arcsec",
+        unit="arcsec",
+        description="largest deviation of the drive TE from [te_target]",
+        always=False,
+    ),
+    Metric(
+        name="te_target_rms_deviation_arcsec",
+        unit="arcsec",
+        description="rms deviation of the drive TE from [te_target]",
+        always=False,
+    ),
+)
+
+
+#: the metrics' names before gearopt 0.2 (``coast_`` prefixed the coast side), by their names
+#: now: for old queries of the ``gearopt_metrics`` table (docs/declarations.md)
+RENAMED = {
+    f"{section}.{new}": f"{prefix}{old}"
+    for prefix, section in (("", "tca"), ("coast_", "tca_coast"))
+    for old, new in (
+        ("te_peak_to_peak_arcsec", "te_peak_to_peak_arcsec"),
+        ("contact_ratio", "contact_ratio"),
+        ("pattern_width_mm", "pattern.width_mm"),
+        ("pattern_bias_mm", "pattern.bias_mm"),
+        ("pattern_center_offset_face_mm", "pattern.center_offset_mm.0"),
+        ("pattern_center_offset_profile_mm", "pattern.center_offset_mm.1"),
+        ("edge_contact", "pattern.edge_contact"),
+    )
+} | {
+    "tca.te_target_max_deviation_arcsec": "te_target_max_deviation_arcsec",
+    "tca.te_target_rms_deviation_arcsec": "te_target_rms_deviation_arcsec",
+    "ease_off.drive.max_um": "ease_off_max_um",
+    "ease_off.coast.max_um": "coast_ease_off_max_um",
+}
 
 
 class TcaEvaluator(BaseEvaluator):
@@ -68,10 +117,42 @@ class TcaEvaluator(BaseEvaluator):
 
     name = "tca"
     description = "unloaded TCA of drive and coast sides: TE, contact path, pattern"
-
-    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
-        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
-        AnalysisOptions.from_conditions(conditions, design=design)
+    section = "tca"
+    sections = SECTIONS
+    metrics = TCA_METRICS
+    curves = (
+        Curve(
+            name="te",
+            x="phi1_deg",
+            y="te_arcsec",
+            x_unit="deg",
+            y_unit="arcsec",
+            description="TE of the carrying pair over the pinion rotation",
+            sides=SIDES,
+        ),
+        Curve(
+            name="path",
+            x="face_mm",
+            y="profile_mm",
+            x_unit="mm",
+            y_unit="mm",
+            description="contact path on the projected pinion tooth",
+            sides=SIDES,
+        ),
+        Curve(
+            name="te_target",
+            x="phi1_deg",
+            y="te_target_arcsec",
+            x_unit="deg",
+            y_unit="arcsec",
+            description="the designed TE ([te_target]) at the TCA's positions",
+        ),
+    )
+    pattern = Pattern(description="contact pattern at the marking compound", sides=SIDES)
+    options = ANALYSIS_OPTIONS
+    analysis = True
+    #: the metrics' names before gearopt 0.2 by their names now (docs/declarations.md)
+    renamed = RENAMED
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
@@ -79,6 +160,8 @@ class TcaEvaluator(BaseEvaluator):
         sides = contact_sides(pair, options)
         drive, coast = sides["drive"], sides["coast"]
         arrays = {"face_mm": drive.face_mm, "profile_mm": drive.profile_mm}
+        curves: dict[str, dict] = {"te": {}, "path": {}}
+        patterns = {}
         for prefix, side, field in (("", drive, pair.drive), ("coast_", coast, pair.coast)):
             arrays[f"{prefix}phi1_deg"] = side.phi1_deg
             arrays[f"{prefix}te_arcsec"] = side.te_arcsec
@@ -86,25 +169,29 @@ class TcaEvaluator(BaseEvaluator):
             arrays[f"{prefix}path_profile_mm"] = side.path_profile_mm
             arrays[f"{prefix}pattern_um"] = side.pattern_um
             arrays[f"{prefix}flank_mask"] = field.pinion.mask
-        metrics = {**contact_metrics(drive), **contact_metrics(coast, "coast_")}
-        report = {"tca": drive.as_dict(), "tca_coast": coast.as_dict()}
+            curves["te"][side.side] = (side.phi1_deg, side.te_arcsec)
+            curves["path"][side.side] = (side.path_face_mm, side.path_profile_mm)
+            patterns[side.side] = pattern_outline(
+                side.pattern_um, drive.face_mm, drive.profile_mm, options.compound_um
+            )
+        report = {SECTIONS["drive"]: drive.as_dict(), SECTIONS["coast"]: coast.as_dict()}
         if design.te_target is not None:  # the designed TE (drive side) beside the achieved
             versus = compare(
                 design.te_target, drive.phi1_deg, drive.te_arcsec, drive.handover_phi1_deg
             )
             arrays["te_target_arcsec"] = versus["te_target_arcsec"]
-            for key in ("te_target_max_deviation_arcsec", "te_target_rms_deviation_arcsec"):
-                metrics[key] = versus[key]
+            curves["te_target"] = {"drive": (drive.phi1_deg, versus["te_target_arcsec"])}
             report["tca"]["te_target_arcsec"] = [float(v) for v in versus["te_target_arcsec"]]
-            report["tca"]["te_target_max_deviation_arcsec"] = versus[
-                "te_target_max_deviation_arcsec"
-            ]
+            for key in ("te_target_max_deviation_arcsec", "te_target_rms_deviation_arcsec"):
+                report["tca"][key] = versus[key]
         return Evaluation(
             evaluator=self.name,
-            metrics=metrics,
+            metrics=report_metrics(self, report),
             arrays=arrays,
             conditions=options.as_dict(),
             report=report,
+            curves=curves,
+            patterns=patterns,
             warnings=tuple(contact_findings(report, strict=False)),
         )
 
@@ -114,10 +201,18 @@ class EaseOffEvaluator(BaseEvaluator):
 
     name = "ease-off"
     description = "pinion ease-off of drive and coast flanks against the conjugate surfaces"
-
-    def check_conditions(self, design, conditions: Mapping[str, Any]) -> None:
-        """The contact analyses' options (:class:`~gearopt.analysis.AnalysisOptions`)."""
-        AnalysisOptions.from_conditions(conditions, design=design)
+    section = "ease_off"
+    sections = {"drive": "ease_off.drive", "coast": "ease_off.coast"}
+    metrics = (
+        Metric(
+            name="max_um",
+            unit="um",
+            description="largest ease-off where the flank is defined",
+            per_side=True,
+        ),
+    )
+    options = ANALYSIS_OPTIONS
+    analysis = True
 
     def evaluate(self, design, conditions: Mapping[str, Any] | None = None) -> Evaluation:
         options = AnalysisOptions.from_conditions(conditions, design=design)
@@ -125,15 +220,13 @@ class EaseOffEvaluator(BaseEvaluator):
         options = replace(options, misalignment=Misalignment())
         result = pair_ease_off(meshed_pair(design, options))
         drive, coast = result["drive"], result["coast"]
+        report = {"ease_off": {"drive": drive.as_dict(), "coast": coast.as_dict()}}
         return Evaluation(
             evaluator=self.name,
-            metrics={
-                "ease_off_max_um": float(drive.ease_off_um[drive.mask].max(initial=0.0)),
-                "coast_ease_off_max_um": float(coast.ease_off_um[coast.mask].max(initial=0.0)),
-            },
+            metrics=report_metrics(self, report),
             arrays={"ease_off_um": drive.ease_off_um, "coast_ease_off_um": coast.ease_off_um},
             conditions=options.as_dict(),
-            report={"ease_off": {"drive": drive.as_dict(), "coast": coast.as_dict()}},
+            report=report,
         )
 
 

@@ -40,42 +40,38 @@ number. Options come from the study file's ``[[objectives]]`` / ``[[constraints]
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Mapping
+from typing import Any
 
 from gearopt import hookimpl
+from gearopt.declarations import Option, check_options
 from gearopt.errors import StudyError
 from gearopt.evaluation import BaseObjective, Evaluation
 
-SIDES = {"drive": ("",), "coast": ("coast_",), "both": ("", "coast_")}
+#: the ``tca`` evaluator's report section of each side, before its metrics' names
+SIDES = {"drive": ("tca.",), "coast": ("tca_coast.",), "both": ("tca.", "tca_coast.")}
+
+SIDE = Option(
+    name="side",
+    default="drive",
+    kind="string",
+    choices=tuple(SIDES),
+    description="the flank side read; both: the larger",
+)
 
 
-def _side(objective: str, options: Mapping[str, Any]) -> tuple[str, ...]:
-    side = options.get("side", "drive")
-    if side not in SIDES:
-        raise StudyError(f"objective {objective}.side", side, f"must be one of {sorted(SIDES)}")
-    return SIDES[side]
+def _on(default: Any, required: bool = False, what: str = "TCA") -> Option:
+    return Option(
+        name="on",
+        default=default,
+        kind="labels",
+        required=required,
+        description=f"label(s) of the {what} evaluations read; several: the worst",
+    )
 
 
-def _labels(objective: str, value: Any) -> tuple[str, ...]:
-    labels = (value,) if isinstance(value, str) else value
-    if (
-        not isinstance(labels, Sequence)
-        or not labels
-        or not all(isinstance(x, str) for x in labels)
-    ):
-        raise StudyError(f"objective {objective}.on", value, "must be a label or a list of labels")
-    return tuple(labels)
-
-
-def _known_options(objective: BaseObjective, options: Mapping[str, Any]) -> None:
-    unknown = set(options) - set(objective.options)
-    if unknown:
-        raise StudyError(
-            f"{objective.kind} {objective.name}",
-            sorted(unknown),
-            f"unknown options; known: {objective.options}",
-        )
+def _labels(value: Any) -> tuple[str, ...]:
+    return (value,) if isinstance(value, str) else tuple(value)
 
 
 def _metric(evaluations: Mapping[str, Evaluation], label: str, key: str) -> float:
@@ -90,23 +86,16 @@ class _ContactObjective(BaseObjective):
     """An objective on TCA results: ``on`` labels of ``tca`` evaluations, ``side``."""
 
     requires = ("tca",)
-    options: ClassVar[tuple[str, ...]] = ("on", "side")
-    default_on: ClassVar[Any] = "tca"
-
-    def reads(self, **options: Any) -> dict[str, str]:
-        """Labels this objective reads, with the evaluator each must be."""
-        _known_options(self, options)
-        _side(self.name, options)
-        labels = _labels(self.name, options.get("on", self.default_on))
-        return {label: self.requires[0] for label in labels}
+    options = (_on("tca"), SIDE)
 
     def _worst(self, evaluations, options, of) -> float:
         """The largest ``of(label, prefix)`` over the TCAs ``on`` and the sides ``side``
-        (``prefix``: the side's metric prefix)."""
+        (``prefix``: the side's report section and a dot)."""
+        checked = check_options(self.options, options, f"{self.kind} {self.name}")
         return max(
             of(label, prefix)
-            for label in _labels(self.name, options.get("on", self.default_on))
-            for prefix in _side(self.name, options)
+            for label in _labels(checked["on"])
+            for prefix in SIDES[checked.get("side") or "drive"]
         )
 
 
@@ -121,12 +110,7 @@ class TePeakToPeak(_ContactObjective):
 class WorstTe(_ContactObjective):
     name = "worst_te"
     description = "largest TE peak-to-peak over several TCAs, e.g. misalignments (arcsec)"
-    default_on = None
-
-    def reads(self, **options):
-        if "on" not in options:
-            raise StudyError(f"objective {self.name}.on", rule="list the TCA labels to compare")
-        return super().reads(**options)
+    options = (_on(None, required=True), SIDE)
 
     def value(self, evaluations, **options):
         return self._worst(evaluations, options, _te(evaluations))
@@ -135,17 +119,20 @@ class WorstTe(_ContactObjective):
 class TeTarget(_ContactObjective):
     name = "te_target"
     description = "deviation of the drive side's TE from the design's [te_target] (arcsec)"
-    options = ("on", "measure")
-
-    def reads(self, **options):
-        measure = options.get("measure", "rms")
-        if measure not in ("rms", "max"):
-            raise StudyError(f"objective {self.name}.measure", measure, "must be 'rms' or 'max'")
-        return super().reads(**{k: v for k, v in options.items() if k != "measure"})
+    options = (
+        _on("tca"),
+        Option(
+            name="measure",
+            default="rms",
+            kind="string",
+            choices=("rms", "max"),
+            description="rms or largest deviation over the positions",
+        ),
+    )
 
     def value(self, evaluations, **options):
-        key = f"te_target_{options.get('measure', 'rms')}_deviation_arcsec"
-        labels = _labels(self.name, options.get("on", self.default_on))
+        key = f"tca.te_target_{options.get('measure', 'rms')}_deviation_arcsec"
+        labels = _labels(options.get("on", "tca"))
         for label in labels:
             if key not in evaluations[label].metrics:
                 raise StudyError(
@@ -159,19 +146,17 @@ class TeTarget(_ContactObjective):
 class TeLevel(_ContactObjective):
     name = "te_level"
     description = "distance of the TE peak-to-peak from a prescribed level (arcsec)"
-    options = ("on", "side", "level_arcsec")
-
-    def reads(self, **options):
-        level = options.get("level_arcsec")
-        if (
-            isinstance(level, bool)
-            or not isinstance(level, int | float)
-            or not 0.0 <= level < math.inf
-        ):
-            raise StudyError(
-                f"objective {self.name}.level_arcsec", level, "needs a finite level >= 0"
-            )
-        return super().reads(**options)
+    options = (
+        _on("tca"),
+        SIDE,
+        Option(
+            name="level_arcsec",
+            kind="number",
+            lower=0.0,
+            required=True,
+            description="the prescribed TE peak-to-peak (arcsec)",
+        ),
+    )
 
     def value(self, evaluations, **options):
         te = self._worst(evaluations, options, _te(evaluations))
@@ -181,22 +166,24 @@ class TeLevel(_ContactObjective):
 class PatternCenterOffset(_ContactObjective):
     name = "pattern_center_offset"
     description = "distance of the mean contact point from the flank centre (mm)"
-    options = ("on", "side", "component")
-
-    def reads(self, **options):
-        component = options.get("component", "both")
-        if component not in ("both", "face", "profile"):
-            raise StudyError(
-                f"objective {self.name}.component", component, "must be both, face or profile"
-            )
-        return super().reads(**options)
+    options = (
+        _on("tca"),
+        SIDE,
+        Option(
+            name="component",
+            default="both",
+            kind="string",
+            choices=("both", "face", "profile"),
+            description="the distance (both) or the magnitude of one coordinate",
+        ),
+    )
 
     def value(self, evaluations, **options):
         component = options.get("component", "both")
 
         def size(label, p):
-            face = _metric(evaluations, label, f"{p}pattern_center_offset_face_mm")
-            profile = _metric(evaluations, label, f"{p}pattern_center_offset_profile_mm")
+            face = _metric(evaluations, label, f"{p}pattern.center_offset_mm.0")
+            profile = _metric(evaluations, label, f"{p}pattern.center_offset_mm.1")
             return {"both": math.hypot(face, profile), "face": abs(face), "profile": abs(profile)}[
                 component
             ]
@@ -212,33 +199,41 @@ class PatternBias(_ContactObjective):
         return self._worst(
             evaluations,
             options,
-            lambda label, p: abs(_metric(evaluations, label, f"{p}pattern_bias_mm")),
+            lambda label, p: abs(_metric(evaluations, label, f"{p}pattern.bias_mm")),
         )
 
 
 class PatternMovement(_ContactObjective):
     name = "pattern_movement"
     description = "movement of the mean contact point between two assemblies (mm)"
-    options = ("nominal", "misaligned", "side")
+    options = (
+        Option(
+            name="nominal",
+            default="tca",
+            kind="label",
+            description="label of the nominal assembly's TCA",
+        ),
+        Option(
+            name="misaligned",
+            kind="label",
+            required=True,
+            description="label of the misaligned assembly's TCA",
+        ),
+        SIDE,
+    )
 
     def reads(self, **options):
-        _known_options(self, options)
-        if "misaligned" not in options:
-            raise StudyError(
-                f"objective {self.name}.misaligned", rule="name the misaligned TCA's label"
-            )
-        _side(self.name, options)
-        labels = _labels(self.name, [options.get("nominal", "tca"), options["misaligned"]])
-        return {label: "tca" for label in labels}
+        checked = check_options(self.options, options, f"{self.kind} {self.name}")
+        return {checked["nominal"]: "tca", checked["misaligned"]: "tca"}
 
     def value(self, evaluations, **options):
         nominal, misaligned = options.get("nominal", "tca"), options["misaligned"]
         worst = 0.0
-        for p in _side(self.name, options):
+        for p in SIDES[options.get("side", "drive")]:
             moves = [
-                _metric(evaluations, misaligned, f"{p}pattern_center_offset_{c}_mm")
-                - _metric(evaluations, nominal, f"{p}pattern_center_offset_{c}_mm")
-                for c in ("face", "profile")
+                _metric(evaluations, misaligned, f"{p}pattern.center_offset_mm.{i}")
+                - _metric(evaluations, nominal, f"{p}pattern.center_offset_mm.{i}")
+                for i in (0, 1)
             ]
             worst = max(worst, math.hypot(*moves))
         return worst
@@ -249,33 +244,30 @@ class BacklashWindow(BaseObjective):
     description = "backlash inside [min_um, max_um] (constraint, um outside the window)"
     kind = "constraint"
     requires = ("backlash",)
-    options: ClassVar[tuple[str, ...]] = ("on", "min_um", "max_um")
+    options = (
+        _on("backlash", what="backlash"),
+        Option(name="min_um", kind="number", required=True, description="least backlash (um)"),
+        Option(name="max_um", kind="number", required=True, description="largest backlash (um)"),
+    )
 
     def reads(self, **options):
-        _known_options(self, options)
-        for key in ("min_um", "max_um"):
-            value = options.get(key)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise StudyError(f"constraint {self.name}.{key}", value, "is required (um)")
-            if not math.isfinite(value):
-                raise StudyError(f"constraint {self.name}.{key}", value, "must be finite (um)")
+        labels = super().reads(**options)
         if not options["min_um"] < options["max_um"]:
             raise StudyError(
                 f"constraint {self.name}",
                 (options["min_um"], options["max_um"]),
                 "needs min_um < max_um",
             )
-        (label,) = _labels(self.name, options.get("on", "backlash"))[:1]
-        return {label: "backlash"}
+        return dict(list(labels.items())[:1])
 
     def value(self, evaluations, **options):
-        label = options.get("on", "backlash")
+        label = _labels(options.get("on", "backlash"))[0]
         low, high = float(options["min_um"]), float(options["max_um"])
         excess = max(
-            low - _metric(evaluations, label, "backlash_min_um"),
-            _metric(evaluations, label, "backlash_max_um") - high,
+            low - _metric(evaluations, label, "backlash.min_um"),
+            _metric(evaluations, label, "backlash.max_um") - high,
         )
-        if _metric(evaluations, label, "interference"):
+        if _metric(evaluations, label, "backlash.interference"):
             excess = max(excess, 0.0) + (high - low)
         return excess
 
@@ -284,11 +276,13 @@ class EdgeContact(_ContactObjective):
     name = "edge_contact"
     description = "contact stays inside the flanks (constraint: +0.5 with edge contact)"
     kind = "constraint"
-    default_on = ("tca",)
+    options = (_on(["tca"]), SIDE)
 
     def value(self, evaluations, **options):
         edge = self._worst(
-            evaluations, options, lambda label, p: _metric(evaluations, label, f"{p}edge_contact")
+            evaluations,
+            options,
+            lambda label, p: _metric(evaluations, label, f"{p}pattern.edge_contact"),
         )
         return edge - 0.5
 

@@ -35,7 +35,7 @@ QUERY = sa.text(
     FROM gearopt_trial_params p
     JOIN gearopt_trial_metrics m ON m.study = p.study AND m.trial_number = p.trial_number
     WHERE p.study = :study AND m.evaluation = 'tca'
-      AND m.metric IN ('te_peak_to_peak_arcsec', 'pattern_bias_mm')
+      AND m.metric IN ('tca.te_peak_to_peak_arcsec', 'tca.pattern.bias_mm')
     """
 )
 
@@ -56,8 +56,8 @@ def sweep(name: str) -> dict[int, dict[str, float]]:
 def _line(ax, rows, key, label):
     x = np.array([r[key] for r in rows.values()])
     order = np.argsort(x)
-    te = -np.array([r["te_peak_to_peak_arcsec"] for r in rows.values()])[order]
-    bias = np.array([r["pattern_bias_mm"] for r in rows.values()])[order]
+    te = -np.array([r["tca.te_peak_to_peak_arcsec"] for r in rows.values()])[order]
+    bias = np.array([r["tca.pattern.bias_mm"] for r in rows.values()])[order]
     ax.plot(x[order], te, "o-", label="max. kinematic error (arcsec)")
     ax.plot(x[order], bias, "s--", label="bias (mm, the contact line's extension)")
     ax.set_xlabel(label)
@@ -86,7 +86,9 @@ def main(out: Path) -> list[Path]:
     rb = np.array(sorted({r[RB] for r in rows.values()}))
     te = np.full((len(rb), len(rh)), np.nan)
     for r in rows.values():
-        te[np.searchsorted(rb, r[RB]), np.searchsorted(rh, r[RH])] = -r["te_peak_to_peak_arcsec"]
+        te[np.searchsorted(rb, r[RB]), np.searchsorted(rh, r[RH])] = -r[
+            "tca.te_peak_to_peak_arcsec"
+        ]
     fig, ax = plt.subplots(figsize=(7, 5))
     contour = ax.contourf(rh, rb, te, levels=12, cmap="viridis")
     ax.contour(rh, rb, te, levels=[-10.0], colors="white", linewidths=2)
