@@ -143,7 +143,7 @@ def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:
     """The trial's PNG figures (:func:`gearopt.plots.plot_evaluations`) as (name, bytes)."""
 
     with tempfile.TemporaryDirectory() as folder:
-        paths = plot_evaluations(evaluations, folder, f"{spec.name}: {design.name}")
+        paths = plot_evaluations(evaluations, folder, f"{spec.name}: {design.name}", design=design)
         return [(p.name, p.read_bytes()) for p in paths]
 
 
