@@ -65,7 +65,10 @@ class TeCurves:
     analysed_deg
         The analysed range ``(first, last)`` position.
     handover_deg, handover_arcsec
-        The solved hand-overs and the TE there.
+        The hand-overs (where two pairs' TE curves cross, both carrying: bisected on the
+        field here) and the TE there.
+    reported_handover_deg, reported_peak_to_peak_arcsec
+        The TCA's (the report's) hand-overs and peak-to-peak, for comparison.
     peak_to_peak_arcsec
         The envelope's max - min (hand-overs included).
     contact_ratio
@@ -82,6 +85,8 @@ class TeCurves:
     analysed_deg: tuple[float, float]
     handover_deg: NDArray
     handover_arcsec: NDArray
+    reported_handover_deg: NDArray
+    reported_peak_to_peak_arcsec: float
     peak_to_peak_arcsec: float
     contact_ratio: float
     orders: NDArray
@@ -182,6 +187,32 @@ class _Motion:
             sep = (self.sample.clearance_rad - env[:, None, None]) * factor
         self.sep_mm = np.where(np.isfinite(sep), sep, np.inf)
 
+    def handovers(self, iterations: int = 40) -> tuple[NDArray, NDArray]:
+        """The hand-overs of the base pair to the next: ``(u, lag)`` where G(u) = G(u + p)
+        and both carry, bracketed on the samples and bisected on the field."""
+        n = PER_PITCH
+        g, nxt = self.g[:-n], self.g[n:]
+        with np.errstate(invalid="ignore"):
+            d = nxt - g
+        both = np.isfinite(d[:-1]) & np.isfinite(d[1:])
+        low = np.minimum(g, nxt)
+        carrying = (low[:-1] <= self.envelope[:-n][:-1] + 1e-12) | (
+            low[1:] <= self.envelope[:-n][1:] + 1e-12
+        )
+        k = np.flatnonzero(both & carrying & (np.sign(d[:-1]) * np.sign(d[1:]) < 0))
+        if not k.size:
+            return np.zeros(0), np.zeros(0)
+        a, b = self.u[k], self.u[k + 1]
+        da = d[k]
+        for _ in range(iterations):
+            m = 0.5 * (a + b)
+            dm = self.curve(m + self.pitch) - self.curve(m)
+            left = np.sign(dm) == np.sign(da)
+            a, da = np.where(left, m, a), np.where(left, dm, da)
+            b = np.where(left, b, m)
+        u = 0.5 * (a + b)
+        return u, np.maximum(self.curve(u), self.curve(u + self.pitch))
+
     def envelope_at(self, t: NDArray) -> NDArray:
         """The least lag over the pairs at relative rotations ``t`` (evaluated anew)."""
         t = np.asarray(t, float)
@@ -212,14 +243,26 @@ def te_curves(field: ClearanceField, report: dict, *, separation: str = "normal"
     pair_t = np.array([np.where(inside, motion.u - k * p, np.nan) for k in ks])
     pair_te = np.tile(te_pair, (len(ks), 1))
     pair_carrying = np.tile(motion.carrying, (len(ks), 1))
-    hand = np.radians(np.asarray(report["handover_phi1_deg"], float))
-    if hand.size:  # the hand-overs recur every pitch: those over the range drawn
-        hand = hand[0] + p * np.arange(-4 * REACH_PITCHES, 4 * REACH_PITCHES + 1)
-        hand = hand[(hand >= lo) & (hand <= hi)]
+    # the hand-overs solved on the field (they recur every pitch: those over the range drawn)
+    u_hand, g_hand = motion.handovers()
+    reported = np.radians(np.asarray(report["handover_phi1_deg"], float))
+    if len(u_hand) > 1 and reported.size:
+        # several crossings a pitch: a flat TE (line contact), where the curves cross in
+        # their noise; the one nearest the TCA's hand-over
+        off = (u_hand - reported[0] + 0.5 * p) % p - 0.5 * p
+        pick = int(np.argmin(np.abs(off)))
+        u_hand, g_hand = u_hand[pick : pick + 1], g_hand[pick : pick + 1]
+    shifts = np.arange(-4 * REACH_PITCHES, 4 * REACH_PITCHES + 1) * p
+    hand = (u_hand[:, None] + shifts[None, :]).ravel()
+    hand_g = np.repeat(g_hand, len(shifts))
+    keep = (hand >= lo) & (hand <= hi)
+    hand, hand_g = hand[keep], hand_g[keep]
+    order = np.argsort(hand)
+    hand, hand_te = hand[order], (g0 - hand_g[order]) * ARCSEC
     t_fine = np.linspace(lo, hi, int(round((hi - lo) / p * PER_PITCH)) + 1)
-    t_all = np.sort(np.concatenate([t_fine, hand]))
-    env = (g0 - motion.envelope_at(t_all)) * ARCSEC
-    hand_te = (g0 - motion.envelope_at(hand)) * ARCSEC if hand.size else np.zeros(0)
+    order = np.argsort(np.concatenate([t_fine, hand]))
+    t_all = np.concatenate([t_fine, hand])[order]
+    env = np.concatenate([(g0 - motion.envelope_at(t_fine)) * ARCSEC, hand_te])[order]
     # the spectrum: one pitch of the envelope, PER_PITCH samples (the TE is periodic in it)
     period = motion.envelope_at(t_rep[0] + np.arange(PER_PITCH) * (p / PER_PITCH))
     amp = np.abs(np.fft.rfft((g0 - period) * ARCSEC)) * 2.0 / PER_PITCH
@@ -233,6 +276,8 @@ def te_curves(field: ClearanceField, report: dict, *, separation: str = "normal"
         analysed_deg=(float(np.degrees(t_rep[0])), float(np.degrees(t_rep[-1]))),
         handover_deg=np.degrees(hand),
         handover_arcsec=hand_te,
+        reported_handover_deg=np.asarray(report["handover_phi1_deg"], float),
+        reported_peak_to_peak_arcsec=float(report["te_peak_to_peak_arcsec"]),
         peak_to_peak_arcsec=float(np.ptp(env[finite])) if finite.any() else float("nan"),
         contact_ratio=float(report["contact_ratio"]),
         orders=np.arange(1, ORDERS + 1),

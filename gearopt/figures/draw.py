@@ -73,6 +73,17 @@ def te_figure(plt, curves: dict, title: str, target=None):
             zorder=0,
             label=f"envelope (TE): peak-to-peak {c.peak_to_peak_arcsec:.3f} arcsec",
         )
+        if abs(c.reported_peak_to_peak_arcsec - c.peak_to_peak_arcsec) > 0.01 * max(
+            c.peak_to_peak_arcsec, 0.1
+        ):  # the TCA's own hand-over solution disagrees with the curves': show both
+            ax.plot(
+                c.reported_handover_deg,
+                np.interp(c.reported_handover_deg, c.t_deg, c.envelope_arcsec),
+                "x",
+                color="r",
+                ms=7,
+                label=f"TCA's hand-overs; its peak-to-peak {c.reported_peak_to_peak_arcsec:.3f}",
+            )
         ax.plot(
             c.handover_deg,
             c.handover_arcsec,

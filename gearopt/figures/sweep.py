@@ -1,7 +1,7 @@
 """The contact pattern's movement under misalignment: sweeps of each assembly error and a V-H
 grid, run on the analyses' public interface (:func:`gearopt.analysis.analysed_flanks`,
-:func:`gearopt.mesh.mesh_pair`, :func:`gearopt.analysis.contact_sides`) for the figures of ``gearopt analyze --plot`` and
-``gearopt report``.
+:func:`gearopt.mesh.mesh_pair`, :func:`gearopt.analysis.contact_sides`) for the figures of
+``gearopt analyze --plot`` and ``gearopt report``.
 
 The errors are the housing's ``[misalignment]`` keys (docs/architecture.md, "Housing frame and
 misalignment"), added to the design's own: V = ``offset_mm`` (dE, pinion along +y_f),
