@@ -104,11 +104,12 @@ def test_te_spectrum_holds_the_envelopes_variance(case):
     for c in case["data"]["te"].values():
         t, env = c.t_deg, c.envelope_arcsec
         pitch = float(np.diff(c.handover_deg[:2])[0])
-        one = (t >= c.handover_deg[0]) & (t < c.handover_deg[0] + pitch)
-        variance = np.var(np.interp(np.linspace(t[one][0], t[one][-1], 400), t, env))
+        uniform = c.handover_deg[0] + np.arange(1000) * (pitch / 1000)
+        variance = np.var(np.interp(uniform, t, env))  # (the envelope's kinks are sampled)
         power = 0.5 * float(np.sum(c.amplitude_arcsec**2))
-        assert power <= 1.02 * variance + 1e-9
-        assert power >= 0.9 * variance - 1e-6
+        # (a conjugate pair's noise, 1e-3 arcsec, is broadband: an absolute allowance)
+        assert power <= 1.02 * variance + 1e-4
+        assert power >= 0.9 * variance - 1e-4
 
 
 def test_te_axes_keep_a_minimum_scale(case):

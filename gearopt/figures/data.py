@@ -43,6 +43,8 @@ PER_PITCH = 48
 REACH_PITCHES = 3
 #: orders of the tooth-mesh frequency in the TE spectrum
 ORDERS = 8
+#: envelope samples over the pitch of the spectrum
+SPECTRUM_SAMPLES = 256
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -263,9 +265,10 @@ def te_curves(field: ClearanceField, report: dict, *, separation: str = "normal"
     order = np.argsort(np.concatenate([t_fine, hand]))
     t_all = np.concatenate([t_fine, hand])[order]
     env = np.concatenate([(g0 - motion.envelope_at(t_fine)) * ARCSEC, hand_te])[order]
-    # the spectrum: one pitch of the envelope, PER_PITCH samples (the TE is periodic in it)
-    period = motion.envelope_at(t_rep[0] + np.arange(PER_PITCH) * (p / PER_PITCH))
-    amp = np.abs(np.fft.rfft((g0 - period) * ARCSEC)) * 2.0 / PER_PITCH
+    # the spectrum: one pitch of the envelope (the TE is periodic in it), SPECTRUM_SAMPLES
+    # samples (its kinks at the hand-overs alias little into the first orders)
+    period = motion.envelope_at(t_rep[0] + np.arange(SPECTRUM_SAMPLES) * (p / SPECTRUM_SAMPLES))
+    amp = np.abs(np.fft.rfft((g0 - period) * ARCSEC)) * 2.0 / SPECTRUM_SAMPLES
     finite = np.isfinite(env)
     return TeCurves(
         pair_t_deg=np.degrees(pair_t),
