@@ -119,9 +119,9 @@ class MemberPattern:
     grid_x_mm, grid_y_mm, generated
         ``(n_f, n_p)`` the flank's nodes and where they are generated.
     pattern
-        The pattern's boundary polygons (each ``(k, 2)``).
+        The pattern's boundary rings (each ``(k, 2)``, closed; a hole's runs the other way).
     zones
-        The instantaneous contact zones at evenly spaced positions along the path (polygons).
+        The instantaneous contact zones at evenly spaced positions along the path (rings).
     path_mm, path_carrying
         ``(m, 2)`` the path of one tooth over its whole contact (NaN where it has no zone) and
         where that tooth carries.
@@ -289,17 +289,21 @@ def te_curves(field: ClearanceField, report: dict, *, separation: str = "normal"
 
 
 def _contours(values: NDArray, x: NDArray, y: NDArray, level: float) -> list[NDArray]:
-    """The polygons where ``values`` (on the grid ``x``, ``y``: coordinates of its nodes) is
-    below ``level``: closed lines of the linear interpolant (contourpy, matplotlib's)."""
+    """The closed rings bounding the region where ``values`` (on the grid ``x``, ``y``: its
+    nodes' coordinates) is below ``level``, the flanks' boundary included where the region
+    reaches it: the filled contours of the linear interpolant (contourpy, matplotlib's); a
+    hole's ring runs the other way."""
     import contourpy
 
     z = np.where(np.isfinite(values), values, 1e9)
-    generator = contourpy.contour_generator(x, y, z, line_type=contourpy.LineType.Separate)
-    lines = [np.asarray(line) for line in generator.lines(level) if len(line) > 2]
+    generator = contourpy.contour_generator(x, y, z, fill_type=contourpy.FillType.OuterOffset)
+    rings = []
+    for points, offsets in zip(*generator.filled(-1e30, level), strict=True):
+        rings += [points[a:b] for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
     # islands of a node or two where the separation grazes the level: the linear
     # interpolant's noise, not a zone
     cell = np.ptp(x) / (x.shape[0] - 1) * np.ptp(y) / (y.shape[1] - 1)
-    return [line for line in lines if _area(line) > 0.5 * cell]
+    return [ring for ring in rings if len(ring) > 3 and _area(ring) > 0.5 * cell]
 
 
 def _area(line: NDArray) -> float:

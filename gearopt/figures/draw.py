@@ -179,6 +179,9 @@ def pattern_figure(plt, patterns: dict, reports: dict, title: str):
     pattern, instantaneous contact zones, path, M and C on the tooth's true projection.
     ``patterns``: ``{side: (pinion MemberPattern, gear MemberPattern)}``; ``reports``:
     ``{side: reported TCA}``."""
+    from matplotlib.patches import PathPatch
+    from matplotlib.path import Path
+
     m0 = patterns["drive"][0].outline
     aspect = np.ptp(m0.corners_mm[:, 1]) * 1.6 / m0.face_width_mm
     height = max(1.6, 6.4 * aspect) + 1.0
@@ -189,16 +192,10 @@ def pattern_figure(plt, patterns: dict, reports: dict, title: str):
         for col, m in enumerate(patterns[side]):
             ax = axes[row, col]
             _tooth(ax, m, first=first)
-            for k, poly in enumerate(m.pattern):
-                ax.fill(
-                    *poly.T,
-                    color="C3",
-                    alpha=0.45,
-                    lw=0,
-                    label=f"pattern ({pat['compound_um']:g} um compound)"
-                    if first and k == 0
-                    else None,
-                )
+            if m.pattern:
+                area = Path.make_compound_path(*[Path(r, closed=True) for r in m.pattern])
+                label = f"pattern ({pat['compound_um']:g} um compound)" if first else None
+                ax.add_patch(PathPatch(area, facecolor="C3", alpha=0.45, lw=0, label=label))
             for k, zone in enumerate(m.zones):
                 ax.plot(
                     *np.vstack([zone, zone[:1]]).T,
