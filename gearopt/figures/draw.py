@@ -263,7 +263,7 @@ def ease_off_figure(plt, report: dict, projections: dict, title: str):
                 facecolor="white",
                 edgecolor="0.4",
                 hatch="////",
-                label="not generated / no conjugate gear point",
+                label="not generated / no conjugate gear point" if side == "drive" else None,
             )
         ring = np.vstack([outline.corners_mm, outline.corners_mm[:1]])
         ax.plot(*ring.T, "k-", lw=1.0)
