@@ -76,6 +76,20 @@ def _pattern_to_tooth(design, pair):
     return convert
 
 
+def _ease_off(plt, design, pair, evaluation, title: str):
+    """The ease-off figure of an ``ease-off`` evaluation on the pinion's true projection."""
+    convert = _pattern_to_tooth(design, pair)
+    report = evaluation.report["ease_off"]
+    projections = {}
+    for side in SIDE_KEYS:
+        face = np.asarray(report[side]["face_mm"])
+        profile = np.asarray(report[side]["profile_mm"])
+        grid = np.stack(np.meshgrid(face, profile, indexing="ij"), -1)
+        x, y = np.moveaxis(convert(side, grid), -1, 0)
+        projections[side] = (x, y, tooth_outline(design.blank, "pinion"))
+    return ease_off_figure(plt, report, projections, title)
+
+
 def analysis_figures(design, evaluations: Mapping, *, window_um=None, sweep: bool = True) -> dict:
     """``{name: matplotlib Figure}`` of a design's evaluations (module docstring): ``tca``,
     ``backlash``, ``ease-off`` and optionally ``ltca``; ``window_um`` the backlash window;
@@ -99,15 +113,7 @@ def analysis_figures(design, evaluations: Mapping, *, window_um=None, sweep: boo
         )
     convert = _pattern_to_tooth(design, pair)
     if "ease-off" in evaluations:
-        report = evaluations["ease-off"].report["ease_off"]
-        projections = {}
-        for side in SIDE_KEYS:
-            face = np.asarray(report[side]["face_mm"])
-            profile = np.asarray(report[side]["profile_mm"])
-            grid = np.stack(np.meshgrid(face, profile, indexing="ij"), -1)
-            x, y = np.moveaxis(convert(side, grid), -1, 0)
-            projections[side] = (x, y, tooth_outline(design.blank, "pinion"))
-        figures["ease_off"] = ease_off_figure(plt, report, projections, title)
+        figures["ease_off"] = _ease_off(plt, design, pair, evaluations["ease-off"], title)
     if sweep:
         result = misalignment_sweep(design, data["options"])
         outline = tooth_outline(design.blank, "pinion")
@@ -166,11 +172,8 @@ def plot_evaluations(evaluations: Mapping, directory, title: str, *, design=None
         elif kind == "ltca":
             figures = {"ltca": ltca_figure(plt, evaluation, title)}
         elif kind == "ease-off" and design is not None:
-            tca = next((e for e in evaluations.values() if e.evaluator == "tca"), None)
-            if tca is not None:
-                both = analysis_figures(design, {"tca": tca, "ease-off": evaluation}, sweep=False)
-                figures = {"ease_off": both.pop("ease_off")}
-                for fig in both.values():
-                    plt.close(fig)
+            options = AnalysisOptions.from_conditions(evaluation.conditions, design=design)
+            pair = meshed_pair(design, options)
+            figures = {"ease_off": _ease_off(plt, design, pair, evaluation, title)}
         paths += _write(figures, out, f"{label}_")
     return paths
