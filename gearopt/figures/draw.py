@@ -355,20 +355,21 @@ def misalignment_figure(plt, sweep, outlines: dict, to_tooth, title: str):
         )
         n = len(sweep.steps)
         for i in range(n):
-            ax.plot(*vh[i].T, "-", color="C1", lw=0.8)
-            ax.plot(*vh[:, i].T, "-", color="C0", lw=0.8)
+            ax.plot(*vh[i].T, "-", color="C0", lw=0.8)  # V = steps[i], H varying
+            ax.plot(*vh[:, i].T, "-", color="C1", lw=0.8)  # H = steps[i]
         for i in range(n):
             for j in range(n):
                 v, h = sweep.steps[i] * amp["V"], sweep.steps[j] * amp["H"]
                 edge = sweep.vh_edge_contact[side][i, j]
                 ax.plot(*vh[i, j], "x" if edge else "o", color="r" if edge else "k", ms=4)
-                ax.annotate(
-                    f"V{v:+.2g} H{h:+.2g}",
-                    vh[i, j],
-                    fontsize=6,
-                    xytext=(2, 2),
-                    textcoords="offset points",
-                )
+                if i in (0, n - 1) and j in (0, n - 1):  # the corners named
+                    ax.annotate(
+                        f"V{v:+.2g} H{h:+.2g}",
+                        vh[i, j],
+                        fontsize=6,
+                        xytext=(2, 2),
+                        textcoords="offset points",
+                    )
         ax.set_aspect("equal")
         ax.set_title(
             f"pinion, {side}: V-H chart (M; lines of constant V blue, H orange)", fontsize=9
