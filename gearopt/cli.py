@@ -30,6 +30,7 @@ from gearopt.commands import text_table as _table
 from gearopt.declarations import Option, declared, describe, metric_names
 from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError, PluginError
+from gearopt.figures.report import write_report
 from gearopt.flank import FLANKS, MEMBERS
 from gearopt.flank_cli import add_flank_parser, parse_grid, print_warnings
 from gearopt.plausibility import caught, contact_findings, flank_findings
@@ -301,6 +302,21 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_report(args: argparse.Namespace) -> int:
+    window = None
+    if args.backlash_window_um is not None:
+        try:
+            window = [float(part) for part in args.backlash_window_um.split(",")]
+        except ValueError:
+            window = []
+        if len(window) != 2 or not window[0] < window[1]:
+            raise DesignError(
+                "--backlash-window-um", args.backlash_window_um, "must be MIN,MAX in um, MIN < MAX"
+            )
+    print(f"wrote {write_report(load_design(args.design), args.out, window_um=window)}")
+    return 0
+
+
 def _torques(text: str | None) -> list[float] | None:
     """The ``--torque-nm`` list, or None."""
     if text is None:
@@ -409,6 +425,12 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     )
     # defaults: the design's [analysis] table, else gearopt.analysis.AnalysisOptions
     p.set_defaults(func=_cmd_analyze)
+
+    p = sub.add_parser("report", help="one self-contained HTML page of a design's analysis")
+    p.add_argument("design", help="design TOML file")
+    p.add_argument("--out", required=True, metavar="DIR", help="folder of the HTML page")
+    p.add_argument("--backlash-window-um", metavar="MIN,MAX", help="backlash window to draw")
+    p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("bench", help="time the kernels (medians over fresh one-thread processes)")
     p.add_argument("names", nargs="*", help="benchmarks to run (default: all)")

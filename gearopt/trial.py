@@ -101,7 +101,7 @@ def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:
     title = f"{spec.name}: {design.name}"
     rest = {k: e for k, e in evaluations.items() if e.evaluator not in DEDICATED_FIGURES}
     with tempfile.TemporaryDirectory() as folder:
-        paths = plot_evaluations(evaluations, folder, title)
+        paths = plot_evaluations(evaluations, folder, title, design=design)
         paths += plot_declared(rest, evaluators(), folder, title=title)
         return [(p.name, p.read_bytes()) for p in paths]
 

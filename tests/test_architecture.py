@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"gearopt": ROOT / "gearopt", "gearopt_plugins": ROOT / "plugins"}
 
 #: optional dependencies, loaded where they are used
-OPTIONAL = {"matplotlib", "pyarrow", "dask", "psycopg"}
+OPTIONAL = {"matplotlib", "contourpy", "pyarrow", "dask", "psycopg"}
 #: the study layer imports Optuna and SQLAlchemy (about 2 s of start-up): the package root and
 #: the study commands load it when asked, so that the CLI and the worker processes start
 #: without it
@@ -97,7 +97,13 @@ LAYERS = (
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
     (
         "analysis",
-        ("gearopt.analysis", "gearopt.plots", "gearopt.plots_declared", "gearopt.warmup"),
+        (
+            "gearopt.analysis",
+            "gearopt.figures",
+            "gearopt.plots",
+            "gearopt.plots_declared",
+            "gearopt.warmup",
+        ),
     ),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
     (
