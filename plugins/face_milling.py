@@ -150,6 +150,7 @@ check against a published settings summary (none readable was found).
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
@@ -159,11 +160,12 @@ import numpy as np
 from gearopt import hookimpl
 from gearopt.design import MEMBERS, Design, PairData
 from gearopt.envelope import flank_map, require_flank, solve_envelope
-from gearopt.errors import DesignError, NotAvailableError, SettingsError
+from gearopt.errors import DesignError, GearoptWarning, NotAvailableError, SettingsError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
-from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
+from gearopt.machine import BaseMachineModel, CorrectionSetting, MachineSettings, SearchDimension
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
+from gearopt_plugins import face_milling_correction
 from gearopt_plugins import face_milling_synthesis as fs
 from gearopt_plugins.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.face_milling_family import (
@@ -443,20 +445,37 @@ def _root_height_mm(spec: FaceMillingFlank, blank, index: int, cone_distance_mm)
 
 
 def _check_root_reach(spec: FaceMillingFlank, blank, index: int, where: str) -> None:
-    """The blade's tip must reach the root line over the whole face (toe and heel; the root
-    cone's generatrix with tapered depth)."""
+    """The blade's tip should reach the root line over the whole face (toe and heel; the root
+    cone's generatrix with tapered depth). Where it stays above the line by less than the
+    clearance the root is cut there, shallower (a warning: setting errors and corrections of
+    some hundredths do this); by more, the mating tip would hit the root (an error)."""
     ends = (("toe", blank.inner_cone_distance_mm), ("heel", blank.outer_cone_distance_mm))
     heights = [(_root_height_mm(spec, blank, index, a), name, a) for name, a in ends]
     root_z, name, a = max(heights)
-    if root_z > ROOT_REACH_TOL_MM:
+    if root_z <= ROOT_REACH_TOL_MM:
+        return
+    clearance = blank.clearance_mm[index]
+    where_z = (
+        f"its tip stays {root_z:.4f} mm above the root line at the {name} (cone distance "
+        f"{a:.3f} mm)"
+    )
+    if root_z >= clearance:
         raise DesignError(
             f"{where}.sliding_base_mm",
             spec.sliding_base_mm,
-            f"the blade cannot reach the root: its tip stays {root_z:.4f} mm above the root "
-            f"line at the {name} (cone distance {a:.3f} mm); the tip must reach the root cone "
-            "over the whole face (sliding_base_mm, machine_center_to_back_mm and "
-            "machine_root_angle_deg place the work; module docstring)",
+            f"the blade cannot reach the root: {where_z}, no less than the clearance "
+            f"{clearance:.4f} mm, so the mating tip would hit the root; the tip must reach "
+            "the root cone over the whole face (sliding_base_mm, machine_center_to_back_mm "
+            "and machine_root_angle_deg place the work; module docstring)",
         )
+    warnings.warn(
+        GearoptWarning(
+            f"{where}.sliding_base_mm = {spec.sliding_base_mm:.6g}: the blade's tip does not "
+            f"reach the root line: {where_z}; the root is cut there and the clearance shrinks "
+            f"to {clearance - root_z:.4f} mm"
+        ),
+        stacklevel=2,
+    )
 
 
 def _parse_member(table: Mapping[str, Any], member: str, pair: PairData) -> FaceMillingMember:
@@ -697,6 +716,9 @@ class FaceMilling(BaseMachineModel):
             if tool_pass:
                 out[flank] = replace(out[flank], tooth=tool_pass if hand == "right" else -tool_pass)
         return out
+
+    def correction_settings(self, design: Design, member: str) -> tuple[CorrectionSetting, ...]:
+        return face_milling_correction.correction_settings(design, member)
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: FaceMillingMachine = design.machine
