@@ -7,6 +7,8 @@
 ``gearopt realise-te DESIGN.toml --out NEW.toml`` fits the settings to its ``[te_target]``;
 ``gearopt chain MACHINE ...`` the errors of a machine's kinematic chains (seed 000) and
 ``gearopt change-gears MACHINE --ratio R`` the best change gears of its set;
+``gearopt grid`` and ``gearopt correct`` the closed loop from measured flanks
+(:mod:`gearopt.measurement_cli`);
 ``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`).
 Errors in the input are printed as one line naming the parameter, its value and the rule
 (exit status 2).
@@ -36,6 +38,7 @@ from gearopt.design_files import load_design
 from gearopt.errors import DesignError, GearoptError
 from gearopt.flank import FLANKS, MEMBERS
 from gearopt.flank_cli import add_flank_parser, parse_grid, print_warnings
+from gearopt.measurement_cli import add_measurement_parsers
 from gearopt.plausibility import caught, contact_findings, flank_findings
 from gearopt.plots import plot_analysis
 from gearopt.plugins import evaluators, get_machine_model, list_plugins
@@ -599,6 +602,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_change_gears)
     add_flank_parser(sub)
     add_blank_parser(sub)
+    add_measurement_parsers(sub)
     add_study_parser(sub)
     return parser
 

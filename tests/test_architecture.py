@@ -81,7 +81,7 @@ LAYERS = (
         ),
     ),
     ("contact", ("gearopt.contact", "gearopt.mesh", "gearopt.newton_tca", "gearopt.loaded")),
-    ("analysis", ("gearopt.analysis", "gearopt.plots", "gearopt.warmup")),
+    ("analysis", ("gearopt.analysis", "gearopt.plots", "gearopt.warmup", "gearopt.measurement")),
     ("trial", ("gearopt.studyfile", "gearopt.trial")),
     (
         "study",
@@ -93,6 +93,7 @@ LAYERS = (
             "gearopt.cli",
             "gearopt.flank_cli",
             "gearopt.blank_cli",
+            "gearopt.measurement_cli",
             "gearopt.study_cli",
             "gearopt.bench",
             "gearopt",
