@@ -192,20 +192,28 @@ class FlankPoints:
 
 
 def _polar(flank: FlankMap, axial_mm, radius_mm) -> tuple[NDArray, NDArray]:
+    """Theta of ``flank`` at axial-plane points and whether they are generated: the exact
+    surface's where the flank carries one and the point is generated, else the local
+    interpolant's."""
     s, t = flank.to_grid(axial_mm, radius_mm)
     theta, inside = flank.polar_angle_local(s, t, with_inside=True)
+    if flank.surface is not None and inside.any():
+        theta = np.array(theta, float)
+        theta[inside] = flank.polar_angle_exact(s[inside], t[inside])
     return theta, inside
 
 
 def flank_points(grid: MeasuringGrid, flank: FlankMap) -> FlankPoints:
-    """The points, normals and generated flags of ``flank`` at the grid's positions."""
+    """The points, normals and generated flags of ``flank`` at the grid's positions (exact on
+    the generated surface where the flank carries one)."""
     g = math.radians(grid.pitch_angle_deg)
     s0 = np.broadcast_to(grid.face_mm[:, None], grid.shape)
     h0 = grid.profile_mm
 
     def point(ds: float, dh: float) -> NDArray:
         big_l, big_r = axial_plane(s0 + ds, h0 + dh, g)
-        theta, _ = _polar(flank, big_l, big_r)
+        s, t = flank.to_grid(big_l, big_r)
+        theta = flank.polar_angle_local(s, t)
         return np.stack([big_r * np.cos(theta), big_r * np.sin(theta), big_l], axis=-1)
 
     big_l, big_r = grid.axial_mm, grid.radius_mm
@@ -221,6 +229,9 @@ def flank_points(grid: MeasuringGrid, flank: FlankMap) -> FlankPoints:
     sense = np.sign(np.median(around[flank.mask])) if flank.mask.any() else 1.0
     mine = -np.sin(theta) * n[..., 0] + np.cos(theta) * n[..., 1]
     n *= np.where(np.sign(mine) == sense, 1.0, -1.0)[..., None]
+    if flank.surface is not None and generated.any():
+        s, t = flank.to_grid(big_l[generated], big_r[generated])
+        n[generated] = flank.surface.geometry_at(s, t)["normal"]
     return FlankPoints(
         flank=flank.flank, points_mm=p, normals=n, polar_angle_rad=theta, generated=generated
     )
