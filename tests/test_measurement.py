@@ -23,10 +23,11 @@ import pytest
 import gearopt
 from gearopt.cli import main
 from gearopt.errors import DesignError, GearoptError, GearoptWarning
+from gearopt.measurement.files import MEASURED_HEADER
 from gearopt.measurement.grid import measuring_grid, normal_deviation_um
 from gearopt.measurement.identify import correct, design_with, identify
 from gearopt.measurement.topography import nominal_measurement, split_deviation
-from gearopt.measurement_cli import GRID_HEADER, MEASURED_HEADER
+from gearopt.measurement_cli import GRID_HEADER
 from gearopt.plugins import get_machine_model
 
 STUDIES = Path(__file__).resolve().parents[1] / "studies"
@@ -301,3 +302,46 @@ def test_bad_measurement_files_are_named(tmp_path, capsys, content, match):
 def test_unknown_settings_are_named(tmp_path, capsys, pinion):
     with pytest.raises(GearoptError, match="must be among"):
         identify(pinion, _cut(pinion, {}), settings=["machine.pinion.spindle_speed"])
+
+
+# --- a study against a measured topography -------------------------------------------------------
+
+CLOSED_LOOP = STUDIES / "closed_loop"
+
+
+def test_topography_evaluator_and_objective_measure_against_the_target(face_milling):
+    """The shipped measurement (the conjugate design's gear cut with a radial setting 0.03 mm
+    too large and a machine root angle 0.02 deg too small, four decimals): the nominal design
+    misses it by its own RMS, the design with those errors by the rounding only."""
+    evaluator = gearopt.evaluators()["topography"]
+    objective = gearopt.objectives()["topography"]
+    conditions = {
+        "member": "gear",
+        "reference": "face_milling_conjugate.toml",
+        "target": "closed_loop/face_milling_gear_measured.csv",
+    }
+    evaluator.check_conditions(face_milling, conditions)
+    assert objective.reads() == {"topography": "topography"}
+    nominal = evaluator.evaluate(face_milling, conditions)
+    rows = list(csv.DictReader((CLOSED_LOOP / "face_milling_gear_measured.csv").open()))
+    given = np.array([float(r["deviation_um"]) for r in rows])
+    assert nominal.metrics["topography_rms_um"] == pytest.approx(np.sqrt(np.mean(given**2)))
+    cut = gearopt.with_overrides(
+        face_milling,
+        {
+            "machine.gear.radial_setting_mm": 74.704435602,
+            "machine.gear.machine_root_angle_deg": 71.545051177,
+        },
+    )
+    found = evaluator.evaluate(cut, conditions)
+    assert found.metrics["topography_rms_um"] < 1e-4
+    assert objective.value({"topography": found}) == found.metrics["topography_rms_um"]
+    with pytest.raises(DesignError, match="no such file"):
+        evaluator.check_conditions(face_milling, {**conditions, "target": "missing.csv"})
+    with pytest.raises(DesignError, match="unknown conditions"):
+        evaluator.check_conditions(face_milling, {**conditions, "grid": "9x5"})
+
+
+def test_closed_loop_study_file_reads():
+    spec = gearopt.load_study_spec(CLOSED_LOOP / "face_milling_gear_study.toml")
+    assert [o.name for o in spec.objectives] == ["topography"]
