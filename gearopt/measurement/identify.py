@@ -230,11 +230,14 @@ def _vector(values: Mapping[str, tuple[NDArray, NDArray]], valid) -> NDArray:
     return np.concatenate([values[f][0][valid[f]] for f in valid])
 
 
-def _jacobian(nominal, settings, valid) -> NDArray:
+def _jacobian(nominal, design, settings, values, valid) -> NDArray:
+    """Central differences of the deviations on the ``valid`` points (narrowed to where every
+    perturbed flank is generated) by each of ``settings`` about ``values`` in ``design``."""
     columns = []
     for s in settings:
-        plus = nominal.deviations(design_with(nominal.design, (s,), {s.key: s.value + s.step}))
-        minus = nominal.deviations(design_with(nominal.design, (s,), {s.key: s.value - s.step}))
+        at = values[s.key]
+        plus = nominal.deviations(design_with(design, (s,), {s.key: at + s.step}))
+        minus = nominal.deviations(design_with(design, (s,), {s.key: at - s.step}))
         for f in valid:
             valid[f] &= plus[f][1] & minus[f][1]
         columns.append((plus, minus, s.step))
@@ -299,7 +302,7 @@ def identify(
     cands = _candidates(nominal, settings)
     measured = {f: np.asarray(measured_um[f], float) for f in flanks}
     valid = {f: nominal.points[f].generated & np.isfinite(measured[f]) for f in flanks}
-    j_set = _jacobian(nominal, cands, valid)
+    j_set = _jacobian(nominal, nominal.design, cands, {c.key: c.value for c in cands}, valid)
     j_rot = _rotations(nominal, valid)
     m_vec = np.concatenate([measured[f][valid[f]] for f in flanks])
     if m_vec.size < len(cands) + len(flanks) + 1:
@@ -387,17 +390,7 @@ def correct(identification: Identification) -> Correction:
     cut = ident.design()
     base = nominal.deviations(cut)
     chosen = [by_key[k] for k in machine]
-    columns = []
-    for s in chosen:
-        value = ident.values[s.key]
-        plus = nominal.deviations(design_with(cut, (s,), {s.key: value + s.step}))
-        minus = nominal.deviations(design_with(cut, (s,), {s.key: value - s.step}))
-        for f in flanks:
-            valid[f] &= plus[f][1] & minus[f][1]
-        columns.append((plus, minus, s.step))
-    jac = np.stack(
-        [(_vector(p, valid) - _vector(m, valid)) / (2.0 * h) for p, m, h in columns], axis=1
-    )
+    jac = _jacobian(nominal, cut, chosen, ident.values, valid)
     target = -np.concatenate([base[f][0][valid[f]] for f in flanks])
     lows = np.array([s.low - ident.values[s.key] for s in chosen])
     highs = np.array([s.high - ident.values[s.key] for s in chosen])
