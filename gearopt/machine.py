@@ -220,6 +220,18 @@ class BaseMachineModel(abc.ABC):
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         """The design keys a study may tune, with bounds inside which every design is valid."""
 
+    def machine_table(self, design: Design) -> dict[str, Any]:
+        """The ``[machine]`` table (without ``model``) that states ``design``'s settings
+        explicitly and parses back to the same machine (:meth:`parse_machine`) without any
+        ``[synthesis]``: what the closed loop changes one key at a time.
+
+        The default is the design's own table; a model that derives settings (a synthesis, a
+        gear from the blank) writes them out.
+        """
+        table = dict(design.source.get("machine", {}))
+        table.pop("model", None)
+        return table
+
     def correction_settings(self, design: Design, member: str) -> tuple[CorrectionSetting, ...]:
         """The settings of ``member`` that the closed loop identifies from a measured flank
         topography and corrects (``gearopt correct``), with their values in ``design``.

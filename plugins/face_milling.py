@@ -720,6 +720,9 @@ class FaceMilling(BaseMachineModel):
     def correction_settings(self, design: Design, member: str) -> tuple[CorrectionSetting, ...]:
         return face_milling_correction.correction_settings(design, member)
 
+    def machine_table(self, design: Design) -> dict[str, Any]:
+        return machine_table(design.machine)
+
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: FaceMillingMachine = design.machine
         min_rb = MIN_PROFILE_RADIUS_DEPTHS * max(design.blank.whole_depth_mm)

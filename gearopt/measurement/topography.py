@@ -18,6 +18,7 @@ the toe: bias or twist); ``residual_rms_um`` what the six terms leave.
 
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 from collections.abc import Mapping
@@ -27,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.design import Design
+from gearopt.design_files import parse_design
 from gearopt.errors import GearoptWarning
 from gearopt.flank import FLANKS, FlankGrid
 from gearopt.measurement.grid import (
@@ -39,7 +41,13 @@ from gearopt.measurement.grid import (
 )
 from gearopt.plugins import get_machine_model
 
-__all__ = ["NominalMeasurement", "nominal_measurement", "split_deviation", "SPLIT_KEYS"]
+__all__ = [
+    "NominalMeasurement",
+    "explicit_design",
+    "nominal_measurement",
+    "split_deviation",
+    "SPLIT_KEYS",
+]
 
 SPLIT_KEYS = (
     "spacing_um",
@@ -91,6 +99,17 @@ class NominalMeasurement:
         return 1000.0 * math.radians(1.0) * self.grid.radius_mm * self.points[flank].circumferential
 
 
+def explicit_design(design: Design) -> Design:
+    """``design`` with its machine settings written out (the model's
+    :meth:`~gearopt.machine.BaseMachineModel.machine_table`, no ``[synthesis]``): the same
+    flanks, and every correction setting a key of its own."""
+    model = get_machine_model(design.model)
+    data = copy.deepcopy(dict(design.source))
+    data.pop("synthesis", None)
+    data["machine"] = {"model": design.model, **model.machine_table(design)}
+    return parse_design(data, path=design.path)
+
+
 def nominal_measurement(
     design: Design,
     member: str,
@@ -99,7 +118,9 @@ def nominal_measurement(
     margin_mm: float | None = None,
     flank_grid: FlankGrid | None = None,
 ) -> NominalMeasurement:
-    """Generate ``member``'s flanks of ``design`` and place the nominal grid on them."""
+    """Generate ``member``'s flanks of ``design`` and place the nominal grid on them (the
+    measurement's design is :func:`explicit_design` of it)."""
+    design = explicit_design(design)
     grid = measuring_grid(design.blank, member, points=points, margin_mm=margin_mm)
     flank_grid = flank_grid or FlankGrid()
     model = get_machine_model(design.model)
