@@ -5,7 +5,8 @@
 ``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
 ``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`);
-``gearopt bench`` times the kernels. Plugins add commands of their own through the
+``gearopt bench`` times the kernels; ``gearopt grid`` and ``gearopt correct`` the closed loop
+from measured flanks (:mod:`gearopt.measurement_cli`). Plugins add commands of their own through the
 ``gearopt_commands`` hook (:class:`gearopt.commands.BaseCommand`). Errors in the input are
 printed as one line naming the parameter, its value and the rule (exit status 2), the plugins'
 commands' errors too.
@@ -33,6 +34,7 @@ from gearopt.errors import DesignError, GearoptError, PluginError
 from gearopt.figures.report import write_report
 from gearopt.flank import FLANKS, MEMBERS
 from gearopt.flank_cli import add_flank_parser, parse_grid, print_warnings
+from gearopt.measurement_cli import add_measurement_parsers
 from gearopt.plausibility import caught, contact_findings, flank_findings
 from gearopt.plots import DEDICATED_FIGURES, plot_analysis
 from gearopt.plots_declared import plot_declared
@@ -439,6 +441,7 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     p.set_defaults(func=_cmd_bench)
     add_flank_parser(sub)
     add_blank_parser(sub)
+    add_measurement_parsers(sub)
     add_study_parser(sub)
     add_plugin_commands(sub, plugin_manager or default_plugin_manager())
     return parser

@@ -87,3 +87,9 @@ class PluginError(GearoptError):
 class StudyError(GearoptError):
     """A study file, its storage or a study run breaks a rule (unknown objective, bad bounds,
     a storage that cannot be opened, ...)."""
+
+
+class GearoptWarning(UserWarning):
+    """A design or result that is legal but unusual: worth the engineer's attention, not a
+    refusal. Commands collect these in their ``warnings`` list
+    (:func:`gearopt.plausibility.caught`); the message names the parameter and the rule."""

@@ -21,7 +21,13 @@ from gearopt.errors import NotAvailableError, PluginError
 if TYPE_CHECKING:
     from gearopt.design import Design, PairData
 
-__all__ = ["BaseMachineModel", "MachineSettings", "SearchDimension"]
+__all__ = [
+    "BaseMachineModel",
+    "CorrectionSetting",
+    "MachineSettings",
+    "SearchDimension",
+    "design_value",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -53,6 +59,72 @@ class SearchDimension:
             )
         if self.log and self.low <= 0.0:
             raise PluginError(f"search dimension {self.key}", self.low, "log scale needs low > 0")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CorrectionSetting:
+    """One design key the closed loop (:mod:`gearopt.measurement`) may identify and correct.
+
+    Attributes
+    ----------
+    key
+        Dotted design key, e.g. ``"machine.pinion.concave.radial_setting_mm"``; the design with
+        this key replaced (:func:`gearopt.design_files.with_overrides`) is cut with the changed
+        setting.
+    value
+        The key's value in the design.
+    step
+        Finite-difference step for the sensitivities, in the key's unit (small against the
+        errors to find, large against the generator's accuracy).
+    low, high
+        Bounds of an identified or corrected value.
+    also
+        Further dotted keys that hold the same setting and take the same value (one machine
+        setting that the design file writes in more than one table).
+    correctable
+        Whether the next cut may change it (a machine setting); False for what is identified
+        but corrected through other settings (a blade angle ground into the cutter).
+    """
+
+    key: str
+    value: float
+    step: float
+    low: float = -math.inf
+    high: float = math.inf
+    also: tuple[str, ...] = ()
+    correctable: bool = True
+
+    def overrides(self, value: float) -> dict[str, float]:
+        """``{dotted key: value}`` for :func:`gearopt.design_files.with_overrides`."""
+        return {k: float(value) for k in (self.key, *self.also)}
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.value) and math.isfinite(self.step) and self.step > 0.0):
+            raise PluginError(
+                f"correction setting {self.key}",
+                (self.value, self.step),
+                "needs a finite value and a finite step > 0",
+            )
+        if not self.low <= self.value <= self.high:
+            raise PluginError(
+                f"correction setting {self.key}",
+                (self.low, self.value, self.high),
+                "needs low <= value <= high",
+            )
+
+
+def design_value(source: Mapping[str, Any], key: str) -> Any:
+    """The value a dotted design key has in a design's source tables, the nearest enclosing
+    table giving it (``machine.pinion.convex.k`` falls back to ``machine.pinion.k``, then
+    ``machine.k``, the inheritance every built-in model uses); None when no table gives it."""
+    parts = key.split(".")
+    for depth in range(len(parts) - 1, 0, -1):
+        node: Any = source
+        for part in parts[:depth]:
+            node = node.get(part) if isinstance(node, Mapping) else None
+        if isinstance(node, Mapping) and parts[-1] in node:
+            return node[parts[-1]]
+    return None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -147,6 +219,49 @@ class BaseMachineModel(abc.ABC):
     @abc.abstractmethod
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         """The design keys a study may tune, with bounds inside which every design is valid."""
+
+    def machine_table(self, design: Design) -> dict[str, Any]:
+        """The ``[machine]`` table (without ``model``) that states ``design``'s settings
+        explicitly and parses back to the same machine (:meth:`parse_machine`) without any
+        ``[synthesis]``: what the closed loop changes one key at a time.
+
+        The default is the design's own table; a model that derives settings (a synthesis, a
+        gear from the blank) writes them out.
+        """
+        table = dict(design.source.get("machine", {}))
+        table.pop("model", None)
+        return table
+
+    def correction_settings(self, design: Design, member: str) -> tuple[CorrectionSetting, ...]:
+        """The settings of ``member`` that the closed loop identifies from a measured flank
+        topography and corrects (``gearopt correct``), with their values in ``design``.
+
+        Return the settings a machine operator corrects on this machine (for face milling the
+        radial setting, cradle angle, machine root angle, sliding base, blank offset, ratio of
+        roll, modified roll and blade angle), as keys of ``design`` so that
+        :func:`gearopt.design_files.with_overrides` cuts the changed gear. A member whose two
+        flanks are cut in one set-up shares its keys between them. The closed loop finds
+        which of them the grid cannot tell apart and identifies a well-posed subset.
+
+        The default offers the numeric keys of :meth:`search_space` that belong to ``member``
+        (steps a thousandth of their range); override it to offer the machine's settings.
+        """
+        out = []
+        for dim in self.search_space(design):
+            if f".{member}." not in f".{dim.key}":
+                continue
+            value = design_value(design.source, dim.key)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                continue
+            if not (math.isfinite(value) and dim.low <= value <= dim.high):
+                continue
+            step = 1e-3 * (dim.high - dim.low)
+            out.append(
+                CorrectionSetting(
+                    key=dim.key, value=float(value), step=step, low=dim.low, high=dim.high
+                )
+            )
+        return tuple(out)
 
     def generate_flank(
         self, design: Design, *, member: str, flank: str, grid: Any = None, tool_pass: int = 0

@@ -23,7 +23,7 @@ import warnings
 from collections.abc import Iterator, Mapping
 from typing import Any
 
-from gearopt.errors import DesignError
+from gearopt.errors import DesignError, GearoptWarning
 
 __all__ = [
     "MAX_INTERFERENCE_UM",
@@ -50,14 +50,23 @@ MIN_WORKING_DEPTH_SHARE = 0.5
 
 @contextlib.contextmanager
 def caught() -> Iterator[list[str]]:
-    """Collect the numerical warnings raised inside the block as warning strings (numpy's
-    RuntimeWarning: overflow, invalid value, division by zero), instead of lines on stderr."""
+    """Collect the warnings raised inside the block as warning strings instead of lines on
+    stderr: numpy's RuntimeWarning (overflow, invalid value, division by zero) as
+    ``"numerical: ..."`` and :class:`~gearopt.errors.GearoptWarning` (a legal but unusual
+    design, e.g. a root cut above its nominal line) as its message."""
     found: list[str] = []
     with warnings.catch_warnings(record=True) as records:
         warnings.simplefilter("always", RuntimeWarning)
+        warnings.simplefilter("always", GearoptWarning)
         yield found
     seen = set()
     for record in records:
+        if issubclass(record.category, GearoptWarning):
+            text = str(record.message)
+            if text not in seen:
+                seen.add(text)
+                found.append(text)
+            continue
         if not issubclass(record.category, RuntimeWarning):
             warnings.warn_explicit(record.message, record.category, record.filename, record.lineno)
             continue

@@ -118,9 +118,9 @@ def evaluate_trial(spec: StudySpec, number: int, params: Mapping[str, float]) ->
     start = time.perf_counter()
     pid = os.getpid()
     try:
-        design = spec.design_for(params)
         installed = evaluators()
-        with caught() as numerical:
+        with caught() as numerical:  # numerical warnings and legal-but-unusual designs
+            design = spec.design_for(params)
             evaluations = {
                 e.label: installed[e.evaluator].evaluate(design, e.conditions)
                 for e in spec.evaluations

@@ -100,6 +100,7 @@ LAYERS = (
         (
             "gearopt.analysis",
             "gearopt.figures",
+            "gearopt.measurement",
             "gearopt.plots",
             "gearopt.plots_declared",
             "gearopt.warmup",
@@ -124,6 +125,7 @@ LAYERS = (
             "gearopt.cli",
             "gearopt.flank_cli",
             "gearopt.blank_cli",
+            "gearopt.measurement_cli",
             "gearopt.study_cli",
             "gearopt.bench",
             "gearopt.json_schemas",

@@ -468,37 +468,45 @@ def test_tapered_tip_sweeps_the_root_cone(tapered, member):
 
 
 def test_root_reach_is_checked_at_toe_and_heel(conjugate, tapered):
-    """The blade's tip must reach the root line over the whole face: a tapered root cut with
+    """The blade's tip should reach the root line over the whole face: a tapered root cut with
     the machine root angle at the pitch angle misses the heel's root; a uniform-depth member
-    with the work tilted by 1 deg (the mean root line just reached) misses one end."""
-    g = tapered.blank.pitch_angle_deg[1]
-    with pytest.raises(DesignError, match="at the heel") as info:
-        gearopt.with_overrides(
-            tapered,
-            {"machine.gear.machine_root_angle_deg": g, "machine.gear.sliding_base_mm": 4.857},
-        )
-    assert info.value.parameter == "machine.gear.convex.sliding_base_mm"
-    g = conjugate.blank.pitch_angle_deg[1]
-    a_m, b_m = 90.0, conjugate.blank.mean_dedendum_mm[1]
-    tilt = math.radians(1.0)
-    reach = a_m * math.sin(tilt) + b_m * math.cos(tilt)  # the mean root line in the tip plane
-    with pytest.raises(DesignError, match="at the heel") as info:
-        gearopt.with_overrides(
+    with the work tilted (the mean root line just reached) misses one end. Below the clearance
+    the root is cut there, shallower (a warning naming the end); beyond it, the mating tip
+    would hit the root (an error)."""
+
+    def tilted(deg, sign):
+        g = conjugate.blank.pitch_angle_deg[1]
+        a_m, b_m = 90.0, conjugate.blank.mean_dedendum_mm[1]
+        tilt = math.radians(deg)
+        reach = sign * a_m * math.sin(tilt) + b_m * math.cos(tilt)  # the mean root line
+        return gearopt.with_overrides(
             conjugate,
             {
-                "machine.gear.machine_root_angle_deg": g + 1.0,
+                "machine.gear.machine_root_angle_deg": g + sign * deg,
                 "machine.gear.sliding_base_mm": reach,
             },
         )
-    assert "sliding_base_mm" in info.value.parameter
+
+    g = tapered.blank.pitch_angle_deg[1]
+    for case, end in (
+        (lambda: tilted(1.0, 1.0), "at the heel"),
+        (lambda: tilted(1.0, -1.0), "at the toe"),
+        (
+            lambda: gearopt.with_overrides(
+                tapered,
+                {"machine.gear.machine_root_angle_deg": g, "machine.gear.sliding_base_mm": 4.857},
+            ),
+            "at the heel",
+        ),
+    ):
+        with pytest.warns(gearopt.errors.GearoptWarning, match=end) as records:
+            case()
+        assert "clearance shrinks" in str(records[0].message)
+    with pytest.raises(DesignError, match="at the heel") as info:
+        tilted(5.0, 1.0)  # 14 mm x sin 5 deg = 1.2 mm above the root: more than the clearance
+    assert info.value.parameter == "machine.gear.convex.sliding_base_mm"
     with pytest.raises(DesignError, match="at the toe"):
-        gearopt.with_overrides(
-            conjugate,
-            {
-                "machine.gear.machine_root_angle_deg": g - 1.0,
-                "machine.gear.sliding_base_mm": -a_m * math.sin(tilt) + b_m * math.cos(tilt),
-            },
-        )
+        tilted(5.0, -1.0)
 
 
 def test_tapered_face_keeps_the_conjugate_pair_conjugate(conjugate):

@@ -162,16 +162,18 @@ from gearopt.design import MEMBERS, Design, PairData
 from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
-from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
+from gearopt.machine import BaseMachineModel, CorrectionSetting, MachineSettings, SearchDimension
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
+from gearopt_plugins.face_milling import correction
 from gearopt_plugins.face_milling import synthesis as fs
 from gearopt_plugins.face_milling.family import (
     CutterFlank,
     design_family,
 )
 from gearopt_plugins.face_milling.inverse import RealiseTECommand, inverse_tca
+from gearopt_plugins.face_milling.root_reach import check_root_reach
 from gearopt_plugins.face_milling.synthesis import SIDES
 
 __all__ = ["FaceMilling", "FaceMillingFlank", "FaceMillingMachine", "FaceMillingMember"]
@@ -221,7 +223,6 @@ MACHINE_KEYS = MEMBERS
 BLADE_SIDE = {"concave": 1.0, "convex": -1.0}
 BLADE_OF_FLANK = {"concave": "outside", "convex": "inside"}
 #: the blade's tip may stay this far above the root line (rounding of printed settings)
-ROOT_REACH_TOL_MM = 1e-6
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -425,39 +426,8 @@ def _parse_flank(
         work_phase_deg=read_number(merged, "work_phase_deg", where, 0.0, gt=-360.0, lt=360.0),
     )
     spec = FaceMillingFlank(**values)
-    _check_root_reach(spec, blank, index, where)
+    check_root_reach(spec, blank, index, where)
     return spec
-
-
-def _root_height_mm(spec: FaceMillingFlank, blank, index: int, cone_distance_mm):
-    """z_m of the member's root line (the root cone's generatrix nearest the cradle at centre
-    roll) at a cone distance: the blade's tip (the plane z_m = 0) reaches it where this is
-    <= 0. The line is linear in the cone distance, so toe and heel bound it."""
-    g = math.radians(spec.machine_root_angle_deg)
-    dg = g - math.radians(blank.pitch_angle_deg[index])
-    apex_z = spec.machine_center_to_back_mm * math.sin(g) - spec.sliding_base_mm
-    return (
-        apex_z
-        + cone_distance_mm * math.sin(dg)
-        + blank.dedendum_at_mm(index, cone_distance_mm) * math.cos(dg)
-    )
-
-
-def _check_root_reach(spec: FaceMillingFlank, blank, index: int, where: str) -> None:
-    """The blade's tip must reach the root line over the whole face (toe and heel; the root
-    cone's generatrix with tapered depth)."""
-    ends = (("toe", blank.inner_cone_distance_mm), ("heel", blank.outer_cone_distance_mm))
-    heights = [(_root_height_mm(spec, blank, index, a), name, a) for name, a in ends]
-    root_z, name, a = max(heights)
-    if root_z > ROOT_REACH_TOL_MM:
-        raise DesignError(
-            f"{where}.sliding_base_mm",
-            spec.sliding_base_mm,
-            f"the blade cannot reach the root: its tip stays {root_z:.4f} mm above the root "
-            f"line at the {name} (cone distance {a:.3f} mm); the tip must reach the root cone "
-            "over the whole face (sliding_base_mm, machine_center_to_back_mm and "
-            "machine_root_angle_deg place the work; module docstring)",
-        )
 
 
 def _parse_member(table: Mapping[str, Any], member: str, pair: PairData) -> FaceMillingMember:
@@ -698,6 +668,12 @@ class FaceMilling(BaseMachineModel):
             if tool_pass:
                 out[flank] = replace(out[flank], tooth=tool_pass if hand == "right" else -tool_pass)
         return out
+
+    def correction_settings(self, design: Design, member: str) -> tuple[CorrectionSetting, ...]:
+        return correction.correction_settings(design, member)
+
+    def machine_table(self, design: Design) -> dict[str, Any]:
+        return machine_table(design.machine)
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: FaceMillingMachine = design.machine
