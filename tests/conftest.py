@@ -20,13 +20,15 @@ SEED_CASES = Path(__file__).parent / "data" / "seed_cases.json"
 
 @pytest.fixture(scope="session", autouse=True)
 def _compiled_kernels():
-    """The compiled kernels (contact engine, loaded contact) compiled (or loaded from the disk
-    cache) once in this process before any test starts a subprocess: CLI and study workers
-    then load the cache rather than compile it side by side."""
+    """The compiled kernels (contact engine, mesh cycle, loaded contact) compiled (or loaded
+    from the disk cache) once in this process before any test starts a subprocess: CLI and
+    study workers then load the cache rather than compile it side by side."""
     from gearopt.contact import kernel_warmup as contact_kernels
     from gearopt.loaded import kernels as loaded_kernels
+    from gearopt.mesh import kernels as mesh_kernels
 
     contact_kernels.warm()
+    mesh_kernels.warm()
     loaded_kernels.warm()
 
 
