@@ -545,3 +545,17 @@ def test_the_engine_finds_where_the_coast_contact_leaves_the_heel(section53):
         assert engine[0] == pytest.approx(textbook[0], abs=1e-4)
         assert engine[2] == pytest.approx(textbook[2][0], abs=0.005)
         assert engine[2] == pytest.approx(field.pinion.face_mm[-1], abs=0.005)  # the heel
+
+
+def test_a_pattern_with_no_pair_near_its_mean_point_is_still_measured():
+    """Section 5.3 on a coarse grid with the pinion offset 0.1 mm: the pattern's contacts lie
+    farther than a major axis from M along the path, so the rays across the path have no pair
+    near M. They scan the nearest pair's zone (this raised a ValueError before) and every
+    figure is finite."""
+    design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
+    options = AnalysisOptions.from_conditions(
+        {"grid": [13, 9], "positions": 9, "misalignment": {"offset_mm": 0.1}}, design=design
+    )
+    for side, tc in contact_sides(meshed_pair(design, options), options).items():
+        assert math.isfinite(tc.te_peak_to_peak_arcsec), side
+        assert np.all(np.isfinite(tc.mean_point_mm)), side

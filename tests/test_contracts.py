@@ -17,6 +17,13 @@ from .test_declarations import toy_evaluator_site  # noqa: F401  (a fixture)
 SMALL = {"grid": [13, 9], "positions": 9}
 SECTION53 = STUDIES / "seed001_section5_3.toml"
 TE_TARGET = STUDIES / "fourth_order_te" / "case1.toml"
+FACE_MILLING = STUDIES / "face_milling_conjugate.toml"
+#: the closed loop's measured gear (absolute paths: the contract reads the design from text)
+TOPOGRAPHY = {
+    "member": "gear",
+    "reference": str(FACE_MILLING),
+    "target": str(STUDIES / "closed_loop" / "face_milling_gear_measured.csv"),
+}
 
 #: evaluator -> (design file, conditions)
 EVALUATORS = {
@@ -25,6 +32,7 @@ EVALUATORS = {
     "ease-off": (SECTION53, SMALL),
     "ltca": (SECTION53, {**SMALL, "torque_nm": [50.0]}),
     "chain-error": (STUDIES / "seed001_table3.toml", {}),
+    "topography": (FACE_MILLING, TOPOGRAPHY),
 }
 
 
@@ -97,6 +105,10 @@ OBJECTIVES = {
     "max_contact_pressure": (
         lambda: {"limit_mpa": 1500.0, "side": "both"},
         lambda: {"ltca": _evaluate("ltca", "ltca", SECTION53, {**SMALL, "torque_nm": [20, 50]})},
+    ),
+    "topography": (
+        lambda: {"flank": "convex"},
+        lambda: {"topography": _evaluate("topography", "topography", FACE_MILLING, TOPOGRAPHY)},
     ),
     "edge_loading": (
         lambda: {},

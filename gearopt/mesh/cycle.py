@@ -404,8 +404,10 @@ class MeshCycle:
             m = middle[k, 0]
             offset = np.abs((x["pattern_contact_mm"] - m) @ path[k])
             near = np.flatnonzero(offset <= major[k, 0] + 1.0)
+            if not near.size and offset.size:  # no pair near M along the path: the nearest
+                near = np.array([int(np.argmin(offset))])
             for slot in range(4):
-                if slot < 2:
+                if slot < 2 or not near.size:
                     rows_here, key, pos = [first[k]], [-(10**6)], [0]
                 else:
                     rows_here = first[k] + 3 + near
