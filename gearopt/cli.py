@@ -1,6 +1,6 @@
 """The ``gearopt`` command.
 
-``gearopt plugins`` lists every machine model, evaluator and objective with its distribution;
+``gearopt plugins`` lists every machine model, evaluator, objective, plugin command and benchmark;
 ``gearopt settings DESIGN.toml`` prints the blank and the basic machine-tool settings;
 ``gearopt flanks DESIGN.toml`` generates both members' flanks and measures them;
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
@@ -387,7 +387,7 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     )
     parser.add_argument("--version", action="version", version=f"gearopt {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("plugins", help="list machine models, evaluators and objectives")
+    p = sub.add_parser("plugins", help="list machine models, evaluators, objectives, plugin commands and benchmarks")
     p.add_argument("--json", action="store_true", help="print JSON (with the declarations)")
     p.add_argument(
         "--options", action="store_true", help="also list the evaluators' and objectives' options"
