@@ -387,7 +387,10 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     )
     parser.add_argument("--version", action="version", version=f"gearopt {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("plugins", help="list machine models, evaluators, objectives, plugin commands and benchmarks")
+    p = sub.add_parser(
+        "plugins",
+        help="list machine models, evaluators, objectives, plugin commands and benchmarks",
+    )
     p.add_argument("--json", action="store_true", help="print JSON (with the declarations)")
     p.add_argument(
         "--options", action="store_true", help="also list the evaluators' and objectives' options"
