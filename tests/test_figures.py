@@ -188,13 +188,14 @@ def test_backlash_shows_the_window(case):
     assert low <= WINDOW_UM[0] and high >= WINDOW_UM[1]
 
 
-def test_misalignment_sweep_centre_is_the_analysis(case):
+def test_misalignment_sweep_centre_is_the_analysis():
+    """On section 5.3 (one design is enough for the sweep's numbers)."""
     from gearopt.figures.sweep import misalignment_sweep
 
-    if case["name"] != "section5_3":
-        pytest.skip("one design is enough for the sweep's numbers")
-    sweep = misalignment_sweep(case["design"], case["data"]["options"])
-    tca = case["evaluations"]["tca"].report
+    design = gearopt.load_design(DESIGNS["section5_3"])
+    evaluation = evaluators()["tca"].evaluate(design, {})
+    sweep = misalignment_sweep(design, figure_data(design, evaluation)["options"])
+    tca = evaluation.report
     for side, key in (("drive", "tca"), ("coast", "tca_coast")):
         for letter in ("V", "H", "J", "Sigma"):
             np.testing.assert_allclose(
