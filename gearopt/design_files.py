@@ -27,7 +27,14 @@ if TYPE_CHECKING:
 
     from gearopt.iso23509 import StandardBlank
 
-__all__ = ["load_design", "loads_design", "parse_design", "with_overrides", "load_standard_blank"]
+__all__ = [
+    "load_design",
+    "loads_design",
+    "parse_design",
+    "source_with_machine",
+    "with_overrides",
+    "load_standard_blank",
+]
 
 
 def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
@@ -140,6 +147,16 @@ def load_standard_blank(path: str | Path) -> StandardBlank:
         )
     _, standard = pair_from_tables(read_table(data, "pair", ""), read_table(data, "blank", ""))
     return standard
+
+
+def source_with_machine(design: Design, table: Mapping[str, Any]) -> dict[str, Any]:
+    """A copy of ``design``'s source tables with ``[machine]`` replaced by ``table`` (settings
+    written out, without ``model``) and no ``[synthesis]``: what a design with plain settings
+    parses from (:func:`parse_design`) or writes out (``tomli_w``)."""
+    data = copy.deepcopy(dict(design.source))
+    data.pop("synthesis", None)
+    data["machine"] = {"model": design.model, **table}
+    return data
 
 
 def with_overrides(

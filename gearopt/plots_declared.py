@@ -15,23 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gearopt.errors import GearoptError, NotAvailableError
+from gearopt.errors import GearoptError
+from gearopt.figures.draw import pyplot
 
-__all__ = ["plot_declared", "pyplot"]
-
-
-def pyplot():
-    """matplotlib.pyplot on the Agg backend; :class:`NotAvailableError` without matplotlib."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:  # pragma: no cover - depends on the environment
-        raise NotAvailableError(
-            "--plot", "matplotlib", "needs matplotlib: pip install 'gearopt[plot]'"
-        ) from None
-    return plt
+__all__ = ["plot_declared"]
 
 
 def _panels(evaluator, evaluation) -> list[tuple[str, object]]:

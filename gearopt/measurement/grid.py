@@ -186,9 +186,12 @@ class FlankPoints:
     @property
     def circumferential(self) -> NDArray:
         """``(n_face, n_profile)`` n . e_Theta: the normal's component around the axis."""
-        th = self.polar_angle_rad
-        n = self.normals
-        return -np.sin(th) * n[..., 0] + np.cos(th) * n[..., 1]
+        return _around(self.polar_angle_rad, self.normals)
+
+
+def _around(theta_rad: NDArray, normals: NDArray) -> NDArray:
+    """n . e_Theta of unit normals at polar angles Theta (their component around the axis)."""
+    return -np.sin(theta_rad) * normals[..., 0] + np.cos(theta_rad) * normals[..., 1]
 
 
 def _polar(flank: FlankMap, axial_mm, radius_mm) -> tuple[NDArray, NDArray]:
@@ -224,11 +227,9 @@ def flank_points(grid: MeasuringGrid, flank: FlankMap) -> FlankPoints:
     n = np.cross(r_s, r_h)
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     # out of the tooth: the side of the flank's own normals (its nodes' circumferential sense)
-    around = -np.sin(flank.polar_angle_rad) * flank.normals[..., 0]
-    around += np.cos(flank.polar_angle_rad) * flank.normals[..., 1]
+    around = _around(flank.polar_angle_rad, flank.normals)
     sense = np.sign(np.median(around[flank.mask])) if flank.mask.any() else 1.0
-    mine = -np.sin(theta) * n[..., 0] + np.cos(theta) * n[..., 1]
-    n *= np.where(np.sign(mine) == sense, 1.0, -1.0)[..., None]
+    n *= np.where(np.sign(_around(theta, n)) == sense, 1.0, -1.0)[..., None]
     if flank.surface is not None and generated.any():
         s, t = flank.to_grid(big_l[generated], big_r[generated])
         n[generated] = flank.surface.geometry_at(s, t)["normal"]

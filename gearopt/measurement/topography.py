@@ -18,7 +18,6 @@ the toe: bias or twist); ``residual_rms_um`` what the six terms leave.
 
 from __future__ import annotations
 
-import copy
 import math
 import warnings
 from collections.abc import Mapping
@@ -28,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.design import Design
-from gearopt.design_files import parse_design
+from gearopt.design_files import parse_design, source_with_machine
 from gearopt.errors import GearoptWarning
 from gearopt.flank import FLANKS, FlankGrid
 from gearopt.measurement.grid import (
@@ -103,11 +102,8 @@ def explicit_design(design: Design) -> Design:
     """``design`` with its machine settings written out (the model's
     :meth:`~gearopt.machine.BaseMachineModel.machine_table`, no ``[synthesis]``): the same
     flanks, and every correction setting a key of its own."""
-    model = get_machine_model(design.model)
-    data = copy.deepcopy(dict(design.source))
-    data.pop("synthesis", None)
-    data["machine"] = {"model": design.model, **model.machine_table(design)}
-    return parse_design(data, path=design.path)
+    table = get_machine_model(design.model).machine_table(design)
+    return parse_design(source_with_machine(design, table), path=design.path)
 
 
 def nominal_measurement(

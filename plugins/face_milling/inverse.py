@@ -30,7 +30,6 @@ settings.
 from __future__ import annotations
 
 import argparse
-import copy
 import json
 import math
 from dataclasses import dataclass
@@ -44,7 +43,7 @@ from numpy.typing import NDArray
 from gearopt.commands import BaseCommand
 from gearopt.contact import Placement
 from gearopt.design import Design
-from gearopt.design_files import load_design
+from gearopt.design_files import load_design, source_with_machine
 from gearopt.errors import SettingsError
 from gearopt.flank import cone_coordinates
 from gearopt.kinematics import rot_z
@@ -414,9 +413,7 @@ class RealiseTECommand(BaseCommand):
         design = load_design(args.design, plugin_manager=self.plugin_manager)
         model = get_machine_model(design.model, plugin_manager=self.plugin_manager)
         table, report = model.realise_te_target(design, side=args.side)
-        data = copy.deepcopy(dict(design.source))
-        data.pop("synthesis", None)
-        data["machine"] = {"model": design.model, **table}
+        data = source_with_machine(design, table)
         header = (
             f"# {Path(args.design).name} with the pinion's {report.get('pinion_flank', '')} roll "
             f"fitted to [te_target] by `gearopt realise-te` (inverse TCA).\n"
