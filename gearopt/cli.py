@@ -319,6 +319,14 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_dashboard(args: argparse.Namespace) -> int:
+    from gearopt.dashboard import dashboard_app, serve
+    from gearopt.studyfile import load_study_spec
+
+    serve(dashboard_app(load_study_spec(args.study), args.storage), args.host, args.port)
+    return 0
+
+
 def _torques(text: str | None) -> list[float] | None:
     """The ``--torque-nm`` list, or None."""
     if text is None:
@@ -436,6 +444,15 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     p.add_argument("--out", required=True, metavar="DIR", help="folder of the HTML page")
     p.add_argument("--backlash-window-um", metavar="MIN,MAX", help="backlash window to draw")
     p.set_defaults(func=_cmd_report)
+
+    p = sub.add_parser(
+        "dashboard", help="optuna-dashboard on a study, its best trials the feasible ones"
+    )
+    p.add_argument("study", help="study TOML file")
+    p.add_argument("--storage", help="SQLAlchemy storage URL (default: the study's own)")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (127.0.0.1)")
+    p.add_argument("--port", type=int, default=8080, help="port (8080; 0: any free port)")
+    p.set_defaults(func=_cmd_dashboard)
 
     p = sub.add_parser("bench", help="time the kernels (medians over fresh one-thread processes)")
     p.add_argument("names", nargs="*", help="benchmarks to run (default: all)")

@@ -117,6 +117,7 @@ LAYERS = (
             "gearopt.best",
             "gearopt.study",
             "gearopt.export",
+            "gearopt.dashboard",
         ),
     ),
     (

@@ -10,12 +10,15 @@ import json
 import shutil
 import subprocess
 import sys
+import urllib.request
 from pathlib import Path
 from wsgiref.util import setup_testing_defaults
 
 import optuna
 import pytest
 import sqlalchemy as sa
+
+from gearopt.dashboard import FeasibleBestTrials, feasible_best
 
 optuna_dashboard = pytest.importorskip("optuna_dashboard")
 
@@ -42,7 +45,8 @@ FEASIBLE = (
 
 def _get(app, path: str):
     """GET ``path`` from a WSGI app in this process; the decoded JSON body."""
-    environ: dict = {"PATH_INFO": path, "REQUEST_METHOD": "GET"}
+    path, _, query = path.partition("?")
+    environ: dict = {"PATH_INFO": path, "QUERY_STRING": query, "REQUEST_METHOD": "GET"}
     setup_testing_defaults(environ)
     environ["wsgi.input"] = io.BytesIO(b"")
     status: list[str] = []
@@ -118,16 +122,85 @@ def test_the_dashboard_lists_every_trials_constraints_and_a_feasible_front(examp
 
 
 @pytest.mark.slow
-def test_the_dashboard_apis_best_trials_card_ignores_constraints_upstream(example_study):
+def test_gearopts_dashboard_offers_feasible_best_trials_only(example_study):
     # optuna-dashboard 0.21 computes the API's ``best_trials`` (its "Best Trials" card) as the
     # Pareto front of every COMPLETE trial, constraints aside (_app.py, get_study_detail); the
-    # fix is upstream (filter the trials by their ``constraints`` first, as its Pareto plot
-    # does). This test says when that changes.
-    app = optuna_dashboard.wsgi(optuna.storages.RDBStorage(example_study))
-    (study_summary,) = _get(app, "/api/studies")["study_summaries"]
-    detail = _get(app, f"/api/studies/{study_summary['study_id']}")
+    # upstream fix would filter the trials by their ``constraints`` first, as its Pareto plot
+    # does. The first half says when upstream changes; gearopt's filter around the same app
+    # (what ``gearopt dashboard`` serves) answers with the feasible front.
+    storage = optuna.storages.RDBStorage(example_study)
+    raw = optuna_dashboard.wsgi(storage)
+    (study_summary,) = _get(raw, "/api/studies")["study_summaries"]
+    path = f"/api/studies/{study_summary['study_id']}"
+    detail = _get(raw, path)
     trials = detail["trials"]
     unconstrained = {
         t["number"] for t in trials if not any(_dominates(o["values"], t["values"]) for o in trials)
     }
     assert {t["number"] for t in detail["best_trials"]} == unconstrained
+
+    app = FeasibleBestTrials(raw)
+    filtered = _get(app, path)
+    study = optuna.load_study(study_name=NAME, storage=storage)
+    best = {t["number"] for t in filtered["best_trials"]}
+    assert best == {t.number for t in study.best_trials}  # Optuna's feasible front
+    assert best != unconstrained  # the example holds an infeasible trial on the raw front
+    assert all(all(c <= 0 for c in t["constraints"]) for t in filtered["best_trials"])
+    assert filtered["trials"] == trials  # the rest of the answer unchanged
+    # a later page of trials: the front still over every trial
+    page = _get(app, path + "?after=4")
+    assert [t["number"] for t in page["trials"]] == [t["number"] for t in trials[4:]]
+    assert {t["number"] for t in page["best_trials"]} == best
+    # other endpoints pass through
+    assert _get(app, "/api/studies") == _get(raw, "/api/studies")
+
+
+def test_feasible_best_one_objective_and_maximised():
+    trials = [
+        {"number": 0, "state": "Complete", "values": [1.0], "constraints": [0.5]},
+        {"number": 1, "state": "Complete", "values": [3.0], "constraints": [-1.0]},
+        {"number": 2, "state": "Complete", "values": [2.0], "constraints": [0.0]},
+        {"number": 3, "state": "Fail", "values": None, "constraints": []},
+    ]
+    assert [t["number"] for t in feasible_best(trials, ["minimize"])] == [2]
+    assert [t["number"] for t in feasible_best(trials, ["maximize"])] == [1]
+    assert feasible_best(trials[:1], ["minimize"]) == []
+
+
+def test_the_dashboard_command_refuses_a_study_never_run(tmp_path):
+    shutil.copy(STUDIES / f"{NAME}.toml", tmp_path)
+    shutil.copy(STUDIES / "seed001_section5_3.toml", tmp_path)
+    run = subprocess.run(
+        [sys.executable, "-m", "gearopt.cli", "dashboard", f"{NAME}.toml", "--port", "0"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and "run it first" in run.stderr
+    assert not list(tmp_path.glob("*.db"))  # nothing created
+
+
+@pytest.mark.slow
+def test_the_dashboard_command_serves_the_filtered_api(example_study, tmp_path):
+    folder = Path(example_study.removeprefix("sqlite:///")).parent
+    server = subprocess.Popen(
+        [sys.executable, "-m", "gearopt.cli", "dashboard", f"{NAME}.toml", "--port", "0"],
+        cwd=folder,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        line = server.stdout.readline()
+        url = line.split()[3]  # "gearopt dashboard on http://127.0.0.1:PORT/ (...)"
+        with urllib.request.urlopen(url + "api/studies", timeout=30) as answer:
+            (summary,) = json.load(answer)["study_summaries"]
+        with urllib.request.urlopen(url + f"api/studies/{summary['study_id']}") as answer:
+            detail = json.load(answer)
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
+    study = optuna.load_study(study_name=NAME, storage=example_study)
+    assert {t["number"] for t in detail["best_trials"]} == {t.number for t in study.best_trials}
