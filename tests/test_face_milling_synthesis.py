@@ -299,6 +299,17 @@ def test_a_path_the_pinion_cannot_realise_is_named():
         parse_design(_with(path_angle_deg=0.0))
 
 
+def test_a_te_level_out_of_reach_is_named_with_the_users_sign():
+    # the sign of te_level_arcsec is ignored (the TE is negative away from M); the error printed
+    # the stored negative level and the reached one with their signs flipped
+    with pytest.raises(SettingsError) as info:
+        parse_design(_with(te_level_arcsec=290.0))
+    text = str(info.value)
+    assert text.startswith("synthesis.drive.te_level_arcsec = 290.0: ")
+    reached = float(text.split("reaches ")[1].split(" arcsec")[0])
+    assert 200.0 < reached < 290.0
+
+
 def test_missing_synthesis_keys_are_named_together():
     # issue 19 item 5: the required [synthesis] keys came one error at a time
     data = tomllib.loads(SEED002.read_text())

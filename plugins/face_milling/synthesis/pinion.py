@@ -534,8 +534,8 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
         ),
         "te_level_arcsec": (
             abs(local.lag_curvature / lag_target - 1.0) / TOLERANCE["relative"],
-            targets.te_level_arcsec,
-            f"{report.te_level_arcsec:.3f} arcsec",
+            abs(targets.te_level_arcsec),  # the magnitude the user gave (its sign is ignored)
+            f"{abs(report.te_level_arcsec):.3f} arcsec",
         ),
     }
     key = max(misses, key=lambda k: misses[k][0])
@@ -556,7 +556,7 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
             f"unit normals' match close to {report.first_order_residual:.1e} only, "
             f"{TOLERANCE['first_order']:g} needed) while meeting ellipse_major_axis_mm = "
             f"{targets.ellipse_major_axis_mm:g} mm, path_angle_deg = "
-            f"{targets.path_angle_deg:g} deg and te_level_arcsec = {targets.te_level_arcsec:g}: "
+            f"{targets.path_angle_deg:g} deg and te_level_arcsec = {abs(targets.te_level_arcsec):g}: "
             "ask a shorter ellipse or a lower TE level, or move M (mean_point_face_mm, "
             "mean_point_profile_mm; default the flank centre)",
         )
