@@ -38,11 +38,12 @@ GRID = FlankGrid(n_face=5, n_profile=5)
 def converted(entry: dict, flank: str) -> dict:
     """One printed flank setting in gearopt's keys (docs/printed_settings.md), with the reading
     of the signs the design adopts: q and E_m as printed, L_m negated."""
-    alpha = 180.0 - entry["psi_deg"] if flank == "concave" else entry["psi_deg"]
+    psi = entry["psi_deg"] * EFFECTIVE  # the program's trigonometry sees psi, not 180 - psi
+    alpha = 180.0 - psi if flank == "concave" else psi
     shift_mm = -entry["L_m"] * MM_PER_IN
     return {
         "cutter_point_radius_mm": entry["r"] * MM_PER_IN,
-        "blade_pressure_angle_deg": alpha * EFFECTIVE,
+        "blade_pressure_angle_deg": alpha,
         "radial_setting_mm": entry["s"] * MM_PER_IN,
         "cradle_angle_deg": entry["q_deg"] * EFFECTIVE,
         "blank_offset_mm": entry["E_m"] * MM_PER_IN,
