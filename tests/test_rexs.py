@@ -249,3 +249,24 @@ def test_the_xml_form_is_refused_clearly(tmp_path):
     path.write_text('<?xml version="1.0"?><model/>', encoding="utf-8")
     with pytest.raises(RexsError, match="XML form"):
         load_rexs(path)
+
+
+def test_settings_gearopt_derives_are_checked_against_the_file(documents):
+    """A cyclo-palloid file whose machine distance is not the one gearopt derives from the
+    cutter (here 0.01 mm off, or without gearopt's additional slope angle) is refused."""
+    base = documents["cyclo-palloid"]
+    doc = copy.deepcopy(base)
+    for a in _component(doc, "bevel_gear_manufacturing_settings", "gear convex settings")[
+        "attributes"
+    ]:
+        if a["id"] == "radial_distance":
+            a["floating_point"] += 0.01
+    with pytest.raises(RexsError, match="gear convex.radial_distance"):
+        rexs_tables(doc)
+    doc = copy.deepcopy(base)
+    c = _component(doc, "bevel_gear_manufacturing_settings", "pinion concave settings")
+    c["attributes"] = [
+        a for a in c["attributes"] if a["id"] != CUSTOM_PREFIX + "additional_slope_angle"
+    ]
+    with pytest.raises(RexsError, match="pinion concave"):
+        rexs_tables(doc)

@@ -307,12 +307,9 @@ def parse_model(document: Mapping[str, Any]) -> dict[str, Any]:
         for role in ("gear_1", "gear_2")
     ]
     attrs = [_read_attributes(c, f"bevel_gear {c.get('name') or c['id']}") for c in pair]
-    teeth = [a.get("number_of_teeth", RexsValue(0, "none")).value for a in attrs]
-    order = (
-        (1, 0)
-        if isinstance(teeth[0], int) and isinstance(teeth[1], int) and (teeth[1] < teeth[0])
-        else (0, 1)
-    )
+    teeth = [a.get("number_of_teeth", RexsValue(None, "none")).value for a in attrs]
+    counted = all(isinstance(t, int) and not isinstance(t, bool) for t in teeth)
+    order = (1, 0) if counted and teeth[1] < teeth[0] else (0, 1)
     gears = {m: pair[i] for m, i in zip(MEMBERS, order, strict=True)}
     gear_attrs = {m: attrs[i] for m, i in zip(MEMBERS, order, strict=True)}
     hands = {}

@@ -19,12 +19,15 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from gearopt.design import MEMBERS, Design, PairData, pair_from_table
 from gearopt.design_files import parse_design
 from gearopt.errors import GearoptError, RexsError
 from gearopt.plugins import get_machine_model
 from gearopt.rexs.attributes import (
     CUSTOM_PREFIX,
+    RexsMachine,
     RexsValue,
     read_integer,
     read_number,
@@ -35,7 +38,14 @@ from gearopt.rexs.document import MISALIGNMENT, export_document, parse_model
 if TYPE_CHECKING:
     import pluggy
 
-__all__ = ["export_rexs", "load_rexs", "read_rexs_file", "rexs_tables", "write_rexs"]
+__all__ = [
+    "check_settings",
+    "export_rexs",
+    "load_rexs",
+    "read_rexs_file",
+    "rexs_tables",
+    "write_rexs",
+]
 
 
 def export_rexs(
@@ -229,7 +239,45 @@ def rexs_tables(
         tables["misalignment"] = misalignment
     if compensation:
         tables["compensation"] = compensation
+    design = parse_design(tables, plugin_manager=plugin_manager)
+    check_settings(parsed["machine"], machine_model.rexs_export(design))
     return tables
+
+
+#: how far a setting of the file may lie from the one gearopt derives (mm, deg or none): the
+#: rounding of printed settings, far below what moves a flank by a micrometre in the check
+SETTING_TOLERANCE = 1e-4
+
+
+def check_settings(given: RexsMachine, derived: RexsMachine) -> None:
+    """Refuse a file whose settings gearopt derives otherwise: every REXS attribute of a tool
+    or settings component that both the file (``given``) and the machine model's export of the
+    design read from it (``derived``) hold must agree within :data:`SETTING_TOLERANCE` (a
+    cyclo-palloid machine distance that gearopt computes from the cutter, read as another tool
+    wrote it). Custom attributes are not compared."""
+    for (member, flank), step in derived.steps.items():
+        if (member, flank) not in given.steps:
+            continue
+        theirs = given.steps[(member, flank)]
+        for kind, ours, found in (
+            ("bevel_gear_tool", step.tool, theirs.tool),
+            ("bevel_gear_manufacturing_settings", step.settings, theirs.settings),
+        ):
+            for attribute, value in ours.items():
+                if attribute.startswith(CUSTOM_PREFIX) or attribute not in found:
+                    continue
+                a = np.atleast_1d(np.asarray(value.value, dtype=float))
+                b = np.atleast_1d(np.asarray(found[attribute].value, dtype=float))
+                n = max(a.size, b.size)
+                a, b = np.pad(a, (0, n - a.size)), np.pad(b, (0, n - b.size))
+                if np.any(np.abs(a - b) > SETTING_TOLERANCE * np.maximum(1.0, np.abs(a))):
+                    raise RexsError(
+                        f"{kind} {member} {flank}.{attribute}",
+                        found[attribute].value,
+                        f"gearopt derives {value.value!r} {value.unit} from the file's other "
+                        "data (the machine model's inputs, docs/rexs.md); the file's value "
+                        "disagrees, so gearopt would cut another flank",
+                    )
 
 
 def _pair_data(pair: Mapping[str, Any]) -> PairData:
