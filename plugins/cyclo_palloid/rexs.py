@@ -28,7 +28,6 @@ from collections.abc import Mapping
 from typing import Any
 
 from gearopt.design import MEMBERS
-from gearopt.errors import RexsError
 from gearopt.flank import FLANKS
 from gearopt.rexs.attributes import (
     CUSTOM_PREFIX,
@@ -40,6 +39,7 @@ from gearopt.rexs.attributes import (
     refuse_unmodelled,
     standard,
 )
+from gearopt_plugins.face_hobbing.rexs import DERIVED, agree, derived_settings
 
 __all__ = ["from_rexs", "to_rexs"]
 
@@ -52,15 +52,6 @@ CUSTOM_TOOL = {
     "rake_angle_deg": ("rake_angle", "deg"),
 }
 SLOPE = CUSTOM_PREFIX + "additional_slope_angle"
-#: derived settings written for information: attribute -> settings field ({b}: inner/outer)
-DERIVED = {
-    "radial_distance": "{b}_machine_distance_mm",
-    "center_roll_position": "{b}_cradle_angle_deg",
-    "machine_root_angle": "machine_root_angle_deg",
-    "sliding_base": "sliding_base_mm",
-    "work_offset": "blank_offset_mm",
-    "machine_center_to_crossing_point": "machine_center_to_back_mm",
-}
 
 
 def to_rexs(machine: Any, settings: Mapping[str, Any]) -> RexsMachine:
@@ -91,27 +82,10 @@ def to_rexs(machine: Any, settings: Mapping[str, Any]) -> RexsMachine:
             for key, (name, unit) in CUSTOM_TOOL.items():
                 attribute, value = custom(name, float(values[key]), unit)
                 tool[attribute] = value
-            derived = {
-                a: standard(a, float(getattr(basic, f.format(b=blades))))
-                for a, f in DERIVED.items()
-            }
-            derived["ratio_of_roll"] = standard("ratio_of_roll", 1.0 / basic.gear_to_cradle_roll)
+            derived = derived_settings(basic, f"{blades}_")
             name, value = custom("additional_slope_angle", basic.additional_slope_angle_deg, "deg")
             steps[(member, flank)] = RexsStep(tool=tool, settings={name: value, **derived})
     return RexsMachine(steps=steps)
-
-
-def _agree(found: dict[str, Any], key: str) -> Any:
-    """The one value the steps give for ``key`` (``{where: value}``), else an error."""
-    first_where, first = next(iter(found.items()))
-    for where, value in found.items():
-        if value != first:
-            raise RexsError(
-                where,
-                value,
-                f"the cyclo-palloid model has one {key} here; {first_where} gives {first!r}",
-            )
-    return first
 
 
 def from_rexs(machine: RexsMachine) -> dict[str, Any]:
@@ -156,9 +130,9 @@ def from_rexs(machine: RexsMachine) -> dict[str, Any]:
                 read_number(step.settings, SLOPE, where_set, unit="deg", default=0.0)
             )
         for key, found in member_values.items():
-            table[key] = _agree(found, key)
+            table[key] = agree(found, key, "cyclo-palloid")
         out[member] = table
-    out["blade_groups"] = _agree(shared["blade_groups"], "number of blade groups")
+    out["blade_groups"] = agree(shared["blade_groups"], "number of blade groups", "cyclo-palloid")
     if shared["blade_module_mm"]:
-        out["blade_module_mm"] = _agree(shared["blade_module_mm"], "blade module")
+        out["blade_module_mm"] = agree(shared["blade_module_mm"], "blade module", "cyclo-palloid")
     return out
