@@ -3,7 +3,7 @@
 ``gearopt rexs export DESIGN.toml --out FILE.rexsj [--date ISO] [--json]`` writes the design as a
 REXS 2.0.0 model in the JSON form (:func:`gearopt.rexs.files.write_rexs`).
 ``gearopt rexs import FILE.rexsj --out DESIGN.toml [--model NAME] [--json]`` reads a REXS JSON
-file into a design file (:func:`gearopt.rexs.files.rexs_tables`); the design is parsed before it
+file into a design file (:func:`gearopt.rexs.files.read_rexs_model`); the design is parsed before it
 is written, so a file gearopt cannot cut is refused with the attribute's name and nothing is
 written. ``--model`` names the machine model that reads the settings of a file gearopt did not
 write. ``docs/rexs.md`` lists the attributes and their conventions.
@@ -17,8 +17,8 @@ from pathlib import Path
 
 import tomli_w
 
-from gearopt.design_files import load_design, parse_design
-from gearopt.rexs.files import read_rexs_file, rexs_tables, write_rexs
+from gearopt.design_files import load_design
+from gearopt.rexs.files import read_rexs_file, read_rexs_model, write_rexs
 
 __all__ = ["add_rexs_parser"]
 
@@ -47,10 +47,12 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_import(args: argparse.Namespace) -> int:
-    tables = rexs_tables(
-        read_rexs_file(args.file), model=args.model, source=f"REXS file {Path(args.file).name}"
+    tables, design = read_rexs_model(
+        read_rexs_file(args.file),
+        model=args.model,
+        source=f"REXS file {Path(args.file).name}",
+        path=str(args.out),
     )
-    design = parse_design(tables, path=str(args.out))
     header = f"# {Path(args.out).name}: read from the REXS file {Path(args.file).name}\n\n"
     Path(args.out).write_text(header + tomli_w.dumps(tables), encoding="utf-8")
     report = {"design": design.name, "model": design.model, "written": str(args.out)}

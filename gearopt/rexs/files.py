@@ -43,6 +43,7 @@ __all__ = [
     "export_rexs",
     "load_rexs",
     "read_rexs_file",
+    "read_rexs_model",
     "rexs_tables",
     "write_rexs",
 ]
@@ -208,7 +209,21 @@ def rexs_tables(
 
     ``model`` names the machine model that reads the settings; default the one the file names
     (``custom_gearopt_machine_model``), else a :class:`~gearopt.errors.RexsError` asks for it.
+    The design is parsed and its settings checked against the file (:func:`check_settings`).
     """
+    return read_rexs_model(document, model=model, source=source, plugin_manager=plugin_manager)[0]
+
+
+def read_rexs_model(
+    document: Mapping[str, Any],
+    *,
+    model: str | None = None,
+    source: str = "",
+    path: str | None = None,
+    plugin_manager: pluggy.PluginManager | None = None,
+) -> tuple[dict[str, Any], Design]:
+    """``(tables, design)`` of a REXS model: :func:`rexs_tables` and the design they parse
+    into (``path`` recorded as the design's)."""
     parsed = parse_model(document)
     stage = parsed["stage"]
     named = read_string(stage, CUSTOM_PREFIX + "machine_model", "bevel_stage", default=None)
@@ -239,9 +254,9 @@ def rexs_tables(
         tables["misalignment"] = misalignment
     if compensation:
         tables["compensation"] = compensation
-    design = parse_design(tables, plugin_manager=plugin_manager)
+    design = parse_design(tables, plugin_manager=plugin_manager, path=path)
     check_settings(parsed["machine"], machine_model.rexs_export(design))
-    return tables
+    return tables, design
 
 
 #: how far a setting of the file may lie from the one gearopt derives (mm, deg or none): the
@@ -293,12 +308,11 @@ def load_rexs(
     model: str | None = None,
     plugin_manager: pluggy.PluginManager | None = None,
 ) -> Design:
-    """The design of a REXS JSON file (:func:`rexs_tables`, then
-    :func:`gearopt.design_files.parse_design`)."""
-    tables = rexs_tables(
+    """The design of a REXS JSON file (:func:`read_rexs_model`)."""
+    return read_rexs_model(
         read_rexs_file(path),
         model=model,
         source=f"REXS file {Path(path).name}",
+        path=str(path),
         plugin_manager=plugin_manager,
-    )
-    return parse_design(tables, plugin_manager=plugin_manager, path=str(path))
+    )[1]
