@@ -16,7 +16,7 @@ from gearopt.design_files import load_design, parse_design
 from gearopt.errors import RexsError
 from gearopt.plugins import get_machine_model
 from gearopt.rexs.attributes import CUSTOM_PREFIX, SCHEMA
-from gearopt.rexs.document import flank_of_side
+from gearopt.rexs.document import RENAMED_FROM_1, flank_of_side
 from gearopt.rexs.files import export_rexs, load_rexs, rexs_tables
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -274,3 +274,15 @@ def test_settings_gearopt_derives_are_checked_against_the_file(documents):
     ]
     with pytest.raises(RexsError, match="pinion concave"):
         rexs_tables(doc)
+
+
+def test_a_rexs_1_7_file_reads_with_its_attribute_ids(documents):
+    """REXS 1.7 (the bevel tool and settings components' first release) named the pressure
+    angles and the chordal thickness otherwise; its file reads as the 2.0.0 one."""
+    doc = copy.deepcopy(documents["cyclo-palloid"])
+    doc["model"]["version"] = "1.7"
+    old = {v: k for k, v in RENAMED_FROM_1.items()}
+    for c in doc["model"]["components"]:
+        for a in c["attributes"]:
+            a["id"] = old.get(a["id"], a["id"])
+    assert rexs_tables(doc) == rexs_tables(documents["cyclo-palloid"])

@@ -62,6 +62,12 @@ MISALIGNMENT = {
     "gear_axial_mm": "axial_displacement_gear",
     "shaft_angle_deg": "deviation_of_shaft_angle",
 }
+#: attributes gearopt reads whose ids REXS 2.0 renamed: their REXS 1.7 ids
+RENAMED_FROM_1 = {
+    "nominal_design_pressure_angle_drive": "nominal_design_pressure_angle_on_drive_side",
+    "nominal_design_pressure_angle_coast": "nominal_design_pressure_angle_on_coast_side",
+    "mean_normal_chordal_thickness": "mean_normal_chordal_tooth_thickness",
+}
 _COMPENSATION_UNITS = {"offset_mm": "mm", "pinion_axial_mm": "mm", "gear_axial_mm": "mm"}
 
 
@@ -230,7 +236,9 @@ def export_document(
 # --- reading ---------------------------------------------------------------------------------
 
 
-def _read_attributes(component: Mapping[str, Any], where: str) -> dict[str, RexsValue]:
+def _read_attributes(
+    component: Mapping[str, Any], where: str, renames: Mapping[str, str]
+) -> dict[str, RexsValue]:
     attrs: dict[str, RexsValue] = {}
     found = component.get("attributes", [])
     if not isinstance(found, list):
@@ -238,7 +246,7 @@ def _read_attributes(component: Mapping[str, Any], where: str) -> dict[str, Rexs
     for item in found:
         if not isinstance(item, Mapping) or not isinstance(item.get("id"), str):
             raise RexsError(f"{where}.attributes", item, "each attribute needs a string id")
-        attribute = item["id"]
+        attribute = renames.get(item["id"], item["id"])
         values = [k for k in item if k in VALUE_KEYS]
         if len(values) != 1:
             raise RexsError(f"{where}.{attribute}", item, "needs exactly one value")
@@ -292,6 +300,7 @@ def parse_model(document: Mapping[str, Any]) -> dict[str, Any]:
     version = str(model.get("version", ""))
     if version.split(".")[0] not in ("1", "2"):
         raise RexsError("REXS model.version", version, "gearopt reads REXS 1.x and 2.x files")
+    renames = RENAMED_FROM_1 if version.startswith("1") else {}
     stages = [r for r in relations if r.get("type") == "stage"]
     bevel = [r for r in stages if by_id.get(_refs(r).get("stage"), {}).get("type") == "bevel_stage"]
     if len(bevel) != 1:
@@ -306,7 +315,7 @@ def parse_model(document: Mapping[str, Any]) -> dict[str, Any]:
         _component(by_id, refs.get(role), "bevel_gear", f"stage relation.{role}")
         for role in ("gear_1", "gear_2")
     ]
-    attrs = [_read_attributes(c, f"bevel_gear {c.get('name') or c['id']}") for c in pair]
+    attrs = [_read_attributes(c, f"bevel_gear {c.get('name') or c['id']}", renames) for c in pair]
     teeth = [a.get("number_of_teeth", RexsValue(None, "none")).value for a in attrs]
     counted = all(isinstance(t, int) and not isinstance(t, bool) for t in teeth)
     order = (1, 0) if counted and teeth[1] < teeth[0] else (0, 1)
@@ -358,12 +367,12 @@ def parse_model(document: Mapping[str, Any]) -> dict[str, Any]:
                 f"{where} manufacturing_settings",
             )
             steps[(member, flank)] = RexsStep(
-                tool=_read_attributes(tool, f"bevel_gear_tool {member} {flank}"),
+                tool=_read_attributes(tool, f"bevel_gear_tool {member} {flank}", renames),
                 settings=_read_attributes(
-                    settings, f"bevel_gear_manufacturing_settings {member} {flank}"
+                    settings, f"bevel_gear_manufacturing_settings {member} {flank}", renames
                 ),
             )
-    stage_attrs = _read_attributes(stage, "bevel_stage")
+    stage_attrs = _read_attributes(stage, "bevel_stage", renames)
     return {
         "name": stage.get("name") or "",
         "stage": stage_attrs,
