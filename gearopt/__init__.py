@@ -31,6 +31,7 @@ from gearopt.plugins import (
     machine_models,
     objectives,
 )
+from gearopt.rexs.files import export_rexs, load_rexs, write_rexs
 from gearopt.studyfile import load_study_spec
 
 __version__ = "0.1.0"
@@ -80,6 +81,9 @@ __all__ = [
     "UnknownKeyError",
     "__version__",
     "basic_settings",
+    "export_rexs",
+    "load_rexs",
+    "write_rexs",
     "load_study_spec",
     "run_study",
     "compute_blank",

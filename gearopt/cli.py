@@ -6,7 +6,8 @@
 ``gearopt analyze DESIGN.toml`` runs the contact analyses (TCA, pattern, backlash, ease-off);
 ``gearopt study run|enqueue|export STUDY.toml`` runs Optuna studies (:mod:`gearopt.study`);
 ``gearopt bench`` times the kernels; ``gearopt grid`` and ``gearopt correct`` the closed loop
-from measured flanks (:mod:`gearopt.measurement_cli`). Plugins add commands of their own through the
+from measured flanks (:mod:`gearopt.measurement_cli`); ``gearopt rexs export|import`` REXS files
+(:mod:`gearopt.rexs_cli`). Plugins add commands of their own through the
 ``gearopt_commands`` hook (:class:`gearopt.commands.BaseCommand`). Errors in the input are
 printed as one line naming the parameter, its value and the rule (exit status 2), the plugins'
 commands' errors too.
@@ -39,6 +40,7 @@ from gearopt.plausibility import caught, contact_findings, flank_findings
 from gearopt.plots import DEDICATED_FIGURES, plot_analysis
 from gearopt.plots_declared import plot_declared
 from gearopt.plugins import default_plugin_manager, evaluators, get_machine_model, list_plugins
+from gearopt.rexs_cli import add_rexs_parser
 from gearopt.study_cli import add_study_parser
 from gearopt.thickness import design_chordal_thickness
 
@@ -462,6 +464,7 @@ def build_parser(plugin_manager: pluggy.PluginManager | None = None) -> argparse
     add_flank_parser(sub)
     add_blank_parser(sub)
     add_measurement_parsers(sub)
+    add_rexs_parser(sub)
     add_study_parser(sub)
     add_plugin_commands(sub, plugin_manager or default_plugin_manager())
     return parser

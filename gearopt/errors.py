@@ -19,6 +19,7 @@ __all__ = [
     "SettingsError",
     "NotAvailableError",
     "PluginError",
+    "RexsError",
     "StudyError",
 ]
 
@@ -82,6 +83,11 @@ class NotAvailableError(GearoptError):
 
 class PluginError(GearoptError):
     """A plugin breaks the plugin contract (duplicate name, wrong return type, ...)."""
+
+
+class RexsError(GearoptError):
+    """A REXS file cannot be read into a design, or a design cannot be written as one (a missing
+    or unknown attribute, a unit other than the schema's, a setting gearopt does not model)."""
 
 
 class StudyError(GearoptError):

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import abc
 import dataclasses
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from gearopt.errors import NotAvailableError, PluginError
+from gearopt.errors import NotAvailableError, PluginError, RexsError
+from gearopt.rexs.attributes import RexsMachine, custom, read_string
 
 if TYPE_CHECKING:
     from gearopt.design import Design, PairData
@@ -230,6 +232,45 @@ class BaseMachineModel(abc.ABC):
         """
         table = dict(design.source.get("machine", {}))
         table.pop("model", None)
+        return table
+
+    def rexs_export(self, design: Design) -> RexsMachine:
+        """``design``'s settings as REXS attributes (:mod:`gearopt.rexs`): the tool and the
+        machine settings of the step that cuts each flank (``bevel_gear_tool``,
+        ``bevel_gear_manufacturing_settings``) and the pair's (``bevel_stage``), so that
+        :meth:`rexs_import` reads back a ``[machine]`` table with identical flanks.
+
+        Use the REXS attributes (:func:`gearopt.rexs.attributes.standard`) where they mean the
+        setting, custom ones (:func:`gearopt.rexs.attributes.custom`) for what REXS has no
+        attribute for, and document the mapping and its sign conventions for users.
+        The default writes :meth:`machine_table` as one custom attribute of the stage
+        (``custom_gearopt_machine_table``, a JSON string): a round trip through gearopt, which no
+        other tool reads.
+        """
+        name, value = custom("machine_table", json.dumps(self.machine_table(design)), "none")
+        return RexsMachine(stage={name: value})
+
+    def rexs_import(self, machine: RexsMachine, pair: PairData) -> dict[str, Any]:
+        """The ``[machine]`` table (without ``model``) of a REXS file's settings, read from
+        ``machine`` (what :meth:`rexs_export` writes, or another tool's file): parsed next by
+        :meth:`parse_machine` with the file's ``pair``.
+
+        Raise :class:`~gearopt.errors.RexsError` naming the attribute that is missing, in
+        another unit, or a setting the model does not model
+        (:func:`gearopt.rexs.attributes.refuse_unmodelled`). The default reads the custom
+        attribute the default :meth:`rexs_export` writes.
+        """
+        text = read_string(machine.stage, "custom_gearopt_machine_table", "bevel_stage")
+        try:
+            table = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise RexsError(
+                "bevel_stage.custom_gearopt_machine_table", text, f"is not JSON: {exc}"
+            ) from None
+        if not isinstance(table, dict):
+            raise RexsError(
+                "bevel_stage.custom_gearopt_machine_table", text, "must hold a JSON object"
+            )
         return table
 
     def correction_settings(self, design: Design, member: str) -> tuple[CorrectionSetting, ...]:

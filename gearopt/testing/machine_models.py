@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import pickle
 import re
@@ -16,6 +17,7 @@ from gearopt.errors import GearoptError, UnknownKeyError
 from gearopt.hookspecs import hookimpl
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.plugins import get_plugin_manager, machine_models
+from gearopt.rexs.files import export_rexs, rexs_tables
 
 __all__ = ["MachineModelContract"]
 
@@ -125,3 +127,14 @@ class MachineModelContract:
                     pytest.fail(f"{dim.key} = {value} inside its bounds is refused: {exc}")
                 for member in ("pinion", "gear"):
                     assert all(_finite_scalar(v) for v in settings.as_dict()[member].values())
+
+    def test_a_rexs_round_trip_keeps_the_settings(self, design, machine_model, plugin_manager):
+        """The design written as REXS (:meth:`~gearopt.machine.BaseMachineModel.rexs_export`)
+        and read back (:meth:`~gearopt.machine.BaseMachineModel.rexs_import`) has the same
+        basic settings, through the file's text."""
+        document = export_rexs(design, date="2026-01-01T00:00:00", plugin_manager=plugin_manager)
+        tables = rexs_tables(json.loads(json.dumps(document)), plugin_manager=plugin_manager)
+        back = parse_design(tables, plugin_manager=plugin_manager)
+        assert back.model == machine_model.name
+        before, after = machine_model.basic_settings(design), machine_model.basic_settings(back)
+        assert (after.pinion, after.gear) == (before.pinion, before.gear)

@@ -38,7 +38,9 @@ from gearopt.design import MEMBERS, Design, PairData
 from gearopt.errors import DesignError
 from gearopt.flank import FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
+from gearopt.rexs.attributes import RexsMachine
 from gearopt.validate import check_keys, read_integer, read_number, read_table
+from gearopt_plugins.cyclo_palloid import rexs as cp_rexs
 from gearopt_plugins.cyclo_palloid.settings import (
     AUTO,
     CycloPalloidMachine,
@@ -225,6 +227,15 @@ class CycloPalloid(BaseMachineModel):
                 "chordal thickness (seed 001 eqs 39-48)"
             )
         return MachineSettings(model=self.name, notes=tuple(notes), **settings)
+
+    def rexs_export(self, design: Design) -> RexsMachine:
+        """Each flank's blades and settings (:mod:`gearopt_plugins.cyclo_palloid.rexs`), an
+        ``"auto"`` additional slope angle written as the value solved from the thickness."""
+        settings = self.basic_settings(design)
+        return cp_rexs.to_rexs(design.machine, {m: settings.member(m) for m in MEMBERS})
+
+    def rexs_import(self, machine: RexsMachine, pair: PairData) -> dict[str, Any]:
+        return cp_rexs.from_rexs(machine)
 
     def generate_flanks(
         self,

@@ -71,8 +71,10 @@ from gearopt.design import MEMBERS, Design, PairData
 from gearopt.errors import DesignError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
+from gearopt.rexs.attributes import RexsMachine
 from gearopt.validate import check_keys, read_integer, read_number, read_table
 from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
+from gearopt_plugins.epicycloid import rexs as ep_rexs
 from gearopt_plugins.face_hobbing.family import BladeSystem
 from gearopt_plugins.face_hobbing.generation import (
     BLADE_OF_FLANK,
@@ -388,6 +390,16 @@ class Epicycloid(BaseMachineModel):
             tool_pass=tool_pass,
             notes=notes,
         )
+
+    def rexs_export(self, design: Design) -> RexsMachine:
+        """Each flank's head and derived settings (:mod:`gearopt_plugins.epicycloid.rexs`)."""
+        settings = self.basic_settings(design)
+        return ep_rexs.to_rexs(
+            design.machine, {m: settings.member(m) for m in MEMBERS}, DRIVE_FLANK
+        )
+
+    def rexs_import(self, machine: RexsMachine, pair: PairData) -> dict[str, Any]:
+        return ep_rexs.from_rexs(machine)
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: EpicycloidMachine = design.machine

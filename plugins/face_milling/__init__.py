@@ -163,10 +163,12 @@ from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import DesignError, NotAvailableError, SettingsError
 from gearopt.flank import FLANKS, FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, CorrectionSetting, MachineSettings, SearchDimension
+from gearopt.rexs.attributes import RexsMachine
 from gearopt.solve import newton
 from gearopt.validate import check_keys, read_number, read_table
 from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.face_milling import correction
+from gearopt_plugins.face_milling import rexs as fm_rexs
 from gearopt_plugins.face_milling import synthesis as fs
 from gearopt_plugins.face_milling.family import (
     CutterFlank,
@@ -674,6 +676,13 @@ class FaceMilling(BaseMachineModel):
 
     def machine_table(self, design: Design) -> dict[str, Any]:
         return machine_table(design.machine)
+
+    def rexs_export(self, design: Design) -> RexsMachine:
+        """Each flank's blade and settings (:mod:`gearopt_plugins.face_milling.rexs`)."""
+        return fm_rexs.to_rexs(machine_table(design.machine))
+
+    def rexs_import(self, machine: RexsMachine, pair: PairData) -> dict[str, Any]:
+        return fm_rexs.from_rexs(machine)
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: FaceMillingMachine = design.machine
