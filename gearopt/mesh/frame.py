@@ -91,40 +91,23 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
     float
         The angle in degrees, range (-90, 90].
     """
-    # three-vectors as floats: numpy's per-call cost is most of this function's otherwise
-    n = _unit(tuple(float(a) for a in normal))
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
     theta = math.atan2(point[1], point[0])
-    e_r = (math.cos(theta), math.sin(theta), 0.0)
-    sin_root, cos_root = math.sin(root_angle_rad), math.cos(root_angle_rad)
-    along = _unit(_less(_sum(_times(sin_root, e_r), (0.0, 0.0, cos_root)), n))
-    up = _sum(_times(cos_root, e_r), (0.0, 0.0, -sin_root))
-    up = _unit(_sum(_less(up, n), _times(-_dot(up, along), along)))
-    t = _less(tuple(float(a) for a in tangent), n)
-    if _dot(t, along) < 0.0:
-        t = _times(-1.0, t)
-    angle = math.degrees(math.atan2(_dot(t, up), _dot(t, along)))
+    e_r = np.array([math.cos(theta), math.sin(theta), 0.0])
+    e_z = np.array([0.0, 0.0, 1.0])
+    along = math.sin(root_angle_rad) * e_r + math.cos(root_angle_rad) * e_z
+    up = math.cos(root_angle_rad) * e_r - math.sin(root_angle_rad) * e_z
+    along = along - (along @ n) * n
+    along /= np.linalg.norm(along)
+    up = up - (up @ n) * n - (up @ along) * along
+    up /= np.linalg.norm(up)
+    t = np.asarray(tangent, float)
+    t = t - (t @ n) * n
+    if t @ along < 0.0:
+        t = -t
+    angle = math.degrees(math.atan2(t @ up, t @ along))
     return 90.0 if angle <= -90.0 + 1e-12 else angle
-
-
-def _dot(a, b) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _times(k: float, a) -> tuple:
-    return (k * a[0], k * a[1], k * a[2])
-
-
-def _sum(a, b) -> tuple:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-
-def _less(a, n) -> tuple:
-    """``a`` less its component along the unit vector ``n``."""
-    return _sum(a, _times(-_dot(a, n), n))
-
-
-def _unit(a) -> tuple:
-    return _times(1.0 / math.sqrt(_dot(a, a)), a)
 
 
 def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -> float:
