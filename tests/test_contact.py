@@ -479,6 +479,27 @@ def test_node_fields_agree_with_the_general_clearance(aligned53):
         assert np.allclose(sample.radius_mm[rows][:, mask], radius, rtol=1e-12)
 
 
+def test_joint_field_made_once_per_combination_gives_a_fresh_one_s_tca(aligned53):
+    # JointField.of keeps the joint field of a combination with its first field: the same
+    # object again for the same fields (in order), another for another combination; the TCA,
+    # which runs on the kept one, is unchanged by runs before it
+    pair = aligned53["pair"]
+    joint = JointField.of([pair.drive, pair.coast])
+    assert JointField.of([pair.drive, pair.coast]) is joint
+    assert JointField.of([pair.drive]) is not joint
+    assert JointField.of([pair.coast, pair.drive]) is not joint
+    side = np.array([0, 1, 0, 1])
+    phi = np.array([-0.3, -0.1, 0.05, 0.2]) * np.array([pair.drive.sense, pair.coast.sense])[side]
+    kept, fresh = joint.sample(side, phi), JointField([pair.drive, pair.coast]).sample(side, phi)
+    assert np.array_equal(kept.minimum_rad, fresh.minimum_rad)
+    assert np.array_equal(kept.clearance_rad, fresh.clearance_rad)
+    again = contact_sides(pair, AnalysisOptions())
+    for name in ("drive", "coast"):
+        before, after = aligned53[name], again[name]
+        assert np.array_equal(before.te_arcsec, after.te_arcsec)
+        assert before.ellipse_major_axis_mm == after.ellipse_major_axis_mm
+
+
 def test_near_rows_refined_alongside_a_sample_get_the_same_answers(aligned53):
     # sample(..., near=...) refines the near rows in the same loop as the sample's candidates,
     # each group stopping on its own: the same answers as minimum_near alone

@@ -509,6 +509,10 @@ class ContactEngine:
         near_out = None
         if near is not None and not rows.size:
             near_out = self.near(*near)
+        elif rows.size == n:  # every row refined: no copies of the node fields
+            f0, s, h, edge, near_out = self._refined(
+                side, field_, fac, phi, angle, f0, s, h, near=near, node_min=(i, j)
+            )
         elif rows.size or near is not None:
             f0, s, h = f0.copy(), s.copy(), h.copy()
             f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
@@ -577,12 +581,15 @@ class ContactEngine:
         fields ``side``): their flat indices into ``pick`` and values into ``values``."""
         _kernels.lowest_nodes(flat, self.refine_nodes, side, pick, values)
 
-    def _refined(self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None):
+    def _refined(
+        self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None, node_min=None
+    ):
         """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
         Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
         region (the pinion's lowest cells) lower than that by more than the edge tolerance
         stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
-        refined alongside (as :meth:`near`); their results come last (None without)."""
+        refined alongside (as :meth:`near`); their results come last (None without).
+        ``node_min``: the rows' node minima ``(i, j)`` where known."""
         n = len(phi)
         flat = field_.reshape(n, -1)
         pick = np.empty((n, min(candidates, flat.shape[1])), np.intp)
@@ -622,7 +629,7 @@ class ContactEngine:
             s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
             e_best[rows[first]] = e_r[first]
         rows = np.arange(n)
-        i, j = _argmin_nodes(field_)
+        i, j = _argmin_nodes(field_) if node_min is None else node_min
         tol = self.tol_um[side] * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
         with np.errstate(invalid="ignore"):
             low = np.isfinite(f0) & ~(best - f0 <= tol)

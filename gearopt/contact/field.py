@@ -113,6 +113,9 @@ class ClearanceField:
                 "pinion flank", int(pinion.mask.sum()), "needs at least 4 generated nodes"
             )
         self.node_tables = node_tables(pinion)
+        #: the joint fields made with this one first (:meth:`JointField.of`), by the other
+        #: fields' identities
+        self.joints: dict[tuple[int, ...], JointField] = {}
         #: mm of normal separation per rad of gear rotation at the mean position (the median
         #: over the nodes in contact; None until measured)
         self.node_factor_mm: float | None = None
@@ -249,6 +252,19 @@ class JointField:
     def __init__(self, fields) -> None:
         self.fields = list(fields)
         self._engine = ContactEngine(self.fields)
+
+    @classmethod
+    def of(cls, fields) -> JointField:
+        """The joint field of ``fields``, made once per combination (a field does not change
+        once made, nor does its joint field's tables: the TCA of a pair reuses them); kept by
+        the first field."""
+        fields = list(fields)
+        key = tuple(id(f) for f in fields[1:])
+        joint = fields[0].joints.get(key)
+        if joint is None or any(a is not b for a, b in zip(joint.fields, fields, strict=True)):
+            joint = cls(fields)
+            fields[0].joints[key] = joint
+        return joint
 
     def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None):
         """As :meth:`ClearanceField.sample`, row k on field ``side[k]``. With ``near`` =

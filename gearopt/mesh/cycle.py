@@ -192,7 +192,7 @@ class MeshCycle:
         self.names = tuple(names)
         self.frame, self.pairs = frame, pairs
         self.compound_um, self.separation = compound_um, separation
-        self.joint = JointField(self.fields)
+        self.joint = JointField.of(self.fields)
         p1 = self.fields[0].pinion.pitch_rad
         self.pitch = p1
         self.sense = np.array([f.sense for f in self.fields], float)
@@ -340,8 +340,8 @@ class MeshCycle:
                 sample, answers = self.joint.sample(f_side, f_phi, refine=f_refine, near=near)
             else:
                 answers = self.joint.minimum_near(*near)
-            for k, (side, tag) in enumerate(owners):
-                side.answers[tag] = tuple(a[k] for a in answers)
+            for (side, tag), *answer in zip(owners, *answers, strict=True):
+                side.answers[tag] = tuple(answer)
         elif f_side.size:
             sample = self.joint.sample(f_side, f_phi)
         start = 0

@@ -354,8 +354,11 @@ class SideCycle:
         angles = self.extra_angles()
         self.near_extras = self.fit_mode()
         if self.near_extras:
-            for j, v in enumerate(angles):
-                self.requests.append(Request(v, *self.contact_at(v), ("ex", j)))
+            faces, profiles = self.contact_at(np.array(angles))
+            for j, (v, face, profile) in enumerate(
+                zip(angles, faces.tolist(), profiles.tolist(), strict=True)
+            ):
+                self.requests.append(Request(v, face, profile, ("ex", j)))
             rows = angles[3:], [False] * 3
         else:
             rows = angles, [True] * 6
@@ -398,8 +401,8 @@ class SideCycle:
                 v_peak += float(np.clip(0.5 * (gm - gp) / curv, -1.0, 1.0)) * step
         return float(v_peak)
 
-    def contact_at(self, v: float) -> tuple[float, float]:
-        """A start for a refinement at relative rotation ``v``: the contact point interpolated
+    def contact_at(self, v: NDArray) -> tuple[NDArray, NDArray]:
+        """Starts for refinements at relative rotations ``v``: the contact points interpolated
         (linearly in v) between the nearest samples in contact on either side."""
         if self.contact_path is None:
             sample = self.interval_sample
@@ -412,7 +415,7 @@ class SideCycle:
                 sample.contact_profile_mm[ok][order],
             )
         vs, cs, ch = self.contact_path
-        return float(np.interp(v, vs, cs)), float(np.interp(v, vs, ch))
+        return np.interp(v, vs, cs), np.interp(v, vs, ch)
 
     def near_extras_sample(self, mean: FieldSample) -> FieldSample:
         """The extra positions' sample from their refined minima (answers ``("ex", j)``) and
