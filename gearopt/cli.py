@@ -42,6 +42,7 @@ from gearopt.plots_declared import plot_declared
 from gearopt.plugins import default_plugin_manager, evaluators, get_machine_model, list_plugins
 from gearopt.rexs_cli import add_rexs_parser
 from gearopt.study_cli import add_study_parser
+from gearopt.studyfile import load_study_spec
 from gearopt.thickness import design_chordal_thickness
 
 __all__ = ["main"]
@@ -323,7 +324,6 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 def _cmd_dashboard(args: argparse.Namespace) -> int:
     from gearopt.dashboard import dashboard_app, serve
-    from gearopt.studyfile import load_study_spec
 
     serve(dashboard_app(load_study_spec(args.study), args.storage), args.host, args.port)
     return 0

@@ -22,6 +22,8 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 from urllib.parse import parse_qs, urlencode
 
+import optuna
+
 from gearopt.errors import StudyError
 from gearopt.storage import default_storage_url, masked_url, study_exists
 from gearopt.studyfile import StudySpec
@@ -143,8 +145,6 @@ def dashboard_app(spec: StudySpec, storage: str | None = None) -> FeasibleBestTr
         The storage holds no study of that name (nothing is created), or optuna-dashboard is
         not installed.
     """
-    import optuna
-
     url = storage or default_storage_url(spec)
     if not study_exists(spec, url):
         raise StudyError(

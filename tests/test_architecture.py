@@ -40,6 +40,7 @@ LAZY = {
     ("gearopt", "gearopt.study"),
     ("gearopt.study_cli", "gearopt.study"),
     ("gearopt.study_cli", "gearopt.export"),
+    ("gearopt.cli", "gearopt.dashboard"),
 }
 #: the reference TCA's importers outside the tests
 REFERENCE = "gearopt.newton_tca"
