@@ -68,6 +68,11 @@ class GeneratingFamily(Protocol):
 
     # optional: ``axial_radial_meshing_jacobian(q, flank) -> (L, R, g, J)`` with J ``(..., 3, 3)``
     # the Jacobian of (L, R, g) in q, analytically; the solver uses it instead of complex step
+    #
+    # optional: ``newton(q, flank, big_l, big_r, *, tol, max_iter, give_up, chords)`` the
+    # solver's Newton iteration (``_newton``: same arguments, same result ``(q, f, jac,
+    # converged, iterations)``, ``q`` ``(n, 3)``) done by the family, compiled, or None where it
+    # cannot (then the solver iterates itself)
 
     def pitch_row(self, cone_distance_mm: NDArray) -> NDArray:
         """``(n_flanks, n, 3)`` parameters of the flank points on the pitch line (h = 0),
@@ -142,6 +147,13 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6),
     and stops iterating; it is reported as not converged. ``chords=False``: plain Newton steps
     (a chord step with a Jacobian from across a jump of the tool's curvature can cycle).
     """
+    own = getattr(family, "newton", None)
+    if own is not None:
+        done = own(
+            q, flank, big_l, big_r, tol=tol, max_iter=max_iter, give_up=give_up, chords=chords
+        )
+        if done is not None:
+            return done
     limit = np.asarray(family.max_step, float)
     active = np.ones(len(q), bool)
     f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
