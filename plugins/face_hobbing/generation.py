@@ -76,7 +76,7 @@ flank is the outer blade's envelope on the other side of the same tooth.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -386,18 +386,16 @@ def generate_flanks(
     out = {}
     for k, flank in enumerate(flanks):
         require_flank(solution, k, member=member, flank=flank)
-        out[flank] = replace(
-            flank_map(
-                family_,
-                solution,
-                index=k,
-                member=member,
-                flank=flank,
-                hand=blank.hand[index],
-                teeth=teeth,
-                turn_rad=turns_rad[flank],
-                notes=(notes or {}).get(flank, ()),
-            ),
+        out[flank] = flank_map(
+            family_,
+            solution,
+            index=k,
+            member=member,
+            flank=flank,
+            hand=blank.hand[index],
+            teeth=teeth,
+            turn_rad=turns_rad[flank],
+            notes=(notes or {}).get(flank, ()),
             tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
         )
     return out
