@@ -127,3 +127,21 @@ def test_compiled_newton_solves_as_the_solver(case):
     assert got.iterations == ref.iterations
     assert_allclose(got.q, ref.q, rtol=0, atol=1e-11)
     assert np.all(np.abs(got.residual[got.converged]) <= 1e-14)
+
+
+def test_the_warm_up_compiles_the_models_kernels(monkeypatch):
+    # gearopt.warmup.warm_kernels asks every installed machine model to warm its own kernels
+    import gearopt.warmup as warmup
+    from gearopt.plugins import machine_models
+
+    calls = []
+    models = machine_models()
+    for name in ("cyclo-palloid", "epicycloid"):
+        model = models[name]
+        monkeypatch.setattr(
+            model, "warm_kernels", lambda m=model: (calls.append(m.name), type(m).warm_kernels(m))
+        )
+    warmup.warm_kernels(announce=False)
+    assert sorted(calls) == ["cyclo-palloid", "epicycloid"]
+    for kernel in (kernels.meshing_jacobians, kernels.newton, kernels.geometries):
+        assert kernel.signatures  # compiled or loaded from the cache
