@@ -31,7 +31,14 @@ from numpy.typing import NDArray
 from scipy.interpolate import RegularGridInterpolator
 
 from gearopt.errors import GearoptError, SettingsError
-from gearopt.flank import DepthTaper, FlankGrid, FlankMap, axial_plane
+from gearopt.flank import (
+    DepthTaper,
+    FlankGrid,
+    FlankMap,
+    axial_plane,
+    mirror_image,
+    turned,
+)
 
 __all__ = [
     "GeneratingFamily",
@@ -68,6 +75,11 @@ class GeneratingFamily(Protocol):
 
     # optional: ``axial_radial_meshing_jacobian(q, flank) -> (L, R, g, J)`` with J ``(..., 3, 3)``
     # the Jacobian of (L, R, g) in q, analytically; the solver uses it instead of complex step
+    #
+    # optional: ``newton(q, flank, big_l, big_r, *, tol, max_iter, give_up, chords)`` the
+    # solver's Newton iteration (``_newton``: same arguments, same result ``(q, f, jac,
+    # converged, iterations)``, ``q`` ``(n, 3)``) done by the family, compiled, or None where it
+    # cannot (then the solver iterates itself)
 
     def pitch_row(self, cone_distance_mm: NDArray) -> NDArray:
         """``(n_flanks, n, 3)`` parameters of the flank points on the pitch line (h = 0),
@@ -142,6 +154,13 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6),
     and stops iterating; it is reported as not converged. ``chords=False``: plain Newton steps
     (a chord step with a Jacobian from across a jump of the tool's curvature can cycle).
     """
+    own = getattr(family, "newton", None)
+    if own is not None:
+        done = own(
+            q, flank, big_l, big_r, tol=tol, max_iter=max_iter, give_up=give_up, chords=chords
+        )
+        if done is not None:
+            return done
     limit = np.asarray(family.max_step, float)
     active = np.ones(len(q), bool)
     f, jac = _residual_and_jacobian(family, q, flank, big_l, big_r)
@@ -527,9 +546,12 @@ def flank_map(
     teeth: int,
     turn_rad: float = 0.0,
     notes: tuple[str, ...] = (),
+    tooth: int = 0,
 ) -> FlankMap:
     """FlankMap of flank ``index`` of a solution: right-hand as generated, turned by
-    ``turn_rad`` about the member axis, then mirrored if ``hand`` is left."""
+    ``turn_rad`` about the member axis, then mirrored if ``hand`` is left (as
+    :meth:`FlankMap.rotated` and :meth:`FlankMap.mirrored` would, the map made once);
+    ``tooth``: the index of the tooth it is on."""
     q = solution.q[index]
     mask, sheet = solution.mask[index], solution.sheet[index]
     geo = family.geometry(q, np.full(q.shape[:-1], index))
@@ -543,11 +565,28 @@ def flank_map(
         point,
         np.stack([radius * np.cos(polar), radius * np.sin(polar), point[..., 2]], axis=-1),
     )
-    result = FlankMap(
+    surface = EnvelopeSurface(
+        family=family,
+        index=index,
+        pitch_angle_rad=solution.pitch_angle_rad,
+        face_mm=solution.face_mm,
+        profile_mm=solution.profile_mm,
+        q=q,
+        mask=mask,
+        taper=solution.taper,
+    )
+    if turn_rad:
+        polar, point, normal = turned(polar, point, normal, turn_rad)
+        surface = surface.transformed(offset_rad=turn_rad)
+    if hand == "left":
+        polar, point, normal = mirror_image(polar, point, normal)
+        surface = surface.transformed(sign=-1.0)
+    return FlankMap(
         member=member,
         flank=flank,
-        hand="right",
+        hand="left" if hand == "left" else "right",
         teeth=teeth,
+        tooth=tooth,
         pitch_angle_deg=math.degrees(solution.pitch_angle_rad),
         face_mm=solution.face_mm,
         profile_mm=solution.profile_mm,
@@ -558,18 +597,6 @@ def flank_map(
         mask=mask,
         parameters=q,
         notes=notes,
-        surface=EnvelopeSurface(
-            family=family,
-            index=index,
-            pitch_angle_rad=solution.pitch_angle_rad,
-            face_mm=solution.face_mm,
-            profile_mm=solution.profile_mm,
-            q=q,
-            mask=mask,
-            taper=solution.taper,
-        ),
+        surface=surface,
         taper=solution.taper,
     )
-    if turn_rad:
-        result = result.rotated(turn_rad)
-    return result.mirrored() if hand == "left" else result

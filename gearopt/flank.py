@@ -48,11 +48,28 @@ __all__ = [
     "FLANKS",
     "HANDS",
     "check_member_and_flank",
+    "mirror_image",
+    "turned",
 ]
 
 MEMBERS = ("pinion", "gear")
 FLANKS = ("convex", "concave")
 HANDS = ("left", "right")
+
+
+def turned(polar_rad: NDArray, points_mm: NDArray, normals: NDArray, angle_rad: float):
+    """``(polar, points, normals)`` of a flank turned by ``angle_rad`` about the member axis
+    (:meth:`FlankMap.rotated`)."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return polar_rad + angle_rad, points_mm @ rot.T, normals @ rot.T
+
+
+def mirror_image(polar_rad: NDArray, points_mm: NDArray, normals: NDArray):
+    """``(polar, points, normals)`` of a flank mirrored in the member's x-z plane
+    (:meth:`FlankMap.mirrored`)."""
+    flip = np.array([1.0, -1.0, 1.0])
+    return -polar_rad, points_mm * flip, normals * flip
 
 
 def check_member_and_flank(member: str, flank: str) -> None:
@@ -511,14 +528,15 @@ class FlankMap:
 
     def rotated(self, angle_rad: float, *, teeth: int = 0) -> FlankMap:
         """The flank turned by ``angle_rad`` about the member axis (``teeth`` adds to ``tooth``)."""
-        c, s = math.cos(angle_rad), math.sin(angle_rad)
-        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        polar, points, normals = turned(
+            self.polar_angle_rad, self.points_mm, self.normals, angle_rad
+        )
         return replace(
             self,
             tooth=self.tooth + teeth,
-            polar_angle_rad=self.polar_angle_rad + angle_rad,
-            points_mm=self.points_mm @ rot.T,
-            normals=self.normals @ rot.T,
+            polar_angle_rad=polar,
+            points_mm=points,
+            normals=normals,
             surface=None
             if self.surface is None
             else self.surface.transformed(offset_rad=angle_rad),
@@ -530,13 +548,13 @@ class FlankMap:
 
     def mirrored(self) -> FlankMap:
         """The mirror image in the member's x-z plane: the flank of the opposite hand."""
-        flip = np.array([1.0, -1.0, 1.0])
+        polar, points, normals = mirror_image(self.polar_angle_rad, self.points_mm, self.normals)
         return replace(
             self,
             hand="left" if self.hand == "right" else "right",
-            polar_angle_rad=-self.polar_angle_rad,
-            points_mm=self.points_mm * flip,
-            normals=self.normals * flip,
+            polar_angle_rad=polar,
+            points_mm=points,
+            normals=normals,
             surface=self.surface and self.surface.transformed(sign=-1.0),
         )
 

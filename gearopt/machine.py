@@ -359,5 +359,12 @@ class BaseMachineModel(abc.ABC):
             for f in flanks
         }
 
+    def warm_kernels(self) -> None:
+        """Compile the model's own numerical kernels (numba), or load them from the disk cache,
+        in this process: :func:`gearopt.warmup.warm_kernels` calls it for every installed model
+        before a study's workers start, so that they load the cache rather than compile it side
+        by side. The default does nothing (a model without compiled kernels)."""
+        return None
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

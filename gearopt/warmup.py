@@ -13,6 +13,7 @@ from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
 from gearopt.mesh import kernels as mesh_kernels
+from gearopt.plugins import machine_models
 
 __all__ = ["ANNOUNCE_AFTER_S", "warm_kernels"]
 
@@ -21,7 +22,8 @@ ANNOUNCE_AFTER_S = 1.0
 
 
 def warm_kernels(*, announce: bool = True) -> float:
-    """Compile every compiled kernel (contact engine, mesh cycle, loaded contact) in this
+    """Compile every compiled kernel (contact engine, mesh cycle, loaded contact, the machine
+    models' :meth:`~gearopt.machine.BaseMachineModel.warm_kernels`) in this
     process, or load it from numba's disk cache, and return the seconds it took. A first use
     after an install compiles them (about half a minute); ``announce``: said on stderr when it
     takes longer than :data:`ANNOUNCE_AFTER_S` (a cached load takes well under a second)."""
@@ -46,6 +48,8 @@ def warm_kernels(*, announce: bool = True) -> float:
         mesh_kernels.warm()
         loaded_kernels.warm()
         lcp_kernels.warm()
+        for model in machine_models().values():  # the models' own (flank generation)
+            model.warm_kernels()
     finally:
         if timer is not None:
             timer.cancel()

@@ -51,6 +51,7 @@ from gearopt_plugins.cyclo_palloid.settings import (
     member_settings,
 )
 from gearopt_plugins.cyclo_palloid.thickness import solve_additional_slope_angle
+from gearopt_plugins.face_hobbing import kernels as hobbing_kernels
 from gearopt_plugins.face_hobbing.generation import BLADE_OF_FLANK, generate_flanks
 from gearopt_plugins.face_hobbing.settings import (
     eccentricity,
@@ -183,6 +184,10 @@ class CycloPalloid(BaseMachineModel):
 
     name = "cyclo-palloid"
     description = "Klingelnberg cyclo-palloid dual-head face hobbing, uniform depth (seed 001)"
+
+    def warm_kernels(self) -> None:
+        """The face-hobbing kernels of flank generation (compiled, or loaded from the cache)."""
+        hobbing_kernels.warm()
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> CycloPalloidMachine:
         pair.require_uniform_depth(self.name)

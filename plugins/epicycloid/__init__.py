@@ -75,6 +75,7 @@ from gearopt.rexs.attributes import RexsMachine
 from gearopt.validate import check_keys, read_integer, read_number, read_table
 from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
 from gearopt_plugins.epicycloid import rexs as ep_rexs
+from gearopt_plugins.face_hobbing import kernels as hobbing_kernels
 from gearopt_plugins.face_hobbing.family import BladeSystem
 from gearopt_plugins.face_hobbing.generation import (
     BLADE_OF_FLANK,
@@ -289,6 +290,10 @@ class Epicycloid(BaseMachineModel):
         "Klingelnberg epicycloid face hobbing: head radius and arc blade per flank, uniform "
         "depth (seed 003)"
     )
+
+    def warm_kernels(self) -> None:
+        """The face-hobbing kernels of flank generation (compiled, or loaded from the cache)."""
+        hobbing_kernels.warm()
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> EpicycloidMachine:
         pair.require_uniform_depth(self.name)

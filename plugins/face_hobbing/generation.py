@@ -76,7 +76,7 @@ flank is the outer blade's envelope on the other side of the same tooth.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -87,6 +87,7 @@ from gearopt.design import MEMBERS
 from gearopt.envelope import flank_map, require_flank, solve_envelope
 from gearopt.errors import SettingsError
 from gearopt.flank import FlankGrid, FlankMap
+from gearopt_plugins.face_hobbing import kernels
 from gearopt_plugins.face_hobbing.family import (
     BladeSystem,
     components,
@@ -136,16 +137,67 @@ class FaceHobbingFamily:
     def _stacked(self) -> BladeSystem:
         return BladeSystem.stack(self.blades)
 
+    @cached_property
+    def _table(self) -> NDArray:
+        return kernels.system_table(self.blades)
+
+    def _compiled(self, q) -> bool:
+        """Whether the compiled kernels evaluate ``q`` (real parameters; the numpy functions of
+        :mod:`~gearopt_plugins.face_hobbing.family` take complex steps and run without numba)."""
+        return kernels.ENABLED and not np.iscomplexobj(q)
+
     def axial_radial_meshing(self, q, flank):
+        if self._compiled(q):
+            qq, ff, shape = _flat(q, flank)
+            out = np.empty((len(qq), 3))
+            kernels.meshing(self._table, ff, qq, float(self.scale_mm), out)
+            return out[:, 0].reshape(shape), out[:, 1].reshape(shape), out[:, 2].reshape(shape)
         fam = components(self._stacked.take(flank), q[..., 0], q[..., 1], q[..., 2])
         n = fam["normal"]
         norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
         return fam["axial_mm"], fam["radius_mm"], fam["meshing"] / (norm * self.scale_mm)
 
     def axial_radial_meshing_jacobian(self, q, flank):
+        if self._compiled(q):
+            qq, ff, shape = _flat(q, flank)
+            out, jac = np.empty((len(qq), 3)), np.empty((len(qq), 3, 3))
+            kernels.meshing_jacobians(self._table, ff, qq, float(self.scale_mm), out, jac)
+            return (
+                out[:, 0].reshape(shape),
+                out[:, 1].reshape(shape),
+                out[:, 2].reshape(shape),
+                jac.reshape(*shape, 3, 3),
+            )
         return meshing_jacobian(
             self._stacked.take(flank), q[..., 0], q[..., 1], q[..., 2], self.scale_mm
         )
+
+    def newton(self, q, flank, big_l, big_r, *, tol, max_iter, give_up, chords):
+        """gearopt.envelope's Newton iteration compiled (:func:`kernels.newton`), or None
+        without the kernels (the solver then runs its own)."""
+        if not self._compiled(q):
+            return None
+        q, flank, _ = _flat(q, flank)
+        n = len(q)
+        f, jac, converged = np.empty((n, 3)), np.empty((n, 3, 3)), np.empty(n, bool)
+        iterations = kernels.newton(
+            self._table,
+            flank,
+            q,
+            np.ascontiguousarray(big_l, dtype=float),
+            np.ascontiguousarray(big_r, dtype=float),
+            float(self.scale_mm),
+            np.asarray(self.max_step, dtype=float),
+            float(tol),
+            int(max_iter),
+            int(give_up[0]),
+            float(give_up[1]),
+            bool(chords),
+            f,
+            jac,
+            converged,
+        )
+        return q, f, jac, converged, int(iterations)
 
     def pitch_row(self, cone_distance_mm):
         return np.stack(
@@ -153,6 +205,11 @@ class FaceHobbingFamily:
         )
 
     def geometry(self, q, flank) -> dict[str, NDArray]:
+        if self._compiled(q):
+            qq, ff, shape = _flat(q, flank)
+            point, normal = np.empty((len(qq), 3)), np.empty((len(qq), 3))
+            kernels.geometries(self._table, ff, qq, point, normal)
+            return {"point": point.reshape(*shape, 3), "normal": normal.reshape(*shape, 3)}
         b = self._stacked.take(flank)
         fam = components(b, q[..., 0], q[..., 1], q[..., 2])
         g = b.machine_root_angle_rad
@@ -177,10 +234,26 @@ class FaceHobbingFamily:
 
     def blade_height_mm(self, u, flank):
         """Height y_c of the edge point (eqs 2-8) above the cradle plane, toward the tip."""
+        if self._compiled(u):
+            u = np.asarray(u, float)
+            ff = np.ascontiguousarray(np.broadcast_to(flank, u.shape), dtype=np.intp).ravel()
+            out = np.empty(u.size)
+            kernels.blade_heights(self._table, ff, np.ascontiguousarray(u).ravel(), out)
+            return out.reshape(u.shape)
         return edge(self._stacked.take(flank), u)[1]
 
     def within_tool(self, q, flank):
         return self.blade_height_mm(q[..., 0], flank) >= -self.tip_depth_mm - 1e-9
+
+
+def _flat(q, flank):
+    """``(q (n, 3), flank (n,), shape)`` of parameters ``q`` ``(..., 3)`` and the flank indices
+    broadcast to ``shape = q.shape[:-1]``, contiguous for the kernels."""
+    q = np.asarray(q, float)
+    shape = q.shape[:-1]
+    flat = np.ascontiguousarray(q.reshape(-1, 3))
+    flank = np.ascontiguousarray(np.broadcast_to(flank, shape), dtype=np.intp).reshape(-1)
+    return flat, flank, shape
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -313,18 +386,16 @@ def generate_flanks(
     out = {}
     for k, flank in enumerate(flanks):
         require_flank(solution, k, member=member, flank=flank)
-        out[flank] = replace(
-            flank_map(
-                family_,
-                solution,
-                index=k,
-                member=member,
-                flank=flank,
-                hand=blank.hand[index],
-                teeth=teeth,
-                turn_rad=turns_rad[flank],
-                notes=(notes or {}).get(flank, ()),
-            ),
+        out[flank] = flank_map(
+            family_,
+            solution,
+            index=k,
+            member=member,
+            flank=flank,
+            hand=blank.hand[index],
+            teeth=teeth,
+            turn_rad=turns_rad[flank],
+            notes=(notes or {}).get(flank, ()),
             tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
         )
     return out
