@@ -167,7 +167,8 @@ class PairData:
     root_angle_deg: tuple[float, float] | None = None
     mean_normal_chordal_addendum_mm: tuple[float, float] | None = None
     mean_normal_chordal_thickness_mm: tuple[float, float] | None = None
-    pressure_angles_deg: tuple[float, float] = field(init=False, default=(20.0, 20.0))
+    #: ``(drive, coast)``, derived from ``pressure_angle_deg`` (given only by ``replace``)
+    pressure_angles_deg: tuple[float, float] | None = None
 
     @property
     def unequal_pressure_angles(self) -> bool:
@@ -193,6 +194,9 @@ class PairData:
             unit="degrees",
         )
         angles = self.pressure_angle_deg
+        kept = self.pressure_angles_deg  # a copy's (dataclasses.replace) two sides
+        if not isinstance(angles, list | tuple) and kept is not None and kept[0] == angles:
+            angles = kept
         if isinstance(angles, list | tuple):
             if len(angles) != 2:
                 raise DesignError(

@@ -17,6 +17,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from gearopt.machine import SearchDimension
+
 __all__ = [
     "INCH_MM",
     "CutterSize",
@@ -25,6 +27,7 @@ __all__ = [
     "CYCLO_PALLOID",
     "EPICYCLOID",
     "face_hobbing_rules",
+    "face_hobbing_dimensions",
     "face_milling_rules",
     "filtered",
     "nearest",
@@ -223,3 +226,17 @@ def face_milling_rules(
             lambda s: s.radius_mm - 0.5 * slot_width_mm - slot_reach_mm > 0.0,
         ),
     )
+
+
+def face_hobbing_dimensions(
+    catalogue: Catalogue, keys: tuple[str, ...], *, blade_groups: int, module_mm: float
+) -> tuple[SearchDimension, ...]:
+    """Categorical dimensions of ``keys`` over the heads of ``catalogue`` that suit a
+    face-hobbing design (:func:`face_hobbing_rules`); () when none does."""
+    sizes, note = filtered(
+        catalogue, face_hobbing_rules(blade_groups=blade_groups, module_mm=module_mm)
+    )
+    if not sizes:
+        return ()
+    radii = [s.radius_mm for s in sizes]
+    return tuple(SearchDimension.categorical(key, radii, note) for key in keys)

@@ -259,7 +259,8 @@ def default_chosen(pair: PairData, gear_flanks: dict, flank: str) -> dict:
     start = pinion_start(pair, gear_flanks, flank, chosen)
     am = blank.mean_cone_distance_mm
     cone = CradleCone(dedendum_angle_rad=delta1, apex_z_mm=-start["sliding_base_mm"])
-    target = math.sin(math.radians(blank.pressure_angle_deg))
+    # the pinion's convex flank is the drive side, its concave the coast side
+    target = math.sin(math.radians(blank.pressure_angles_deg[flank == "concave"]))
 
     def miss(a):
         return (
