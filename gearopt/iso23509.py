@@ -54,6 +54,15 @@ addendum of the tooth before thinning)::
     s_mn = s_mn,0 - j_mn cos alpha_n / 2
     s_mnc = d_v sin(s_mn / d_v),  h_amc = h_am + d_v (1 - cos(s_mn,0 / d_v)) / 2
 
+Unequal pressure angles (``[pair] pressure_angle_deg = [drive, coast]``, alpha_nD and alpha_nC):
+the rack shifted by x_hm1 m_mn thickens the tooth by x_hm1 m_mn tan alpha on each flank, so
+s_mn1,0 = pi m_mn / 2 + 2 x_smn m_mn + x_hm1 m_mn (tan alpha_nD + tan alpha_nC); the duplex
+slot keeps its width with the mean tangent (tan alpha_nD + tan alpha_nC) / 2 in place of
+tan alpha_n; the backlash thinning takes the mean cosine; the top land is the mean of the two
+sides' involute tips, the contact ratios are the worse side's and the undercut is checked on the
+smaller angle (derivations of this code for a tooth with unequal flanks, not the standard's
+text).
+
 Top land: the involute tooth of the virtual normal spur gear d_vn = d_v / (1 - sin^2 beta_m
 cos^2 alpha_n) at its tip circle d_vn + 2 h_am.
 
