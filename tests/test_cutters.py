@@ -32,15 +32,8 @@ from gearopt_plugins.cutters.catalogue import (
 from gearopt_plugins.face_milling.cutters import suitable
 
 from .conftest import STUDIES
+from .test_iso23509 import PAIR_1439  # issue 24's 14/39 basic data
 
-PAIR_1439 = {
-    "pinion_teeth": 14,
-    "gear_teeth": 39,
-    "mean_spiral_angle_deg": 35.0,
-    "pressure_angle_deg": 20.0,
-    "face_width_mm": 25.4,
-    "outer_pitch_diameter_mm": 176.893,
-}
 DRIVE_COAST = STUDIES / "iso23509" / "face_milling_14x39_drive_coast.toml"
 
 
