@@ -83,6 +83,8 @@ class Blank:
         2 (R_o + a_o cos g) at the heel.
     hand
         ``("left", "right")`` or the reverse.
+    pressure_angle_deg, pressure_angles_deg
+        The drive side's pressure angle, and ``(drive, coast)`` (``()``: both the first).
     """
 
     pinion_teeth: int
@@ -114,6 +116,11 @@ class Blank:
     outer_dedendum_mm: tuple[float, float] = (0.0, 0.0)
     addendum_angle_deg: tuple[float, float] = (0.0, 0.0)
     dedendum_angle_deg: tuple[float, float] = (0.0, 0.0)
+    pressure_angles_deg: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.pressure_angles_deg:
+            object.__setattr__(self, "pressure_angles_deg", (self.pressure_angle_deg,) * 2)
 
     @property
     def tapered(self) -> tuple[bool, bool]:
@@ -187,6 +194,7 @@ def compute_blank(pair: PairData) -> Blank:
         shaft_angle_deg=pair.shaft_angle_deg,
         mean_spiral_angle_deg=pair.mean_spiral_angle_deg,
         pressure_angle_deg=pair.pressure_angle_deg,
+        pressure_angles_deg=pair.pressure_angles_deg,
         face_width_mm=pair.face_width_mm,
         pitch_angle_deg=pitch,
         face_angle_deg=tuple(face_angle),

@@ -20,7 +20,7 @@ Example (seed 001, Table 2)::
                                           # outer_pitch_diameter_mm (the gear's d_e2), or
                                           # outer_transverse_module_mm
     face_width_mm = 32.0
-    pressure_angle_deg = 20.0
+    pressure_angle_deg = 20.0             # or [drive, coast]: unequal flank pressure angles
     pinion_hand = "left"
     outer_addendum_mm = [3.397, 3.397]
     outer_dedendum_mm = [4.076, 4.076]
@@ -135,6 +135,11 @@ class PairData:
     ``outer_addendum_mm`` and ``outer_dedendum_mm`` default to 1.0 and 1.25 mean normal modules;
     the chordal addendum and thickness are needed only to solve the additional slope angle.
 
+    ``pressure_angle_deg`` is one angle or ``[drive, coast]`` (drive: pinion convex on gear
+    concave; coast: pinion concave on gear convex). After validation ``pressure_angle_deg`` is
+    the drive side's and ``pressure_angles_deg`` the pair ``(drive, coast)``; a model that
+    cannot cut unequal angles refuses a pair whose ``unequal_pressure_angles`` is True.
+
     Tapered depth: ``face_angle_deg`` and ``root_angle_deg`` (``[pinion, gear]``, as published
     summaries print them) give the face and root cones; either absent means that cone is
     parallel to the pitch cone (uniform depth: face = root = pitch angle). The outer addendum
@@ -150,7 +155,7 @@ class PairData:
     mean_spiral_angle_deg: float
     face_width_mm: float
     shaft_angle_deg: float = 90.0
-    pressure_angle_deg: float = 20.0
+    pressure_angle_deg: float | tuple[float, float] = 20.0
     pinion_hand: str = "left"
     mean_cone_distance_mm: float | None = None
     mean_normal_module_mm: float | None = None
@@ -162,6 +167,13 @@ class PairData:
     root_angle_deg: tuple[float, float] | None = None
     mean_normal_chordal_addendum_mm: tuple[float, float] | None = None
     mean_normal_chordal_thickness_mm: tuple[float, float] | None = None
+    #: ``(drive, coast)``, derived from ``pressure_angle_deg`` (given only by ``replace``)
+    pressure_angles_deg: tuple[float, float] | None = None
+
+    @property
+    def unequal_pressure_angles(self) -> bool:
+        """True when the drive and coast pressure angles differ."""
+        return self.pressure_angles_deg[0] != self.pressure_angles_deg[1]
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -181,9 +193,26 @@ class PairData:
             le=60.0,
             unit="degrees",
         )
-        check_number(
-            "pair.pressure_angle_deg", self.pressure_angle_deg, gt=0.0, lt=45.0, unit="degrees"
+        angles = self.pressure_angle_deg
+        kept = self.pressure_angles_deg  # a copy's (dataclasses.replace) two sides
+        if not isinstance(angles, list | tuple) and kept is not None and kept[0] == angles:
+            angles = kept
+        if isinstance(angles, list | tuple):
+            if len(angles) != 2:
+                raise DesignError(
+                    "pair.pressure_angle_deg",
+                    list(angles),
+                    "must be one angle or a list of two [drive, coast]",
+                )
+            names = ("pair.pressure_angle_deg[drive]", "pair.pressure_angle_deg[coast]")
+        else:
+            angles, names = (angles, angles), ("pair.pressure_angle_deg",) * 2
+        angles = tuple(
+            float(check_number(n, a, gt=0.0, lt=45.0, unit="degrees"))
+            for n, a in zip(names, angles, strict=True)
         )
+        set_(self, "pressure_angles_deg", angles)
+        set_(self, "pressure_angle_deg", angles[0])
         if not isinstance(self.pinion_hand, str) or self.pinion_hand.lower() not in (
             "left",
             "right",
@@ -198,7 +227,7 @@ class PairData:
         set_(self, "mean_normal_module_mm", derived)
 
         face = check_number("pair.face_width_mm", self.face_width_mm, gt=0.0, unit="mm")
-        for name in ("shaft_angle_deg", "mean_spiral_angle_deg", "pressure_angle_deg"):
+        for name in ("shaft_angle_deg", "mean_spiral_angle_deg"):
             set_(self, name, float(getattr(self, name)))
         set_(self, "face_width_mm", face)
         outer = am + 0.5 * face  # the outer cone distance R_e
@@ -478,6 +507,7 @@ def pair_from_tables(
             shaft_angle_deg=base.shaft_angle_deg,
             mean_spiral_angle_deg=base.mean_spiral_angle_deg,
             pressure_angle_deg=base.pressure_angle_deg,
+            coast_pressure_angle_deg=base.pressure_angles_deg[1],
             face_width_mm=base.face_width_mm,
             mean_cone_distance_mm=base.mean_cone_distance_mm,
         ),

@@ -54,6 +54,15 @@ addendum of the tooth before thinning)::
     s_mn = s_mn,0 - j_mn cos alpha_n / 2
     s_mnc = d_v sin(s_mn / d_v),  h_amc = h_am + d_v (1 - cos(s_mn,0 / d_v)) / 2
 
+Unequal pressure angles (``[pair] pressure_angle_deg = [drive, coast]``, alpha_nD and alpha_nC):
+the rack shifted by x_hm1 m_mn thickens the tooth by x_hm1 m_mn tan alpha on each flank, so
+s_mn1,0 = pi m_mn / 2 + 2 x_smn m_mn + x_hm1 m_mn (tan alpha_nD + tan alpha_nC); the duplex
+slot keeps its width with the mean tangent (tan alpha_nD + tan alpha_nC) / 2 in place of
+tan alpha_n; the backlash thinning takes the mean cosine; the top land is the mean of the two
+sides' involute tips, the contact ratios are the worse side's and the undercut is checked on the
+smaller angle (derivations of this code for a tooth with unequal flanks, not the standard's
+text).
+
 Top land: the involute tooth of the virtual normal spur gear d_vn = d_v / (1 - sin^2 beta_m
 cos^2 alpha_n) at its tip circle d_vn + 2 h_am.
 
@@ -245,6 +254,15 @@ class PairBasics:
     pressure_angle_deg: float
     face_width_mm: float
     mean_cone_distance_mm: float
+    #: the coast side's alpha_nC when it differs from the drive side's (``pressure_angle_deg``)
+    coast_pressure_angle_deg: float | None = None
+
+    @property
+    def pressure_angles_rad(self) -> tuple[float, float]:
+        """(alpha_nD, alpha_nC): drive and coast."""
+        coast = self.coast_pressure_angle_deg
+        drive = self.pressure_angle_deg
+        return math.radians(drive), math.radians(drive if coast is None else coast)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -340,13 +358,10 @@ def _dedendum_angles_rad(
     if data.taper == "standard":
         return standard
     beta = math.radians(basics.mean_spiral_angle_deg)
-    alpha = math.radians(basics.pressure_angle_deg)
+    tan_alpha = 0.5 * sum(math.tan(a) for a in basics.pressure_angles_rad)
     rc = data.cutter_radius_mm
     duplex = (
-        math.pi
-        * met
-        / (2.0 * re * math.tan(alpha) * math.cos(beta))
-        * (1.0 - rm * math.sin(beta) / rc)
+        math.pi * met / (2.0 * re * tan_alpha * math.cos(beta)) * (1.0 - rm * math.sin(beta) / rc)
     )
     if duplex <= 0.0:
         raise DesignError(
@@ -446,7 +461,7 @@ def standard_blank(basics: PairBasics, data: BlankData) -> StandardBlank:
         )
     delta = (d1, d2)
     beta = math.radians(basics.mean_spiral_angle_deg)
-    alpha = math.radians(basics.pressure_angle_deg)
+    sides = basics.pressure_angles_rad
     b = basics.face_width_mm
     rm = basics.mean_cone_distance_mm
     re, ri = rm + 0.5 * b, rm - 0.5 * b
@@ -485,17 +500,36 @@ def standard_blank(basics: PairBasics, data: BlankData) -> StandardBlank:
     de = _pairwise(lambda d: 2.0 * re * math.sin(d), delta)
     dm = _pairwise(lambda d: 2.0 * rm * math.sin(d), delta)
     jmn = data.outer_normal_backlash_mm * rm / re
-    s1 = 0.5 * math.pi * mmn + 2.0 * mmn * (
-        data.thickness_modification_coefficient + xhm * math.tan(alpha)
+    s1 = 0.5 * math.pi * mmn + mmn * (
+        2.0 * data.thickness_modification_coefficient
+        + xhm * (math.tan(sides[0]) + math.tan(sides[1]))
     )
     s0 = (s1, math.pi * mmn - s1)
-    smn = _pairwise(lambda s: s - 0.5 * jmn * math.cos(alpha), s0)
+    cos_alpha = 0.5 * (math.cos(sides[0]) + math.cos(sides[1]))
+    smn = _pairwise(lambda s: s - 0.5 * jmn * cos_alpha, s0)
     dv = _pairwise(lambda d, g: d / math.cos(g), dm, delta)
-    dvn = _pairwise(lambda d: d / (1.0 - (math.sin(beta) * math.cos(alpha)) ** 2), dv)
+    dvn_sides = [
+        _pairwise(lambda d, a=a: d / (1.0 - (math.sin(beta) * math.cos(a)) ** 2), dv) for a in sides
+    ]
     smnc = _pairwise(lambda d, s: d * math.sin(s / d), dv, smn)
     hamc = _pairwise(lambda d, s, h: h + 0.5 * d * (1.0 - math.cos(s / d)), dv, s0, ham)
-    top = _pairwise(lambda d, s, h: _top_land_mm(dvn=d, s_mn=s, ham=h, alpha=alpha), dvn, smn, ham)
-    ratios = _contact_ratios(dm=dm, delta=delta, ham=ham, beta=beta, alpha=alpha, mmn=mmn, b=b)
+    top = _pairwise(
+        lambda s, h, *dvn: (
+            0.5
+            * sum(
+                _top_land_mm(dvn=d, s_mn=s, ham=h, alpha=a) for d, a in zip(dvn, sides, strict=True)
+            )
+        ),
+        smn,
+        ham,
+        *dvn_sides,
+    )
+    per_side = [
+        _contact_ratios(dm=dm, delta=delta, ham=ham, beta=beta, alpha=a, mmn=mmn, b=b)
+        for a in sides
+    ]
+    worse = min(range(2), key=lambda k: per_side[k]["total_contact_ratio"])
+    ratios = per_side[worse]
     blank = StandardBlank(
         method="face hobbing" if data.face_hobbing else "face milling",
         taper=data.taper or "given gear angles",
@@ -544,11 +578,19 @@ def standard_blank(basics: PairBasics, data: BlankData) -> StandardBlank:
         raise DesignError(
             "pair.face_width_mm",
             b,
-            f"gives a total contact ratio of the virtual cylindrical gears "
-            f"eps_vg = {blank.total_contact_ratio:.4f} < 1 (face {blank.face_contact_ratio:.4f}, "
-            f"profile {blank.profile_contact_ratio:.4f}): the pair cannot mesh continuously",
+            "gives a total contact ratio of the virtual cylindrical gears "
+            + (f"on the {('drive', 'coast')[worse]} side " if sides[0] != sides[1] else "")
+            + f"eps_vg = {blank.total_contact_ratio:.4f} < 1 (face {blank.face_contact_ratio:.4f}, "
+            + f"profile {blank.profile_contact_ratio:.4f}): the pair cannot mesh continuously",
         )
-    from_checks = _warnings(blank, data, dvn=dvn, alpha=alpha)
+    undercut = min(range(2), key=lambda k: dvn_sides[k][0] * math.sin(sides[k]) ** 2)
+    from_checks = _warnings(
+        blank,
+        data,
+        dvn=dvn_sides[undercut],
+        alpha=sides[undercut],
+        side=("drive", "coast")[undercut] if sides[0] != sides[1] else "",
+    )
     return replace(blank, warnings=from_checks)
 
 
@@ -570,9 +612,11 @@ def _contact_ratios(*, dm, delta, ham, beta, alpha, mmn, b) -> dict[str, float]:
     }
 
 
-def _warnings(blank: StandardBlank, data: BlankData, *, dvn, alpha: float) -> tuple[str, ...]:
+def _warnings(
+    blank: StandardBlank, data: BlankData, *, dvn, alpha: float, side: str
+) -> tuple[str, ...]:
     """The checks of a blank that is cuttable but outside the usual range, each naming its
-    rule and values."""
+    rule and values (the undercut on the side of the smaller pressure angle, ``side``)."""
     out = []
     b, re, mmn = (
         blank.outer_cone_distance_mm - blank.inner_cone_distance_mm,
@@ -603,7 +647,8 @@ def _warnings(blank: StandardBlank, data: BlankData, *, dvn, alpha: float) -> tu
         out.append(
             f"undercut: the pinion's mean working dedendum h_mw - h_am1 = {working:.4f} mm "
             f"exceeds d_vn1 sin^2(alpha_n) / 2 = {limit:.4f} mm of its virtual normal spur "
-            "gear (the generating rack undercuts the pinion)"
+            "gear (the generating rack undercuts the pinion"
+            + (f" on its {side} flank)" if side else ")")
         )
     if blank.profile_contact_ratio < 1.0:
         out.append(

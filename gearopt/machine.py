@@ -42,16 +42,58 @@ class SearchDimension:
         Dotted design key, e.g. ``"machine.pinion.inner_cutter_radius_mm"``.
     low, high
         Inclusive bounds in the key's unit; every value between them gives a valid design.
+        A categorical dimension's bounds are its smallest and largest choice.
     log
         Sample on a log scale.
+    choices
+        A categorical dimension's values (a catalogue's sizes, :meth:`categorical`): the study
+        samples one of them, never a value between; empty for a continuous dimension.
+    note
+        One line saying where the choices come from (shown by ``gearopt study``).
     """
 
     key: str
     low: float
     high: float
     log: bool = False
+    choices: tuple[float, ...] = ()
+    note: str = ""
+
+    @classmethod
+    def categorical(cls, key: str, choices, note: str = "") -> SearchDimension:
+        """A dimension whose values are ``choices`` only (sorted, duplicates removed)."""
+        values = tuple(sorted({float(c) for c in choices}))
+        if not values:
+            raise PluginError(f"search dimension {key}", (), "needs at least one choice")
+        return cls(key=key, low=values[0], high=values[-1], choices=values, note=note)
+
+    def suggest(self, trial: Any) -> float:
+        """The value an Optuna trial suggests for this dimension (categorical or float)."""
+        if self.choices:
+            return float(trial.suggest_categorical(self.key, list(self.choices)))
+        return trial.suggest_float(self.key, self.low, self.high, log=self.log)
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` is one of the choices, or inside the bounds."""
+        if self.choices:
+            return any(math.isclose(value, c, rel_tol=1e-12, abs_tol=1e-12) for c in self.choices)
+        return self.low <= value <= self.high
+
+    def describe(self) -> Any:
+        """What a study's record keeps of the dimension: ``[low, high, log]`` or the choices."""
+        return {"choices": list(self.choices)} if self.choices else [self.low, self.high, self.log]
 
     def __post_init__(self) -> None:
+        if self.choices:
+            if not all(math.isfinite(c) for c in self.choices) or (
+                min(self.choices) != self.low or max(self.choices) != self.high
+            ):
+                raise PluginError(
+                    f"search dimension {self.key}",
+                    self.choices,
+                    "needs finite choices whose smallest and largest are low and high",
+                )
+            return
         width = self.high - self.low
         if not (math.isfinite(self.low) and math.isfinite(width) and self.low < self.high):
             raise PluginError(
@@ -221,6 +263,19 @@ class BaseMachineModel(abc.ABC):
     @abc.abstractmethod
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         """The design keys a study may tune, with bounds inside which every design is valid."""
+
+    def cutter_catalogue(self, design: Design) -> tuple[SearchDimension, ...]:
+        """The design keys a study may search over the standard cutters one can buy
+        (``[search] "<key>" = "catalogue"``): categorical dimensions
+        (:meth:`SearchDimension.categorical`) whose choices are the catalogue's sizes that
+        suit ``design`` under the model's own rules (blade groups, module range, the slope
+        angle's limit), each ``note`` saying which catalogue, how many sizes remain of how
+        many and where the sizes come from.
+
+        The catalogue is the plugin's data; the core never names one. The default is ``()``:
+        a model without a catalogue refuses the search value ``"catalogue"``.
+        """
+        return ()
 
     def machine_table(self, design: Design) -> dict[str, Any]:
         """The ``[machine]`` table (without ``model``) that states ``design``'s settings

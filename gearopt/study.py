@@ -176,7 +176,7 @@ def _open(spec: StudySpec, storage: str | None) -> OpenStudy:
     fast_sqlite(rdb.engine)
     results = ResultsStore(url, engine=rdb.engine)
     requeue.results = results
-    search = {d.key: [d.low, d.high, d.log] for d in spec.search}
+    search = {d.key: d.describe() for d in spec.search}
     first = results.register_study(spec.name, search)
     if first:
         with warnings.catch_warnings():
@@ -379,10 +379,7 @@ class Coordinator:
             if trial.number >= self.trials and self.ahead(trial.number) >= self.trials:
                 self.surplus(hand)
                 return False
-            hand.params = {
-                d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log)
-                for d in self.spec.search
-            }
+            hand.params = {d.key: d.suggest(trial) for d in self.spec.search}
             self.submit(hand)
             self.asked += 1
             return True
@@ -739,7 +736,7 @@ def trial_objective(spec: StudySpec) -> Callable[[optuna.trial.Trial], Any]:
     a study on several workers with crash recovery and the gearopt tables."""
 
     def objective(trial: optuna.trial.Trial):
-        params = {d.key: trial.suggest_float(d.key, d.low, d.high, log=d.log) for d in spec.search}
+        params = {d.key: d.suggest(trial) for d in spec.search}
         outcome = evaluate_trial(spec, trial.number, params)
         if outcome.failed:
             raise StudyError(f"trial {trial.number}", params, outcome.error or "failed")

@@ -35,6 +35,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from gearopt.study import constraint_values, run_study
 
     spec = load_study_spec(args.study)
+    for dim in spec.search:  # what a catalogue search kept of the catalogue, and why
+        if dim.note:
+            print(f"gearopt: search {dim.key}: {dim.note}", file=sys.stderr)
     # a polite stop (a scheduler's SIGTERM) is a Ctrl-C: the trials in hand go back to the queue
     signal.signal(signal.SIGTERM, _interrupt)
     try:

@@ -14,6 +14,8 @@ A study file::
     [search]                            # dotted design keys: [low, high] or {low, high, log}
     "machine.pinion.inner_cutter_radius_mm" = [73.0, 77.0]
     "machine.pinion.blade_parabola_coefficient_per_mm" = "model"   # the model's own bounds
+    "machine.gear.inner_cutter_radius_mm" = "catalogue"  # the model's standard cutters that
+                                                         # suit the design (categorical)
 
     [evaluations.tca]                   # a label; evaluator defaults to the label
     [evaluations.misaligned]
@@ -94,6 +96,10 @@ def _check_value(dim: Dimension, value: Any, where: str) -> float:
     """``value`` as a float inside the dimension's bounds, or a :class:`StudyError`."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise StudyError(f"{where}.{dim.key}", value, "must be a number")
+    if dim.choices and not dim.contains(value):
+        raise StudyError(
+            f"{where}.{dim.key}", value, f"must be one of the catalogue's {list(dim.choices)}"
+        )
     if not dim.low <= value <= dim.high:
         raise StudyError(f"{where}.{dim.key}", value, f"must lie in [{dim.low}, {dim.high}]")
     return float(value)
@@ -211,12 +217,25 @@ def _dimension(key: str, value: Any, design: Design) -> Dimension:
                 where, value, f"the model has no bounds for it; it has {sorted(declared)}"
             )
         return declared[key]
+    if value == "catalogue":
+        model = get_machine_model(design.model)
+        offered = {d.key: d for d in model.cutter_catalogue(design)}
+        if key not in offered:
+            rule = (
+                f"the {design.model!r} model offers the catalogue for {sorted(offered)}"
+                if offered
+                else f"the {design.model!r} model has no cutter catalogue for this design"
+            )
+            raise StudyError(where, value, rule)
+        return offered[key]
     if isinstance(value, list) and len(value) == 2:
         bounds = {"low": value[0], "high": value[1]}
     elif isinstance(value, Mapping) and {"low", "high"} <= set(value) <= {"low", "high", "log"}:
         bounds = dict(value)
     else:
-        raise StudyError(where, value, 'must be [low, high], {low, high, log} or "model"')
+        raise StudyError(
+            where, value, 'must be [low, high], {low, high, log}, "model" or "catalogue"'
+        )
     try:
         return Dimension(
             key=key,
@@ -234,7 +253,8 @@ def _check_search_keys(design: Design, dims) -> None:
     other reasons, which its trial reports)."""
     for d in dims:
         try:
-            with_overrides(design, {d.key: 0.5 * (d.low + d.high)})
+            middle = d.choices[len(d.choices) // 2] if d.choices else 0.5 * (d.low + d.high)
+            with_overrides(design, {d.key: middle})
         except UnknownKeyError as exc:
             raise StudyError(f"search.{d.key}", exc.value, exc.rule) from None
         except GearoptError:

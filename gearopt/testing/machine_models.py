@@ -111,6 +111,20 @@ class MachineModelContract:
             machine_model.basic_settings(design)
         )
 
+    def test_catalogue_sizes_are_valid_designs(self, design, machine_model, plugin_manager):
+        """Every size a model's cutter catalogue offers for the design (categorical
+        dimensions, filtered by the model's own rules) gives a design it can set up."""
+        for dim in machine_model.cutter_catalogue(design):
+            assert isinstance(dim, SearchDimension) and dim.choices, dim
+            for value in dim.choices:
+                try:
+                    changed = with_overrides(
+                        design, {dim.key: value}, plugin_manager=plugin_manager
+                    )
+                    machine_model.basic_settings(changed)
+                except GearoptError as exc:  # pragma: no cover - the failure message is the point
+                    pytest.fail(f"catalogue size {dim.key} = {value} is refused: {exc}")
+
     def test_search_space_corners_are_valid_designs(self, design, machine_model, plugin_manager):
         space = machine_model.search_space(design)
         assert isinstance(space, tuple)

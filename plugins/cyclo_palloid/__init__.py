@@ -40,6 +40,7 @@ from gearopt.flank import FlankGrid, FlankMap, check_member_and_flank
 from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.rexs.attributes import RexsMachine
 from gearopt.validate import check_keys, read_integer, read_number, read_table
+from gearopt_plugins.cutters.catalogue import CYCLO_PALLOID, face_hobbing_dimensions
 from gearopt_plugins.cyclo_palloid import rexs as cp_rexs
 from gearopt_plugins.cyclo_palloid.settings import (
     AUTO,
@@ -191,6 +192,14 @@ class CycloPalloid(BaseMachineModel):
 
     def parse_machine(self, table: Mapping[str, Any], pair: PairData) -> CycloPalloidMachine:
         pair.require_uniform_depth(self.name)
+        if pair.unequal_pressure_angles:
+            raise DesignError(
+                "pair.pressure_angle_deg",
+                list(pair.pressure_angles_deg),
+                "the cyclo-palloid model grinds one profile_pressure_angle_deg per member into "
+                "both blade systems (inner: convex flanks, outer: concave flanks), so it cannot "
+                "cut unequal drive and coast pressure angles: give one angle",
+            )
         check_keys(table, MACHINE_KEYS, "machine")
         nb = read_integer(table, "blade_groups", "machine", ge=1, le=30)
         default_mb = pair.mean_normal_module_mm
@@ -270,6 +279,18 @@ class CycloPalloid(BaseMachineModel):
             grid=grid or FlankGrid(),
             tool_pass=tool_pass,
             notes={f: (f"{BLADE_OF_FLANK[f]} blades (cyclo-palloid)",) for f in flanks},
+        )
+
+    def cutter_catalogue(self, design: Design) -> tuple[SearchDimension, ...]:
+        """Each member's head radius (``inner_cutter_radius_mm``; the outer head follows it
+        unless given) over the catalogue's cyclo-palloid heads with the design's blade groups
+        that the slope angle allows (:mod:`gearopt_plugins.cutters.catalogue`)."""
+        machine = design.machine
+        return face_hobbing_dimensions(
+            CYCLO_PALLOID,
+            tuple(f"machine.{m}.inner_cutter_radius_mm" for m in MEMBERS),
+            blade_groups=machine.blade_groups,
+            module_mm=machine.blade_module_mm,
         )
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:

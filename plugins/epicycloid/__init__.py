@@ -42,7 +42,7 @@ override the member's for one flank)::
     cutter_head_radius_mm = 137.4           # R_h
     blade_profile_radius_mm = "inf"         # R_b: a number in mm or "inf" (straight edge)
     rake_angle_deg = 0.0                    # as cyclo-palloid (seed 001 eq 4)
-    profile_pressure_angle_deg = 20.0       # default the pair's pressure angle
+    profile_pressure_angle_deg = 20.0       # default the pair's (drive or coast) pressure angle
 
     [machine.pinion.convex]
     cutter_head_radius_mm = 135.0
@@ -74,6 +74,7 @@ from gearopt.machine import BaseMachineModel, MachineSettings, SearchDimension
 from gearopt.rexs.attributes import RexsMachine
 from gearopt.validate import check_keys, read_integer, read_number, read_table
 from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profile_radius
+from gearopt_plugins.cutters.catalogue import EPICYCLOID, face_hobbing_dimensions
 from gearopt_plugins.epicycloid import rexs as ep_rexs
 from gearopt_plugins.face_hobbing import kernels as hobbing_kernels
 from gearopt_plugins.face_hobbing.family import BladeSystem
@@ -201,8 +202,10 @@ class EpicycloidSettings:
 
 
 def _parse_flank(
-    merged: Mapping[str, Any], where: str, pair: PairData, rho_mm: float
+    merged: Mapping[str, Any], where: str, pair: PairData, rho_mm: float, side: int
 ) -> EpicycloidFlank:
+    """One flank's cutter; ``side`` 0 (drive) or 1 (coast) picks the pair's pressure angle
+    that ``profile_pressure_angle_deg`` defaults to."""
     if "cutter_head_radius_mm" not in merged:
         raise DesignError(
             f"{where}.cutter_head_radius_mm",
@@ -224,7 +227,12 @@ def _parse_flank(
         ),
         rake_angle_deg=read_number(merged, "rake_angle_deg", where, 0.0, gt=-30.0, lt=30.0),
         profile_pressure_angle_deg=read_number(
-            merged, "profile_pressure_angle_deg", where, pair.pressure_angle_deg, gt=0.0, lt=45.0
+            merged,
+            "profile_pressure_angle_deg",
+            where,
+            pair.pressure_angles_deg[side],
+            gt=0.0,
+            lt=45.0,
         ),
     )
 
@@ -314,7 +322,9 @@ class Epicycloid(BaseMachineModel):
                 check_keys(own, FLANK_KEYS, where)
                 # errors name the table where the value came from
                 source = where if own else f"machine.{member}"
-                flanks[flank] = _parse_flank({**member_defaults, **own}, source, pair, rho)
+                # drive: pinion convex, gear concave; coast: the other flanks
+                side = int((flank == "convex") != (member == "pinion"))
+                flanks[flank] = _parse_flank({**member_defaults, **own}, source, pair, rho, side)
             members[member] = EpicycloidMember(**flanks)
         return EpicycloidMachine(blade_groups=nb, blade_module_mm=mb, **members)
 
@@ -405,6 +415,21 @@ class Epicycloid(BaseMachineModel):
 
     def rexs_import(self, machine: RexsMachine, pair: PairData) -> dict[str, Any]:
         return ep_rexs.from_rexs(machine)
+
+    def cutter_catalogue(self, design: Design) -> tuple[SearchDimension, ...]:
+        """The head radius (``cutter_head_radius_mm`` of the whole machine or of a member,
+        where a flank's table does not override it) over the catalogue's epicycloid heads with
+        the design's blade groups that the slope angle allows."""
+        machine = design.machine
+        return face_hobbing_dimensions(
+            EPICYCLOID,
+            (
+                "machine.cutter_head_radius_mm",
+                *(f"machine.{m}.cutter_head_radius_mm" for m in MEMBERS),
+            ),
+            blade_groups=machine.blade_groups,
+            module_mm=machine.blade_module_mm,
+        )
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: EpicycloidMachine = design.machine

@@ -170,6 +170,7 @@ from gearopt_plugins.cutters.blades import MIN_PROFILE_RADIUS_DEPTHS, read_profi
 from gearopt_plugins.face_milling import correction
 from gearopt_plugins.face_milling import rexs as fm_rexs
 from gearopt_plugins.face_milling import synthesis as fs
+from gearopt_plugins.face_milling.cutters import catalogue_dimensions, default_gear_cutter
 from gearopt_plugins.face_milling.family import (
     CutterFlank,
     design_family,
@@ -300,6 +301,8 @@ class FaceMillingMachine:
     gear: FaceMillingMember
     #: how the settings were derived when the design has a ``[synthesis]`` table
     synthesis: tuple = field(default=(), compare=False)
+    #: what the settings took by default (a catalogue cutter), for the settings' notes
+    notes: tuple[str, ...] = field(default=(), compare=False)
 
     def member(self, name: str) -> FaceMillingMember:
         return getattr(self, name)
@@ -471,10 +474,15 @@ _SYNTHESIS_NOTE = (
 def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
     check_keys(table, MACHINE_KEYS, "machine")
     targets, options = fs.read_synthesis(synthesis, pair.blank)
+    notes = ()
     if "gear" in table:
         gear = _parse_member(table, "gear", pair)
     else:
-        given = fs.gear_flanks_from_blank(pair, options["gear_cutter_radius_mm"])
+        radius = options["gear_cutter_radius_mm"]
+        if radius is None:
+            radius, note = default_gear_cutter(pair)
+            notes = (note,)
+        given = fs.gear_flanks_from_blank(pair, radius)
         gear = FaceMillingMember(
             **{
                 f: _parse_flank(given[f], f"machine.gear.{f} (from the blank)", pair, "gear", f)
@@ -515,7 +523,7 @@ def _synthesize(table, synthesis, pair) -> FaceMillingMachine:
         flanks[flank] = _parse_flank(values, where + " (synthesised)", pair, "pinion", flank)
         reports.append(report)
     return FaceMillingMachine(
-        pinion=FaceMillingMember(**flanks), gear=gear, synthesis=tuple(reports)
+        pinion=FaceMillingMember(**flanks), gear=gear, synthesis=tuple(reports), notes=notes
     )
 
 
@@ -614,7 +622,7 @@ class FaceMilling(BaseMachineModel):
                 )
         else:
             notes.insert(0, "the settings as given in [machine]")
-        return MachineSettings(model=self.name, notes=tuple(notes), **out)
+        return MachineSettings(model=self.name, notes=(*notes, *machine.notes), **out)
 
     def generate_flanks(
         self,
@@ -683,6 +691,11 @@ class FaceMilling(BaseMachineModel):
 
     def rexs_import(self, machine: RexsMachine, pair: PairData) -> dict[str, Any]:
         return fm_rexs.from_rexs(machine)
+
+    def cutter_catalogue(self, design: Design) -> tuple[SearchDimension, ...]:
+        """The Gleason face mills that suit the gear (``synthesis.gear_cutter_radius_mm``,
+        :mod:`gearopt_plugins.face_milling.cutters`), when the design has ``[synthesis]``."""
+        return catalogue_dimensions(design.pair, "synthesis" in design.source)
 
     def search_space(self, design: Design) -> tuple[SearchDimension, ...]:
         machine: FaceMillingMachine = design.machine

@@ -13,12 +13,14 @@ blades lie W/2 either side of that circle at the pitch plane (W the slot's mean 
 on the pitch line: the circles are concentric, so the normal width is W along the whole face),
 their tips the mean dedendum b below: point radii r_c + W/2 - b tan(alpha) (outside blade,
 concave flank) and r_c - W/2 + b tan(alpha) (inside blade, convex flank), blade angles alpha =
-the blank's pressure angle. Machine root angle = root angle = pitch angle, sliding base = b
-(the root line in the tip plane, the pitch apex on the cradle axis), ratio of roll c1 =
-sin(gamma_2): the cradle is the crown gear. r_c: ``[synthesis] gear_cutter_radius_mm``, default
-the standard cutter radius (Gleason's face-mill diameters 1.1 to 18 in) nearest to A_m, an
-assumption of this code, not a standard's rule. W: pi m_mn / 2 (equal thickness) or, when the
-pair gives ``mean_normal_chordal_thickness_mm``, pi m_mn minus the gear's (chordal read as
+the blank's pressure angle (the drive side's on the concave flank, the coast side's on the
+convex flank when ``[pair] pressure_angle_deg = [drive, coast]``). Machine root angle = root
+angle = pitch angle, sliding base = b (the root line in the tip plane, the pitch apex on the
+cradle axis), ratio of roll c1 = sin(gamma_2): the cradle is the crown gear. r_c:
+``[synthesis] gear_cutter_radius_mm``, default (:mod:`gearopt_plugins.face_milling.cutters`)
+the catalogue face mill nearest to A_m among those that suit the gear, an assumption of this
+code, not a standard's rule. W: pi m_mn / 2 (equal thickness) or, when the pair gives
+``mean_normal_chordal_thickness_mm``, pi m_mn minus the gear's (chordal read as
 circular: the two differ by about s^3 / (6 d^2), well below 1 um here).
 
 **Tapered depth** (dedendum angle delta = gamma_2 - gamma_R > 0): machine root angle = root
@@ -183,36 +185,42 @@ def gear_tool(
     cone: CradleCone,
     mean_cone_distance_mm: float,
     spiral_angle_rad: float,
-    pressure_angle_rad: float,
+    pressure_angle_rad: float | tuple[float, float],
     slot_width_mm: float,
     cutter_radius_mm: float,
 ) -> dict:
     """The gear's spread-blade tool from the blank (module docstring): ``radial_setting_mm``,
     ``cradle_angle_rad``, ``point_radius_mm`` and ``blade_angle_rad`` ``(outside, inside)``,
     and the developed ends of the slot's normal at the mean point (``ends``). Solved by Newton
-    (complex-step Jacobian) from the uniform-depth formulas, exact for delta = 0."""
-    am, beta, alpha, width, rc = (
+    (complex-step Jacobian) from the uniform-depth formulas, exact for delta = 0.
+    ``pressure_angle_rad`` is one angle or ``(outside blade, inside blade)``: the gear's
+    concave flank (drive side) and convex flank (coast side)."""
+    am, beta, width, rc = (
         mean_cone_distance_mm,
         spiral_angle_rad,
-        pressure_angle_rad,
         slot_width_mm,
         cutter_radius_mm,
+    )
+    alphas = (
+        tuple(pressure_angle_rad)
+        if isinstance(pressure_angle_rad, tuple | list)
+        else (pressure_angle_rad,) * 2
     )
     d = cone.dedendum_angle_rad
     mean_xy = np.array([am * math.cos(d), 0.0])  # the mean pitch point, projected on z_m = 0
     depth = -(cone.apex_z_mm - am * math.sin(d))  # its depth below the tip plane
     centre = mean_xy + rc * np.array([-math.sin(beta), math.cos(beta)])
-    reach = depth * math.tan(alpha)
+    reach = [depth * math.tan(a) for a in alphas]
     toward = np.array([math.sin(beta), -math.cos(beta)])  # from the cutter centre outward at M
     ends0 = [np.array([am, 0.0]) + side * 0.5 * width * toward for side in (1.0, -1.0)]
     x0 = np.array(
         [
             math.hypot(*centre),
             math.atan2(centre[1], centre[0]),
-            rc + 0.5 * width - reach,
-            rc - 0.5 * width + reach,
-            alpha,
-            alpha,
+            rc + 0.5 * width - reach[0],
+            rc - 0.5 * width + reach[1],
+            alphas[0],
+            alphas[1],
             math.hypot(*ends0[0]),
             math.hypot(*ends0[1]),
         ]
@@ -259,8 +267,8 @@ def gear_tool(
                     (length - width) / am,
                     chord @ bis / am,  # the normal makes equal angles with both lines
                     centre[1] * math.cos(beta) - centre[0] * math.sin(beta),
-                    at_am[0].sin_pressure - math.sin(alpha),
-                    at_am[1].sin_pressure - math.sin(alpha),
+                    at_am[0].sin_pressure - math.sin(alphas[0]),
+                    at_am[1].sin_pressure - math.sin(alphas[1]),
                     (np.sqrt(cx * cx + cy * cy) - rc) / am,
                 ]
             )
@@ -292,11 +300,12 @@ def gear_flanks_from_blank(pair: PairData, cutter_radius_mm: float | None = None
     am = blank.mean_cone_distance_mm
     width = slot_width_mm(pair)
     b = blank.mean_dedendum_mm[1]
-    alpha = math.radians(blank.pressure_angle_deg)
+    # the gear's concave flank (outside blade) is the drive side, its convex the coast side
+    alphas = tuple(math.radians(a) for a in blank.pressure_angles_deg)
     gamma = math.radians(blank.pitch_angle_deg[1])
     delta = math.radians(blank.dedendum_angle_deg[1])
     sliding = b * math.cos(delta) - am * math.sin(delta)
-    reach = b * math.cos(delta) * math.tan(alpha)
+    reach = b * math.cos(delta) * math.tan(alphas[1])
     if rc - width / 2.0 - reach <= 0.0:
         raise DesignError(
             "synthesis.gear_cutter_radius_mm",
@@ -307,7 +316,7 @@ def gear_flanks_from_blank(pair: PairData, cutter_radius_mm: float | None = None
         cone=CradleCone(dedendum_angle_rad=delta, apex_z_mm=-sliding),
         mean_cone_distance_mm=am,
         spiral_angle_rad=math.radians(blank.mean_spiral_angle_deg),
-        pressure_angle_rad=alpha,
+        pressure_angle_rad=alphas,
         slot_width_mm=width,
         cutter_radius_mm=rc,
     )

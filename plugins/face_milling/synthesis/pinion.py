@@ -259,7 +259,8 @@ def default_chosen(pair: PairData, gear_flanks: dict, flank: str) -> dict:
     start = pinion_start(pair, gear_flanks, flank, chosen)
     am = blank.mean_cone_distance_mm
     cone = CradleCone(dedendum_angle_rad=delta1, apex_z_mm=-start["sliding_base_mm"])
-    target = math.sin(math.radians(blank.pressure_angle_deg))
+    # the pinion's convex flank is the drive side, its concave the coast side
+    target = math.sin(math.radians(blank.pressure_angles_deg[flank == "concave"]))
 
     def miss(a):
         return (
@@ -556,7 +557,8 @@ def _check(report: SynthesisReport, lag_target, local, targets: SideTargets) -> 
             f"unit normals' match close to {report.first_order_residual:.1e} only, "
             f"{TOLERANCE['first_order']:g} needed) while meeting ellipse_major_axis_mm = "
             f"{targets.ellipse_major_axis_mm:g} mm, path_angle_deg = "
-            f"{targets.path_angle_deg:g} deg and te_level_arcsec = {abs(targets.te_level_arcsec):g}: "
+            f"{targets.path_angle_deg:g} deg and te_level_arcsec = "
+            f"{abs(targets.te_level_arcsec):g}: "
             "ask a shorter ellipse or a lower TE level, or move M (mean_point_face_mm, "
             "mean_point_profile_mm; default the flank centre)",
         )
