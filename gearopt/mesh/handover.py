@@ -7,11 +7,17 @@ guess is where the cubic interpolants of the two pairs' sampled lags cross
 (:func:`lag_crossing`), checked by evaluations at the guess and an eighth of a position step to
 either side: the root of the parabola through the three differences stands when it is within a
 tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
-a guess that does not settle) an iteration on the bracket: a secant step, the parabola through
-three differences, a last secant step.
+a guess that does not settle) the Illinois method on the bracket, kept bracketing, until it is
+narrower than :data:`TOLERANCE_RAD`.
 
-Evaluations are asked for as :class:`Request` rows, answered by the joint field's
-refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`).
+A guess's checks are asked for as :class:`Request` rows, answered by the joint field's
+refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`): the
+lags there are smooth and the contact points known. The iteration's evaluations are the lags
+themselves, ``(relative rotation, tag)`` rows sampled like every position (the node field's
+least nodes refined, :meth:`gearopt.contact.JointField.sample`): in edge contact a refinement
+from a point interpolated between the bracket's contact points can settle on another edge's
+local minimum (a lag difference several arcsec off), and the lag, a minimum over the flank,
+can bend or step between positions, where a fixed number of secant steps does not converge.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from gearopt.contact import FieldSample
 
 __all__ = [
     "FIT_TAGS",
+    "ITERATIONS",
     "ITERATION_TAGS",
     "HandOver",
     "Request",
@@ -37,6 +44,7 @@ __all__ = [
     "parabola",
     "parabola_at",
     "parabola_root",
+    "TOLERANCE_RAD",
 ]
 
 
@@ -55,6 +63,11 @@ class Request(NamedTuple):
 FIT_TAGS = tuple(("ho", pair, sign) for pair in (0, 1) for sign in (-1, 1))
 #: the answers of an iteration step: both pairs at the point
 ITERATION_TAGS = (("ho", 0, 0), ("ho", 1, 0))
+#: the iteration stops once the bracket is narrower (relative rotation; the lag then moves by
+#: well under 1e-3 arcsec)
+TOLERANCE_RAD = 1e-9
+#: the most steps of the iteration (bisection of a position step to 1e-9 rad takes about 26)
+ITERATIONS = 60
 
 
 class HandOver:
@@ -78,10 +91,7 @@ class HandOver:
     lo, hi, d_lo, d_hi, ends
         As given.
     x0
-        The secant guess on the bracket; once the iteration has evaluated it, the iteration's
-        first point.
-    d0
-        D at ``x0`` once evaluated (the last secant step's other point), else None.
+        The secant guess on the bracket: the iteration's first point.
     delta
         Offset of a guess's check evaluations (an eighth of a step).
     mode
@@ -92,10 +102,12 @@ class HandOver:
         The lag at the hand-over when interpolated by the check's parabolas, else None (it is
         then taken from the extra positions' evaluation at ``x``).
     round
-        0 at a first evaluation, 1 at the second (a guess's second check; the iteration's
-        parabola step).
+        0 at a guess's first check, 1 at its second.
     bracket
-        The part of the bracket that holds the root after the iteration's first evaluation.
+        ``[a, b, d_a, d_b, side]`` the iteration's bracket, D at its ends (the Illinois
+        method's, halved where one end stays) and the end last moved (0 a, 1 b, -1 none).
+    steps
+        The iteration's evaluations so far.
     done
         True once settled.
     """
@@ -103,13 +115,13 @@ class HandOver:
     def __init__(self, lo, hi, d_lo, d_hi, ends, step):
         self.lo, self.hi, self.d_lo, self.d_hi, self.ends = lo, hi, d_lo, d_hi, ends
         self.x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
-        self.d0 = None
         self.delta = step / 8.0
         self.mode = None
         self.x = None
         self.lag = None
         self.round = 0
-        self.bracket = None
+        self.bracket = [lo, hi, d_lo, d_hi, -1]
+        self.steps = 0
         self.done = False
 
     def fit_requests(self, x, pitch: float) -> list[Request]:
@@ -126,15 +138,11 @@ class HandOver:
                 out.append(Request(x + shift + sign * self.delta, s, h, ("ho", pair, sign)))
         return out
 
-    def iteration_requests(self, x, pitch: float) -> list[Request]:
-        """An iteration step: both pairs at ``x``, started from the middle of each pair's
-        contact points at the bracket's ends."""
+    def iteration_rows(self, x, pitch: float) -> list[tuple[float, tuple]]:
+        """An iteration step: both pairs at ``x``, as ``(relative rotation, tag)`` rows to
+        sample (the lags as at every position; see the module docstring)."""
         self.mode, self.x = "iterate", float(x)
-        out = []
-        for pair, shift in ((0, 0.0), (1, -pitch)):
-            (s0, h0), (s1, h1) = self.ends[pair]
-            out.append(Request(x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ("ho", pair, 0)))
-        return out
+        return [(self.x, ITERATION_TAGS[0]), (self.x - pitch, ITERATION_TAGS[1])]
 
     def take_fit(self, got: list, ex: FieldSample) -> tuple[str, float]:
         """Take in a guess's check.
@@ -173,28 +181,42 @@ class HandOver:
         return "iterate", self.x0
 
     def take_iteration(self, d: float) -> float | None:
-        """Take in D at ``x``: the next point to evaluate, or None once settled (at ``x``)."""
-        if not np.isfinite(d):
+        """Take in D at ``x`` (the Illinois method on the bracket): the next point to
+        evaluate, or None once settled (at ``x``).
+
+        D is +-inf where one pair is off the flanks (its sign still tells the side) and the
+        step is then a bisection; NaN (both off) ends the search where it is.
+        """
+        self.steps += 1
+        if d == 0.0 or np.isnan(d):
             self.done = True
             return None
-        lo, hi, d_lo, d_hi = self.lo, self.hi, self.d_lo, self.d_hi
-        if self.round == 0:
-            x0 = self.x
-            self.x0, self.d0 = x0, d
-            a, b, c = parabola(lo - x0, hi - x0, d_lo, d, d_hi)
-            roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
-            roots = np.real(roots[np.isreal(roots)]) + x0
-            self.bracket = (lo, x0) if d > 0.0 else (x0, hi)
-            good = roots[(roots >= self.bracket[0]) & (roots <= self.bracket[1])]
-            self.round = 1
-            return float(good[0]) if good.size else x0
-        x0, d0, x1 = self.x0, self.d0, self.x
-        if d != d0:  # one last secant step between the two best points
-            x2 = x1 - d * (x1 - x0) / (d - d0)
-            if self.bracket[0] <= x2 <= self.bracket[1]:
-                self.x = float(x2)
-        self.done = True
-        return None
+        a, b, d_a, d_b, moved = self.bracket
+        x = self.x
+        if d < 0.0:
+            if moved == 0 and np.isfinite(d_b):
+                d_b *= 0.5  # the same end moves twice: Illinois halves the other's value
+            a, d_a, moved = x, d, 0
+        else:
+            if moved == 1 and np.isfinite(d_a):
+                d_a *= 0.5
+            b, d_b, moved = x, d, 1
+        self.bracket = [a, b, d_a, d_b, moved]
+        if b - a <= TOLERANCE_RAD or self.steps >= ITERATIONS:
+            self.done = True
+            return None
+        if np.isfinite(d_a) and np.isfinite(d_b) and d_b > d_a:
+            nxt = a - d_a * (b - a) / (d_b - d_a)
+        else:
+            nxt = 0.5 * (a + b)
+        # a step that would not move within the tolerance ends the search; one outside the
+        # bracket (rounding) bisects
+        if not a < nxt < b:
+            nxt = 0.5 * (a + b)
+        if abs(nxt - x) <= 0.5 * TOLERANCE_RAD:
+            self.done = True
+            return None
+        return float(nxt)
 
 
 def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:

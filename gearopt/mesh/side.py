@@ -74,6 +74,9 @@ class SideCycle:
         ``(n, pairs)`` the pairs' contact points (pinion grid face and profile coordinates).
     requests
         The refinements to evaluate at the next joint evaluation.
+    probes
+        ``(relative rotation, tag)`` rows to sample (refined) at the next joint evaluation,
+        their minima filed under ``answers`` like the requests'.
     answers
         The answers ``(minimum_rad, face, profile, edge)`` of evaluated requests, by tag, until
         taken.
@@ -142,6 +145,7 @@ class SideCycle:
         self.cs = sample.contact_face_mm[inv].reshape(shape)
         self.ch = sample.contact_profile_mm[inv].reshape(shape)
         self.requests: list[Request] = []
+        self.probes: list[tuple[float, tuple]] = []
         self.answers: dict = {}
         self.interval: tuple[float, float] | None = None
         self.interval_done = False
@@ -301,9 +305,9 @@ class SideCycle:
         self.requests += self.ho.fit_requests(x, self.pitch)
 
     def ask_iteration(self, x) -> None:
-        """Evaluate both pairs at ``x`` for the iteration on the bracket."""
+        """Sample both pairs at ``x`` for the iteration on the bracket."""
         self.v_star = float(x)
-        self.requests += self.ho.iteration_requests(x, self.pitch)
+        self.probes += self.ho.iteration_rows(x, self.pitch)
 
     def handover_step(self) -> None:
         """Take in the hand-over's evaluations, if they are in: ask for the next ones, or
@@ -370,6 +374,11 @@ class SideCycle:
         """The pending requests, handed over to the driver."""
         requests, self.requests = self.requests, []
         return requests
+
+    def take_probes(self) -> list[tuple[float, tuple]]:
+        """The pending rows to sample, handed over to the driver."""
+        probes, self.probes = self.probes, []
+        return probes
 
     def extra_angles(self) -> list[float]:
         """The extra positions: the hand-over (both pairs), the TE peak, the mean point M and
