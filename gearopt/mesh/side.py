@@ -20,6 +20,9 @@ __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 #: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
 FLAT_ARCSEC = 0.1
 BISECTIONS = 3  # contact-interval ends to an eighth of a position step
+#: the crest's search (:meth:`SideCycle.crest_step`): points a round, the most rounds
+CREST_SAMPLES = 32
+CREST_ROUNDS = 8
 
 
 class SideCycle:
@@ -165,6 +168,10 @@ class SideCycle:
         self.start_interval()
         self.start_handover()
         self.g_peak: float | None = None
+        # the crest's search once started: [lo, hi, round, greatest lag so far]
+        self.crest: list | None = None
+        self.g_crest: float | None = None
+        self.hand_lag = np.inf  # the lag at the hand-over's last evaluation
         self.peak_at = self.peak_guess()
         self.peak_lags: dict = {}
         self.ask_peak([-1, 0, 1])
@@ -325,6 +332,7 @@ class SideCycle:
             action, x = ho.take_fit([self.answers.pop(tag) for tag in FIT_TAGS], self.ex)
             if action == "settled":
                 self.v_star, self.g_hand = x, ho.lag
+                self.hand_lag = ho.lag
             elif action == "fit":
                 self.ask_fit(x)
             else:
@@ -334,6 +342,7 @@ class SideCycle:
         if not all(tag in self.answers for tag in ITERATION_TAGS):
             return
         leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
+        self.hand_lag = float(max(leaving, incoming))
         x = ho.take_iteration(float(leaving - incoming))
         if x is None:
             self.v_star = ho.x
@@ -430,6 +439,53 @@ class SideCycle:
             return
         self.probes.append((self.peak_at + z * self.step / 8.0, ("pk", "vertex")))
 
+    # -- the crest: the greatest lag between two hand-overs in edge contact -----------------
+
+    def crest_step(self) -> None:
+        """Where a pair touches at an edge while it carries (or at the hand-over), its lag, a
+        least clearance that moves from one edge or local minimum to another, can bend up
+        between the hand-overs: the TE's trough then lies there, not at the hand-over. Once the
+        hand-over is settled, the carrying pair is sampled at :data:`CREST_SAMPLES` points
+        between two hand-overs; where the greatest lies inside, the bracket of its neighbours
+        is sampled anew (:data:`CREST_SAMPLES` points) until narrower than 1e-7 rad (the
+        lag's slope is below 0.1 rad/rad: 2e-3 arcsec) or after :data:`CREST_ROUNDS` rounds;
+        ``g_crest`` is the greatest lag found."""
+        if self.g_crest is not None or self.ho is None or not self.ho.done:
+            return
+        if self.crest is None:
+            rows = np.arange(len(self.t))
+            edge = self.edge_all[rows, self.carrying].any() or self.ho.mode == "iterate"
+            if not edge:  # interior contact: the lag is smooth, its greatest at the hand-over
+                self.g_crest = -np.inf
+                return
+            self.crest = [self.v_star - self.pitch, self.v_star, 0, -np.inf]
+            self.ask_crest()
+            return
+        keys = [("cr", j) for j in range(CREST_SAMPLES)]
+        if not all(key in self.answers for key in keys):
+            return
+        lags = np.array([self.answers.pop(key)[0] for key in keys])
+        lags = np.where(np.isfinite(lags), lags, -np.inf)
+        lo, hi, rounds, so_far = self.crest
+        best = int(np.argmax(lags))
+        so_far = max(so_far, float(lags[best]))
+        if rounds == 0 and lags[best] <= self.hand_lag:  # the greatest at the hand-over
+            self.g_crest = so_far
+            return
+        edges = lo + (hi - lo) * np.arange(CREST_SAMPLES + 2) / (CREST_SAMPLES + 1)
+        lo, hi = float(edges[best]), float(edges[best + 2])
+        if hi - lo <= 1e-7 or rounds + 1 >= CREST_ROUNDS:
+            self.g_crest = so_far
+            return
+        self.crest = [lo, hi, rounds + 1, so_far]
+        self.ask_crest()
+
+    def ask_crest(self) -> None:
+        """Sample :data:`CREST_SAMPLES` points inside the crest's bracket."""
+        lo, hi = self.crest[:2]
+        f = np.arange(1, CREST_SAMPLES + 1) / (CREST_SAMPLES + 1)
+        self.probes += [(float(lo + (hi - lo) * fj), ("cr", j)) for j, fj in enumerate(f)]
+
     def peak_guess(self) -> float:
         """The TE maximum's relative rotation: the parabola through the least sample of the
         carrying pair and its neighbours on the same pair."""
@@ -504,7 +560,8 @@ class SideCycle:
             g_min = min(g_min, self.g_peak)
         te = (g_min - lag) * ARCSEC
         pair_te = ((g_min - g) * ARCSEC).T
-        peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
+        g_max = max(g_hand, float(lag.max()), -np.inf if self.g_crest is None else self.g_crest)
+        peak_to_peak = (g_max - g_min) * ARCSEC
 
         # separations at the contact gear angle of each position (same lag for every pair),
         # the pattern and the path (separation_mm, centroids: one compiled pass)
