@@ -1,17 +1,20 @@
-"""The TCA's hand-over where the pairs touch at an edge of a flank: its peak-to-peak is the
-crossing of the two pairs' lag curves on the clearance field, found independently here.
+"""The TCA's hand-over where the pairs touch at an edge of a flank, and its peak-to-peak: the
+envelope of the pairs' lag curves on the clearance field, found independently here.
 
 The reference samples the base pair's lag G(u) (:class:`gearopt.mesh.PairCurve`: the node field
-with its least nodes refined, as the TCA samples positions) densely over two pitches, brackets
-where the next pair's lag G(u - p) crosses it with both the least of all pairs (both carry),
-bisects that crossing to 1e-13 rad, and finds the least lag of the envelope (least over the pairs)
-by dense sampling over one pitch and a bounded scalar minimisation around its least sample. The peak-to-peak is
-the lag at the crossing minus the least lag.
+with its least nodes refined, as the TCA samples positions) over two pitches, brackets where the
+next pair's lag G(u - p) crosses it with both the least of all pairs (both carry) and bisects
+that crossing to 1e-13 rad; it samples the envelope (the least lag over the pairs) 1536 times a
+pitch and refines its least and its greatest (a crest of one pair's lag between the hand-overs,
+where its contact moves from one edge to another) by a bounded scalar search around the best
+sample. The peak-to-peak is the greater of the crossing's lag and the crest minus the least lag.
 
 Tolerance 0.005 arcsec: the TCA's iteration stops on a bracket of 1e-9 rad and the lag's slope
 is below 0.1 rad/rad (2e-5 arcsec of lag); its least lag is the vertex of a parabola through
-evaluations an eighth of a position step apart (measured within 2e-5 arcsec of the reference);
-the old secant iteration missed by 0.75 (drive) and 0.39 arcsec (coast) on the 14/39 pair.
+evaluations an eighth of a position step apart, its crest bracketed to 1e-7 rad (measured:
+within 2e-5 arcsec of the reference on the 14/39 pair). The old secant iteration on refinements
+from interpolated starts missed by 0.75 arcsec (drive: 9.094 against 8.341) and its samples
+missed the coast side's crest (7.872 against 8.077).
 """
 
 from __future__ import annotations
