@@ -2,12 +2,14 @@
 envelope of the pairs' lag curves on the clearance field, found independently here.
 
 The reference samples the base pair's lag G(u) (:class:`gearopt.mesh.PairCurve`: the node field
-with its least nodes refined, as the TCA samples positions) over two pitches, brackets where the
-next pair's lag G(u - p) crosses it with both the least of all pairs (both carry) and bisects
-that crossing to 1e-13 rad; it samples the envelope (the least lag over the pairs) 1536 times a
-pitch and refines its least and its greatest (a crest of one pair's lag between the hand-overs,
-where its contact moves from one edge to another) by a bounded scalar search around the best
-sample. The peak-to-peak is the greater of the crossing's lag and the crest minus the least lag.
+with its least nodes refined, as the TCA samples positions) over four pitches, brackets where
+the next pair's lag G(u - p) crosses it with both the least of all pairs (both carry), bisects
+that crossing to 1e-13 rad and takes the greater of the lower lag at the bracket's ends (the
+common lag, or where one lag steps across the other, the envelope's value there); it samples the
+envelope (the least lag over the pairs) 1536 times a pitch and refines its least and its
+greatest (a crest of one pair's lag between the hand-overs, where its contact moves from one
+edge to another) by a bounded scalar search around the best sample. The peak-to-peak is the
+greater of the crossing's lag and the crest minus the least lag.
 
 Tolerance 0.005 arcsec: the TCA's iteration stops on a bracket of 1e-9 rad and the lag's slope
 is below 0.1 rad/rad (2e-5 arcsec of lag); its least lag is the vertex of a parabola through
@@ -44,15 +46,17 @@ SECTION_5_4 = Misalignment(
 def envelope(curve: PairCurve, t) -> np.ndarray:
     """The least lag over the pairs within three pitches at relative rotations ``t`` (the
     clearance of a pair further off, out of mesh, means nothing)."""
-    t = np.atleast_1d(np.asarray(t, float))
-    ks = np.arange(-3, 4) * curve.pitch
+    p = curve.pitch
+    t = (np.atleast_1d(np.asarray(t, float)) + 0.5 * p) % p - 0.5 * p  # it repeats every pitch
+    ks = np.arange(-3, 4) * p
     return curve((t[:, None] + ks[None, :]).ravel()).reshape(len(t), -1).min(axis=1)
 
 
 def envelope_peak_to_peak(curve: PairCurve) -> tuple[float, list[float]]:
-    """The reference peak-to-peak (arcsec) and the crossings (deg) over one pitch."""
+    """The reference peak-to-peak (arcsec) and the crossings (deg, the leaving pair's relative
+    rotation) over four pitches."""
     p = curve.pitch
-    u = np.arange(-PER_PITCH, PER_PITCH + 1) * (p / PER_PITCH)
+    u = np.arange(-2 * PER_PITCH, 2 * PER_PITCH + 1) * (p / PER_PITCH)
     g, g_next = curve(u), curve(u - p)
     env = envelope(curve, u)
     with np.errstate(invalid="ignore"):
@@ -69,11 +73,13 @@ def envelope_peak_to_peak(curve: PairCurve) -> tuple[float, list[float]]:
                 a, d_a = m, d_m
             else:
                 b = m
-        m = 0.5 * (a + b)
-        lag = float(max(curve(np.array([m]))[0], curve(np.array([m - p]))[0]))
-        if lag <= envelope(curve, m)[0] + 1e-12:  # still the least pairs there
-            lags.append(lag)
-            where.append(math.degrees(m))
+        # the lower of the two lags either side (where one steps across the other, the
+        # greater of the two: the TE's trough)
+        ends = np.array([a, b])
+        low = np.minimum(curve(ends), curve(ends - p))
+        if np.all(low <= envelope(curve, ends) + 1e-12):  # still the least pairs there
+            lags.append(float(low.max()))
+            where.append(math.degrees(0.5 * (a + b)))
     assert lags, "no hand-over on the curves"
     # the envelope over one pitch, densely: its least and its greatest (a crest of one
     # pair's lag between hand-overs in edge contact), each refined around its best sample

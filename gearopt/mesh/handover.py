@@ -99,13 +99,17 @@ class HandOver:
     x
         The point being evaluated, then the hand-over when ``done``.
     lag
-        The lag at the hand-over when interpolated by the check's parabolas, else None (it is
-        then taken from the extra positions' evaluation at ``x``).
+        The lag at the hand-over when interpolated by the check's parabolas or found by the
+        iteration on a closed bracket, else None (it is then taken from the extra positions'
+        evaluation at ``x``).
     round
         0 at a guess's first check, 1 at its second.
     bracket
         ``[a, b, d_a, d_b, side]`` the iteration's bracket, D at its ends (the Illinois
         method's, halved where one end stays) and the end last moved (0 a, 1 b, -1 none).
+    low
+        The lower of the two pairs' lags at the bracket's ends once evaluated there (else
+        None).
     steps
         The iteration's evaluations so far.
     done
@@ -121,6 +125,7 @@ class HandOver:
         self.lag = None
         self.round = 0
         self.bracket = [lo, hi, d_lo, d_hi, -1]
+        self.low = [None, None]
         self.steps = 0
         self.done = False
 
@@ -180,16 +185,19 @@ class HandOver:
         self.round = 0  # not smooth there after all: the iteration on the bracket
         return "iterate", self.x0
 
-    def take_iteration(self, d: float) -> float | None:
-        """Take in D at ``x`` (the Illinois method on the bracket): the next point to
-        evaluate, or None once settled (at ``x``).
+    def take_iteration(self, d: float, low: float) -> float | None:
+        """Take in D at ``x`` and the lower of the two pairs' lags there, ``low`` (the
+        Illinois method on the bracket): the next point to evaluate, or None once settled (at
+        ``x``; ``lag`` then the greater of the lower lags at the bracket's ends: at a crossing
+        of continuous lags their common value, where a pair's lag steps across the other's (its
+        least clearance jumping to another part of its flank) the TE's trough there).
 
         D is +-inf where one pair is off the flanks (its sign still tells the side) and the
         step is then a bisection; NaN (both off) ends the search where it is.
         """
         self.steps += 1
         if d == 0.0 or np.isnan(d):
-            self.done = True
+            self.done, self.lag = True, (None if np.isnan(d) else float(low))
             return None
         a, b, d_a, d_b, moved = self.bracket
         x = self.x
@@ -197,25 +205,26 @@ class HandOver:
             if moved == 0 and np.isfinite(d_b):
                 d_b *= 0.5  # the same end moves twice: Illinois halves the other's value
             a, d_a, moved = x, d, 0
+            self.low[0] = low
         else:
             if moved == 1 and np.isfinite(d_a):
                 d_a *= 0.5
             b, d_b, moved = x, d, 1
+            self.low[1] = low
         self.bracket = [a, b, d_a, d_b, moved]
         if b - a <= TOLERANCE_RAD or self.steps >= ITERATIONS:
             self.done = True
+            if b - a <= TOLERANCE_RAD and all(v is not None for v in self.low):
+                self.lag = float(max(self.low))
             return None
         if np.isfinite(d_a) and np.isfinite(d_b) and d_b > d_a:
             nxt = a - d_a * (b - a) / (d_b - d_a)
         else:
             nxt = 0.5 * (a + b)
-        # a step that would not move within the tolerance ends the search; one outside the
-        # bracket (rounding) bisects
-        if not a < nxt < b:
+        if not a < nxt < b:  # rounding: bisect
             nxt = 0.5 * (a + b)
-        if abs(nxt - x) <= 0.5 * TOLERANCE_RAD:
-            self.done = True
-            return None
+        if abs(nxt - x) < 0.5 * TOLERANCE_RAD:  # a step of the tolerance closes the bracket
+            nxt = x + math.copysign(0.5 * TOLERANCE_RAD, 0.5 * (a + b) - x)
         return float(nxt)
 
 

@@ -172,6 +172,7 @@ class SideCycle:
         self.crest: list | None = None
         self.g_crest: float | None = None
         self.hand_lag = np.inf  # the lag at the hand-over's last evaluation
+        self.hand_edge = False  # whether a pair touched at an edge in the iteration
         self.peak_at = self.peak_guess()
         self.peak_lags: dict = {}
         self.ask_peak([-1, 0, 1])
@@ -341,11 +342,15 @@ class SideCycle:
             return
         if not all(tag in self.answers for tag in ITERATION_TAGS):
             return
-        leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
+        (leaving, _, _, e_l), (incoming, _, _, e_i) = (
+            self.answers.pop(tag) for tag in ITERATION_TAGS
+        )
         self.hand_lag = float(max(leaving, incoming))
-        x = ho.take_iteration(float(leaving - incoming))
+        self.hand_edge = self.hand_edge or bool(e_l or e_i)
+        with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
+            x = ho.take_iteration(float(leaving - incoming), float(min(leaving, incoming)))
         if x is None:
-            self.v_star = ho.x
+            self.v_star, self.g_hand = ho.x, ho.lag
         else:
             self.ask_iteration(x)
 
@@ -454,7 +459,7 @@ class SideCycle:
             return
         if self.crest is None:
             rows = np.arange(len(self.t))
-            edge = self.edge_all[rows, self.carrying].any() or self.ho.mode == "iterate"
+            edge = self.edge_all[rows, self.carrying].any() or self.hand_edge
             if not edge:  # interior contact: the lag is smooth, its greatest at the hand-over
                 self.g_crest = -np.inf
                 return
