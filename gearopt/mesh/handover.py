@@ -85,11 +85,18 @@ class HandOver:
         refinements.
     step
         The position step.
+    flat
+        Whether the lags are flat (a line contact: they differ by noise, their crossing is
+        any point of the bracket): its iteration then takes three steps on refinements
+        (:meth:`flat_requests`, :meth:`take_flat`), which place the hand-over, and with it M,
+        where they always have.
 
     Attributes
     ----------
-    lo, hi, d_lo, d_hi, ends
+    lo, hi, d_lo, d_hi, ends, flat
         As given.
+    d0
+        D at ``x0`` once evaluated (a line contact's iteration).
     x0
         The secant guess on the bracket: the iteration's first point.
     delta
@@ -116,8 +123,10 @@ class HandOver:
         True once settled.
     """
 
-    def __init__(self, lo, hi, d_lo, d_hi, ends, step):
+    def __init__(self, lo, hi, d_lo, d_hi, ends, step, flat=False):
         self.lo, self.hi, self.d_lo, self.d_hi, self.ends = lo, hi, d_lo, d_hi, ends
+        self.flat = flat
+        self.d0 = None
         self.x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
         self.delta = step / 8.0
         self.mode = None
@@ -226,6 +235,39 @@ class HandOver:
         if abs(nxt - x) < 0.5 * TOLERANCE_RAD:  # a step of the tolerance closes the bracket
             nxt = x + math.copysign(0.5 * TOLERANCE_RAD, 0.5 * (a + b) - x)
         return float(nxt)
+
+    def flat_requests(self, x, pitch: float) -> list[Request]:
+        """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from
+        the middle of each pair's contact points at the bracket's ends."""
+        self.mode, self.x = "iterate", float(x)
+        out = []
+        for pair, shift in ((0, 0.0), (1, -pitch)):
+            (s0, h0), (s1, h1) = self.ends[pair]
+            out.append(Request(x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ITERATION_TAGS[pair]))
+        return out
+
+    def take_flat(self, d: float) -> float | None:
+        """Take in D at ``x`` for a line contact (``flat``): the secant guess, the parabola
+        through three differences, a last secant step; None once settled (at ``x``)."""
+        if not np.isfinite(d):
+            self.done = True
+            return None
+        lo, hi, d_lo, d_hi = self.lo, self.hi, self.d_lo, self.d_hi
+        if self.steps == 0:
+            self.steps, self.d0, x0 = 1, d, self.x
+            a, b, c = parabola(lo - x0, hi - x0, d_lo, d, d_hi)
+            roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
+            roots = np.real(roots[np.isreal(roots)]) + x0
+            self.bracket = [lo, x0] if d > 0.0 else [x0, hi]
+            good = roots[(roots >= self.bracket[0]) & (roots <= self.bracket[1])]
+            return float(good[0]) if good.size else x0
+        x0, d0, x1 = self.x0, self.d0, self.x
+        if d != d0:
+            x2 = x1 - d * (x1 - x0) / (d - d0)
+            if self.bracket[0] <= x2 <= self.bracket[1]:
+                self.x = float(x2)
+        self.done = True
+        return None
 
 
 def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:

@@ -295,7 +295,8 @@ class SideCycle:
                     ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
                     for c in (col_l, col_i)
                 ]
-                self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step)
+                flat = d_hi - d_lo < FLAT_ARCSEC / ARCSEC
+                self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step, flat)
                 guess = self.crossing(lo, hi)
                 if guess is None:
                     self.ask_iteration(self.ho.x0)
@@ -319,7 +320,10 @@ class SideCycle:
     def ask_iteration(self, x) -> None:
         """Sample both pairs at ``x`` for the iteration on the bracket."""
         self.v_star = float(x)
-        self.probes += self.ho.iteration_rows(x, self.pitch)
+        if self.ho.flat:
+            self.requests += self.ho.flat_requests(x, self.pitch)
+        else:
+            self.probes += self.ho.iteration_rows(x, self.pitch)
 
     def handover_step(self) -> None:
         """Take in the hand-over's evaluations, if they are in: ask for the next ones, or
@@ -345,6 +349,13 @@ class SideCycle:
         (leaving, _, _, e_l), (incoming, _, _, e_i) = (
             self.answers.pop(tag) for tag in ITERATION_TAGS
         )
+        if ho.flat:
+            x = ho.take_flat(float(leaving - incoming))
+            if x is None:
+                self.v_star = ho.x
+            else:
+                self.ask_iteration(x)
+            return
         self.hand_lag = float(max(leaving, incoming))
         self.hand_edge = self.hand_edge or bool(e_l or e_i)
         with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
