@@ -20,9 +20,13 @@ __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 #: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
 FLAT_ARCSEC = 0.1
 BISECTIONS = 3  # contact-interval ends to an eighth of a position step
-#: the crest's search (:meth:`SideCycle.crest_step`): points a round, the most rounds
+#: the crest's search (:meth:`SideCycle.crest_step`): points between two hand-overs, points
+#: a further round, the most rounds, the bracket it stops at (rad: the lag's slope there is
+#: below 0.01 rad/rad, 2e-3 arcsec)
 CREST_SAMPLES = 32
-CREST_ROUNDS = 8
+CREST_REFINE = 6
+CREST_ROUNDS = 12
+CREST_TOLERANCE_RAD = 1e-6
 
 
 class SideCycle:
@@ -462,10 +466,10 @@ class SideCycle:
         least clearance that moves from one edge or local minimum to another, can bend up
         between the hand-overs: the TE's trough then lies there, not at the hand-over. Once the
         hand-over is settled, the carrying pair is sampled at :data:`CREST_SAMPLES` points
-        between two hand-overs; where the greatest lies inside, the bracket of its neighbours
-        is sampled anew (:data:`CREST_SAMPLES` points) until narrower than 1e-7 rad (the
-        lag's slope is below 0.1 rad/rad: 2e-3 arcsec) or after :data:`CREST_ROUNDS` rounds;
-        ``g_crest`` is the greatest lag found."""
+        between two hand-overs; where the greatest exceeds the lag at the hand-over, the
+        bracket of its neighbours is sampled anew (:data:`CREST_REFINE` points) until narrower
+        than :data:`CREST_TOLERANCE_RAD` or after :data:`CREST_ROUNDS` rounds; ``g_crest`` is
+        the greatest lag found."""
         if self.g_crest is not None or self.ho is None or not self.ho.done:
             return
         if self.crest is None:
@@ -477,29 +481,32 @@ class SideCycle:
             self.crest = [self.v_star - self.pitch, self.v_star, 0, -np.inf]
             self.ask_crest()
             return
-        keys = [("cr", j) for j in range(CREST_SAMPLES)]
+        lo, hi, rounds, so_far = self.crest
+        count = CREST_SAMPLES if rounds == 0 else CREST_REFINE
+        keys = [("cr", j) for j in range(count)]
         if not all(key in self.answers for key in keys):
             return
         lags = np.array([self.answers.pop(key)[0] for key in keys])
         lags = np.where(np.isfinite(lags), lags, -np.inf)
-        lo, hi, rounds, so_far = self.crest
         best = int(np.argmax(lags))
         so_far = max(so_far, float(lags[best]))
         if rounds == 0 and lags[best] <= self.hand_lag:  # the greatest at the hand-over
             self.g_crest = so_far
             return
-        edges = lo + (hi - lo) * np.arange(CREST_SAMPLES + 2) / (CREST_SAMPLES + 1)
+        edges = lo + (hi - lo) * np.arange(count + 2) / (count + 1)
         lo, hi = float(edges[best]), float(edges[best + 2])
-        if hi - lo <= 1e-7 or rounds + 1 >= CREST_ROUNDS:
+        if hi - lo <= CREST_TOLERANCE_RAD or rounds + 1 >= CREST_ROUNDS:
             self.g_crest = so_far
             return
         self.crest = [lo, hi, rounds + 1, so_far]
         self.ask_crest()
 
     def ask_crest(self) -> None:
-        """Sample :data:`CREST_SAMPLES` points inside the crest's bracket."""
-        lo, hi = self.crest[:2]
-        f = np.arange(1, CREST_SAMPLES + 1) / (CREST_SAMPLES + 1)
+        """Sample the crest's bracket: :data:`CREST_SAMPLES` points in the first round,
+        :data:`CREST_REFINE` in the further ones."""
+        lo, hi, rounds = self.crest[:3]
+        count = CREST_SAMPLES if rounds == 0 else CREST_REFINE
+        f = np.arange(1, count + 1) / (count + 1)
         self.probes += [(float(lo + (hi - lo) * fj), ("cr", j)) for j, fj in enumerate(f)]
 
     def peak_guess(self) -> float:
