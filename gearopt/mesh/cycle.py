@@ -223,7 +223,6 @@ class MeshCycle:
                 side.interval_finish()
                 side.handover_step()
                 side.peak_step()
-                side.crest_step()
             due = [s for s in self.sides if s.ex is None and s.extras_due()]
             if not due and not any(s.requests or s.probes for s in self.sides):
                 break

@@ -20,13 +20,6 @@ __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 #: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
 FLAT_ARCSEC = 0.1
 BISECTIONS = 3  # contact-interval ends to an eighth of a position step
-#: the crest's search (:meth:`SideCycle.crest_step`): points between two hand-overs, points
-#: a further round, the most rounds, the bracket it stops at (rad: the lag's slope there is
-#: below 0.01 rad/rad, 2e-3 arcsec)
-CREST_SAMPLES = 32
-CREST_REFINE = 6
-CREST_ROUNDS = 12
-CREST_TOLERANCE_RAD = 1e-6
 
 
 class SideCycle:
@@ -172,11 +165,6 @@ class SideCycle:
         self.start_interval()
         self.start_handover()
         self.g_peak: float | None = None
-        # the crest's search once started: [lo, hi, round, greatest lag so far]
-        self.crest: list | None = None
-        self.g_crest: float | None = None
-        self.hand_lag = np.inf  # the lag at the hand-over's last evaluation
-        self.hand_edge = False  # whether a pair touched at an edge in the iteration
         self.peak_at = self.peak_guess()
         self.peak_lags: dict = {}
         self.ask_peak([-1, 0, 1])
@@ -341,7 +329,6 @@ class SideCycle:
             action, x = ho.take_fit([self.answers.pop(tag) for tag in FIT_TAGS], self.ex)
             if action == "settled":
                 self.v_star, self.g_hand = x, ho.lag
-                self.hand_lag = ho.lag
             elif action == "fit":
                 self.ask_fit(x)
             else:
@@ -350,9 +337,7 @@ class SideCycle:
             return
         if not all(tag in self.answers for tag in ITERATION_TAGS):
             return
-        (leaving, _, _, e_l), (incoming, _, _, e_i) = (
-            self.answers.pop(tag) for tag in ITERATION_TAGS
-        )
+        leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
         if ho.flat:
             x = ho.take_flat(float(leaving - incoming))
             if x is None:
@@ -360,8 +345,6 @@ class SideCycle:
             else:
                 self.ask_iteration(x)
             return
-        self.hand_lag = float(max(leaving, incoming))
-        self.hand_edge = self.hand_edge or bool(e_l or e_i)
         with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
             x = ho.take_iteration(float(leaving - incoming), float(min(leaving, incoming)))
         if x is None:
@@ -459,56 +442,6 @@ class SideCycle:
             return
         self.probes.append((self.peak_at + z * self.step / 8.0, ("pk", "vertex")))
 
-    # -- the crest: the greatest lag between two hand-overs in edge contact -----------------
-
-    def crest_step(self) -> None:
-        """Where a pair touches at an edge while it carries (or at the hand-over), its lag, a
-        least clearance that moves from one edge or local minimum to another, can bend up
-        between the hand-overs: the TE's trough then lies there, not at the hand-over. Once the
-        hand-over is settled, the carrying pair is sampled at :data:`CREST_SAMPLES` points
-        between two hand-overs; where the greatest exceeds the lag at the hand-over, the
-        bracket of its neighbours is sampled anew (:data:`CREST_REFINE` points) until narrower
-        than :data:`CREST_TOLERANCE_RAD` or after :data:`CREST_ROUNDS` rounds; ``g_crest`` is
-        the greatest lag found."""
-        if self.g_crest is not None or self.ho is None or not self.ho.done:
-            return
-        if self.crest is None:
-            rows = np.arange(len(self.t))
-            edge = self.edge_all[rows, self.carrying].any() or self.hand_edge
-            if not edge:  # interior contact: the lag is smooth, its greatest at the hand-over
-                self.g_crest = -np.inf
-                return
-            self.crest = [self.v_star - self.pitch, self.v_star, 0, -np.inf]
-            self.ask_crest()
-            return
-        lo, hi, rounds, so_far = self.crest
-        count = CREST_SAMPLES if rounds == 0 else CREST_REFINE
-        keys = [("cr", j) for j in range(count)]
-        if not all(key in self.answers for key in keys):
-            return
-        lags = np.array([self.answers.pop(key)[0] for key in keys])
-        lags = np.where(np.isfinite(lags), lags, -np.inf)
-        best = int(np.argmax(lags))
-        so_far = max(so_far, float(lags[best]))
-        if rounds == 0 and lags[best] <= self.hand_lag:  # the greatest at the hand-over
-            self.g_crest = so_far
-            return
-        edges = lo + (hi - lo) * np.arange(count + 2) / (count + 1)
-        lo, hi = float(edges[best]), float(edges[best + 2])
-        if hi - lo <= CREST_TOLERANCE_RAD or rounds + 1 >= CREST_ROUNDS:
-            self.g_crest = so_far
-            return
-        self.crest = [lo, hi, rounds + 1, so_far]
-        self.ask_crest()
-
-    def ask_crest(self) -> None:
-        """Sample the crest's bracket: :data:`CREST_SAMPLES` points in the first round,
-        :data:`CREST_REFINE` in the further ones."""
-        lo, hi, rounds = self.crest[:3]
-        count = CREST_SAMPLES if rounds == 0 else CREST_REFINE
-        f = np.arange(1, count + 1) / (count + 1)
-        self.probes += [(float(lo + (hi - lo) * fj), ("cr", j)) for j, fj in enumerate(f)]
-
     def peak_guess(self) -> float:
         """The TE maximum's relative rotation: the parabola through the least sample of the
         carrying pair and its neighbours on the same pair."""
@@ -583,8 +516,7 @@ class SideCycle:
             g_min = min(g_min, self.g_peak)
         te = (g_min - lag) * ARCSEC
         pair_te = ((g_min - g) * ARCSEC).T
-        g_max = max(g_hand, float(lag.max()), -np.inf if self.g_crest is None else self.g_crest)
-        peak_to_peak = (g_max - g_min) * ARCSEC
+        peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
 
         # separations at the contact gear angle of each position (same lag for every pair),
         # the pattern and the path (separation_mm, centroids: one compiled pass)
