@@ -7,8 +7,9 @@ guess is where the cubic interpolants of the two pairs' sampled lags cross
 (:func:`lag_crossing`), checked by evaluations at the guess and an eighth of a position step to
 either side: the root of the parabola through the three differences stands when it is within a
 tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
-a guess that does not settle) the Illinois method on the bracket, kept bracketing, until it is
-narrower than :data:`TOLERANCE_RAD`.
+a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`:
+secant points guarded either side and the middle, four a step) until it is narrower than
+:data:`TOLERANCE_RAD`.
 
 A guess's checks are asked for as :class:`Request` rows, answered by the joint field's
 refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`): the
@@ -67,7 +68,7 @@ ITERATION_TAGS = (("ho", 0, 0), ("ho", 1, 0))
 #: well under 1e-3 arcsec)
 TOLERANCE_RAD = 1e-9
 #: the most steps of the iteration (bisection of a position step to 1e-9 rad takes about 26)
-ITERATIONS = 60
+ITERATIONS = 40
 
 
 class HandOver:
@@ -112,11 +113,10 @@ class HandOver:
     round
         0 at a guess's first check, 1 at its second.
     bracket
-        ``[a, b, d_a, d_b, side]`` the iteration's bracket, D at its ends (the Illinois
-        method's, halved where one end stays) and the end last moved (0 a, 1 b, -1 none).
-    low
-        The lower of the two pairs' lags at the bracket's ends once evaluated there (else
-        None).
+        ``[a, b, d_a, d_b, low_a, low_b]`` the iteration's bracket, D at its ends and the lower
+        of the two pairs' lags there (None at the bracket's first ends).
+    xs
+        The points of the iteration's step being evaluated.
     steps
         The iteration's evaluations so far.
     done
@@ -133,8 +133,8 @@ class HandOver:
         self.x = None
         self.lag = None
         self.round = 0
-        self.bracket = [lo, hi, d_lo, d_hi, -1]
-        self.low = [None, None]
+        self.bracket = [lo, hi, d_lo, d_hi, None, None]
+        self.xs = []
         self.steps = 0
         self.done = False
 
@@ -152,11 +152,16 @@ class HandOver:
                 out.append(Request(x + shift + sign * self.delta, s, h, ("ho", pair, sign)))
         return out
 
-    def iteration_rows(self, x, pitch: float) -> list[tuple[float, tuple]]:
-        """An iteration step: both pairs at ``x``, as ``(relative rotation, tag)`` rows to
-        sample (the lags as at every position; see the module docstring)."""
-        self.mode, self.x = "iterate", float(x)
-        return [(self.x, ITERATION_TAGS[0]), (self.x - pitch, ITERATION_TAGS[1])]
+    def iteration_rows(self, xs, pitch: float) -> list[tuple[float, tuple]]:
+        """An iteration step: both pairs at each of the points ``xs``, as ``(relative rotation,
+        tag)`` rows to sample (the lags as at every position; see the module docstring)."""
+        self.mode = "iterate"
+        self.xs = sorted({float(x) for x in np.atleast_1d(xs)})
+        self.x = self.xs[0]
+        out = []
+        for j, x in enumerate(self.xs):
+            out += [(x, ("ho", 0, j)), (x - pitch, ("ho", 1, j))]
+        return out
 
     def take_fit(self, got: list, ex: FieldSample) -> tuple[str, float]:
         """Take in a guess's check.
@@ -194,47 +199,49 @@ class HandOver:
         self.round = 0  # not smooth there after all: the iteration on the bracket
         return "iterate", self.x0
 
-    def take_iteration(self, d: float, low: float) -> float | None:
-        """Take in D at ``x`` and the lower of the two pairs' lags there, ``low`` (the
-        Illinois method on the bracket): the next point to evaluate, or None once settled (at
-        ``x``; ``lag`` then the greater of the lower lags at the bracket's ends: at a crossing
-        of continuous lags their common value, where a pair's lag steps across the other's (its
-        least clearance jumping to another part of its flank) the TE's trough there).
+    def take_iteration(self, lags) -> list[float] | None:
+        """Take in both pairs' lags ``(leaving, incoming)`` at each point of ``xs``: the next
+        points to evaluate, or None once settled (at ``x``).
 
-        D is +-inf where one pair is off the flanks (its sign still tells the side) and the
-        step is then a bisection; NaN (both off) ends the search where it is.
+        The bracket moves to the first sign change of D = leaving - incoming along the points;
+        D is +-inf where one pair is off the flanks (its sign still tells the side), NaN
+        (both off) drops the point. Next: the secant (regula falsi) point on the bracket, a
+        hundredth of the bracket either side of it (on smooth lags the root falls between
+        them) and the bracket's middle (where a lag steps, at least a halving). Settled once
+        the bracket is narrower than :data:`TOLERANCE_RAD`, at its middle, ``lag`` the greater
+        of the lower lags at its ends: at a crossing of continuous lags their common value,
+        where a pair's lag steps across the other's (its least clearance jumping to another
+        part of its flank) the TE's trough there.
         """
         self.steps += 1
-        if d == 0.0 or np.isnan(d):
-            self.done, self.lag = True, (None if np.isnan(d) else float(low))
+        a, b, d_a, d_b, low_a, low_b = self.bracket
+        points = [(a, d_a, low_a)]
+        with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
+            for x, (g_l, g_i) in zip(self.xs, lags, strict=True):
+                d = g_l - g_i
+                if a < x < b and not np.isnan(d):
+                    points.append((x, d, min(g_l, g_i)))
+        points.append((b, d_b, low_b))
+        for (x0, d0, l0), (x1, d1, l1) in zip(points[:-1], points[1:], strict=True):
+            if d0 <= 0.0 < d1 or d1 == 0.0:
+                a, b, d_a, d_b, low_a, low_b = x0, x1, d0, d1, l0, l1
+                break
+        self.bracket = [a, b, d_a, d_b, low_a, low_b]
+        if d_b == 0.0:
+            self.done, self.x, self.lag = True, float(b), low_b
             return None
-        a, b, d_a, d_b, moved = self.bracket
-        x = self.x
-        if d < 0.0:
-            if moved == 0 and np.isfinite(d_b):
-                d_b *= 0.5  # the same end moves twice: Illinois halves the other's value
-            a, d_a, moved = x, d, 0
-            self.low[0] = low
-        else:
-            if moved == 1 and np.isfinite(d_a):
-                d_a *= 0.5
-            b, d_b, moved = x, d, 1
-            self.low[1] = low
-        self.bracket = [a, b, d_a, d_b, moved]
         if b - a <= TOLERANCE_RAD or self.steps >= ITERATIONS:
-            self.done = True
-            if b - a <= TOLERANCE_RAD and all(v is not None for v in self.low):
-                self.lag = float(max(self.low))
+            self.done, self.x = True, float(0.5 * (a + b))
+            if b - a <= TOLERANCE_RAD and low_a is not None and low_b is not None:
+                self.lag = float(max(low_a, low_b))
             return None
-        if np.isfinite(d_a) and np.isfinite(d_b) and d_b > d_a:
-            nxt = a - d_a * (b - a) / (d_b - d_a)
-        else:
-            nxt = 0.5 * (a + b)
-        if not a < nxt < b:  # rounding: bisect
-            nxt = 0.5 * (a + b)
-        if abs(nxt - x) < 0.5 * TOLERANCE_RAD:  # a step of the tolerance closes the bracket
-            nxt = x + math.copysign(0.5 * TOLERANCE_RAD, 0.5 * (a + b) - x)
-        return float(nxt)
+        mid = 0.5 * (a + b)
+        secant = a - d_a * (b - a) / (d_b - d_a) if np.isfinite(d_a - d_b) else mid
+        if not a < secant < b:
+            secant = mid
+        guard = 0.01 * (b - a)
+        xs = [secant, secant - guard, secant + guard, mid]
+        return [x for x in xs if a < x < b]
 
     def flat_requests(self, x, pitch: float) -> list[Request]:
         """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from

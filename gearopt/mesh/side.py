@@ -310,8 +310,9 @@ class SideCycle:
         self.requests += self.ho.fit_requests(x, self.pitch)
 
     def ask_iteration(self, x) -> None:
-        """Sample both pairs at ``x`` for the iteration on the bracket."""
-        self.v_star = float(x)
+        """Sample both pairs at ``x`` (a point, or the points of a step) for the iteration on
+        the bracket."""
+        self.v_star = float(np.atleast_1d(x)[0])
         if self.ho.flat:
             self.requests += self.ho.flat_requests(x, self.pitch)
         else:
@@ -335,22 +336,25 @@ class SideCycle:
                 self.ex = None
                 self.ask_iteration(x)
             return
-        if not all(tag in self.answers for tag in ITERATION_TAGS):
-            return
-        leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
         if ho.flat:
+            if not all(tag in self.answers for tag in ITERATION_TAGS):
+                return
+            leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
             x = ho.take_flat(float(leaving - incoming))
             if x is None:
                 self.v_star = ho.x
             else:
                 self.ask_iteration(x)
             return
-        with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
-            x = ho.take_iteration(float(leaving - incoming), float(min(leaving, incoming)))
-        if x is None:
+        tags = [(("ho", 0, j), ("ho", 1, j)) for j in range(len(ho.xs))]
+        if not all(tag in self.answers for pair in tags for tag in pair):
+            return
+        lags = [tuple(float(self.answers.pop(tag)[0]) for tag in pair) for pair in tags]
+        xs = ho.take_iteration(lags)
+        if xs is None:
             self.v_star, self.g_hand = ho.x, ho.lag
         else:
-            self.ask_iteration(x)
+            self.ask_iteration(xs)
 
     # -- the extra positions ----------------------------------------------------------------
 
