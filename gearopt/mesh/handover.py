@@ -87,10 +87,10 @@ class HandOver:
     step
         The position step.
     flat
-        Whether the lags are flat (a line contact: they differ by noise, their crossing is
-        any point of the bracket): its iteration then takes three steps on refinements
-        (:meth:`flat_requests`, :meth:`take_flat`), which place the hand-over, and with it M,
-        where they always have.
+        Whether the TE is flat (a line contact: the TE within 0.1 arcsec, or the lags differing
+        by noise over the bracket; their crossing is then any point of it): its iteration
+        then takes three steps on refinements (:meth:`flat_requests`, :meth:`take_flat`), which
+        place the hand-over, and with it M, where they always have.
 
     Attributes
     ----------

@@ -287,7 +287,8 @@ class SideCycle:
                     ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
                     for c in (col_l, col_i)
                 ]
-                flat = d_hi - d_lo < FLAT_ARCSEC / ARCSEC
+                # a line contact: the TE flat, or the lags differing by noise
+                flat = min(np.ptp(self.lag), d_hi - d_lo) < FLAT_ARCSEC / ARCSEC
                 self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step, flat)
                 guess = self.crossing(lo, hi)
                 if guess is None:
