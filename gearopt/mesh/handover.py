@@ -117,6 +117,8 @@ class HandOver:
         of the two pairs' lags there (None at the bracket's first ends).
     xs
         The points of the iteration's step being evaluated.
+    width
+        The bracket's width before the last step.
     steps
         The iteration's evaluations so far.
     done
@@ -134,6 +136,7 @@ class HandOver:
         self.lag = None
         self.round = 0
         self.bracket = [lo, hi, d_lo, d_hi, None, None]
+        self.width = hi - lo
         self.xs = []
         self.steps = 0
         self.done = False
@@ -207,7 +210,8 @@ class HandOver:
         D is +-inf where one pair is off the flanks (its sign still tells the side), NaN
         (both off) drops the point. Next: the secant (regula falsi) point on the bracket, a
         hundredth of the bracket either side of it (on smooth lags the root falls between
-        them) and the bracket's middle (where a lag steps, at least a halving). Settled once
+        them) and the bracket's middle (where a lag steps, at least a halving); where a step left
+        more than a quarter of the bracket, eight points evenly across it. Settled once
         the bracket is narrower than :data:`TOLERANCE_RAD`, at its middle, ``lag`` the greater
         of the lower lags at its ends: at a crossing of continuous lags their common value,
         where a pair's lag steps across the other's (its least clearance jumping to another
@@ -235,6 +239,9 @@ class HandOver:
             if b - a <= TOLERANCE_RAD and low_a is not None and low_b is not None:
                 self.lag = float(max(low_a, low_b))
             return None
+        width, self.width = self.width, b - a
+        if b - a > 0.25 * width:  # not closing in (a lag steps): eight points across it
+            return list(a + (b - a) * np.arange(1, 9) / 9.0)
         mid = 0.5 * (a + b)
         secant = a - d_a * (b - a) / (d_b - d_a) if np.isfinite(d_a - d_b) else mid
         if not a < secant < b:
