@@ -9,7 +9,8 @@ either side: the root of the parabola through the three differences stands when 
 tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
 a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`:
 secant points guarded either side and the middle, four a step) until it is narrower than
-:data:`TOLERANCE_RAD`.
+:data:`TOLERANCE_RAD`. A line contact (``flat``: its crossing lies in noise) keeps three steps
+on refinements (:meth:`HandOver.take_flat`).
 
 A guess's checks are asked for as :class:`Request` rows, answered by the joint field's
 refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`): the
