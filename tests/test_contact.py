@@ -520,7 +520,7 @@ def test_near_rows_refined_alongside_a_sample_get_the_same_answers(aligned53):
 def test_hand_over_guessed_from_interpolated_lags_agrees_with_the_iteration(aligned53, monkeypatch):
     # where the lags around a hand-over are interior contacts, the hand-over is guessed where
     # the two pairs' interpolated lags cross and checked by evaluations around the guess; the
-    # iteration on the bracket (secant, parabola, secant on evaluated differences) must find
+    # iteration on the bracket (on the sampled lags) must find
     # the same hand-over, TE and mean point
     pair = aligned53["pair"]
     opts = AnalysisOptions()

@@ -222,8 +222,9 @@ class MeshCycle:
             for side in self.sides:
                 side.interval_finish()
                 side.handover_step()
+                side.peak_step()
             due = [s for s in self.sides if s.ex is None and s.extras_due()]
-            if not due and not any(s.requests for s in self.sides):
+            if not due and not any(s.requests or s.probes for s in self.sides):
                 break
             self.evaluate(due)
         parts = [
@@ -308,9 +309,10 @@ class MeshCycle:
         return centres
 
     def evaluate(self, full, beyond=()) -> FieldSample | None:
-        """One joint evaluation of every side's pending requests, the extra positions of the
-        sides ``full`` (:meth:`SideCycle.extra_rows`) and the ``beyond`` rows
-        ``(side, relative rotation)``; returns the beyond rows' sample (None without)."""
+        """One joint evaluation of every side's pending requests and rows to sample
+        (:meth:`SideCycle.take_probes`), the extra positions of the sides ``full``
+        (:meth:`SideCycle.extra_rows`) and the ``beyond`` rows ``(side, relative rotation)``;
+        returns the beyond rows' sample (None without)."""
         sense = self.sense
         f_side, f_v, f_refine = [], [], []
         for side in full:
@@ -318,9 +320,11 @@ class MeshCycle:
             f_side += [side.index] * len(angles)
             f_v += angles
             f_refine += refine
-        f_side += [r[0] for r in beyond]
-        f_v += [r[1] for r in beyond]
-        f_refine += [True] * len(beyond)
+        probes = [(side, v, tag) for side in self.sides for v, tag in side.take_probes()]
+        first_probe = len(f_side)
+        f_side += [side.index for side, _, _ in probes] + [r[0] for r in beyond]
+        f_v += [v for _, v, _ in probes] + [r[1] for r in beyond]
+        f_refine += [True] * (len(probes) + len(beyond))
         n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for side in self.sides:
             for request in side.take_requests():
@@ -349,6 +353,15 @@ class MeshCycle:
             count = 3 if side.near_extras else 6
             side.take_extras(sample_rows(sample, slice(start, start + count)))
             start += count
+        for k, (side, _, tag) in enumerate(probes):  # filed like the requests' answers
+            row = first_probe + k
+            side.answers[tag] = (
+                sample.minimum_rad[row],
+                sample.contact_face_mm[row],
+                sample.contact_profile_mm[row],
+                sample.edge[row],
+            )
+        start += len(probes)
         return sample_rows(sample, slice(start, None)) if beyond else None
 
     def contacts(self, parts) -> list[ToothContact]:

@@ -7,11 +7,19 @@ guess is where the cubic interpolants of the two pairs' sampled lags cross
 (:func:`lag_crossing`), checked by evaluations at the guess and an eighth of a position step to
 either side: the root of the parabola through the three differences stands when it is within a
 tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
-a guess that does not settle) an iteration on the bracket: a secant step, the parabola through
-three differences, a last secant step.
+a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`:
+secant points guarded either side and the middle, four a step) until it is narrower than
+:data:`TOLERANCE_RAD`. A line contact (``flat``: its crossing lies in noise) keeps three steps
+on refinements (:meth:`HandOver.take_flat`).
 
-Evaluations are asked for as :class:`Request` rows, answered by the joint field's
-refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`).
+A guess's checks are asked for as :class:`Request` rows, answered by the joint field's
+refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`): the
+lags there are smooth and the contact points known. The iteration's evaluations are the lags
+themselves, ``(relative rotation, tag)`` rows sampled like every position (the node field's
+least nodes refined, :meth:`gearopt.contact.JointField.sample`): in edge contact a refinement
+from a point interpolated between the bracket's contact points can settle on another edge's
+local minimum (a lag difference several arcsec off), and the lag, a minimum over the flank,
+can bend or step between positions, where a fixed number of secant steps does not converge.
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ from gearopt.contact import FieldSample
 
 __all__ = [
     "FIT_TAGS",
+    "ITERATIONS",
     "ITERATION_TAGS",
     "HandOver",
     "Request",
@@ -37,6 +46,7 @@ __all__ = [
     "parabola",
     "parabola_at",
     "parabola_root",
+    "TOLERANCE_RAD",
 ]
 
 
@@ -55,6 +65,11 @@ class Request(NamedTuple):
 FIT_TAGS = tuple(("ho", pair, sign) for pair in (0, 1) for sign in (-1, 1))
 #: the answers of an iteration step: both pairs at the point
 ITERATION_TAGS = (("ho", 0, 0), ("ho", 1, 0))
+#: the iteration stops once the bracket is narrower (relative rotation; the lag then moves by
+#: well under 1e-3 arcsec)
+TOLERANCE_RAD = 1e-9
+#: the most steps of the iteration (bisection of a position step to 1e-9 rad takes about 26)
+ITERATIONS = 40
 
 
 class HandOver:
@@ -72,16 +87,20 @@ class HandOver:
         refinements.
     step
         The position step.
+    flat
+        Whether the TE is flat (a line contact: the TE within 0.1 arcsec, or the lags differing
+        by noise over the bracket; their crossing is then any point of it): its iteration
+        then takes three steps on refinements (:meth:`flat_requests`, :meth:`take_flat`), which
+        place the hand-over, and with it M, where they always have.
 
     Attributes
     ----------
-    lo, hi, d_lo, d_hi, ends
+    lo, hi, d_lo, d_hi, ends, flat
         As given.
-    x0
-        The secant guess on the bracket; once the iteration has evaluated it, the iteration's
-        first point.
     d0
-        D at ``x0`` once evaluated (the last secant step's other point), else None.
+        D at ``x0`` once evaluated (a line contact's iteration).
+    x0
+        The secant guess on the bracket: the iteration's first point.
     delta
         Offset of a guess's check evaluations (an eighth of a step).
     mode
@@ -89,27 +108,38 @@ class HandOver:
     x
         The point being evaluated, then the hand-over when ``done``.
     lag
-        The lag at the hand-over when interpolated by the check's parabolas, else None (it is
-        then taken from the extra positions' evaluation at ``x``).
+        The lag at the hand-over when interpolated by the check's parabolas or found by the
+        iteration on a closed bracket, else None (it is then taken from the extra positions'
+        evaluation at ``x``).
     round
-        0 at a first evaluation, 1 at the second (a guess's second check; the iteration's
-        parabola step).
+        0 at a guess's first check, 1 at its second.
     bracket
-        The part of the bracket that holds the root after the iteration's first evaluation.
+        ``[a, b, d_a, d_b, low_a, low_b]`` the iteration's bracket, D at its ends and the lower
+        of the two pairs' lags there (None at the bracket's first ends).
+    xs
+        The points of the iteration's step being evaluated.
+    width
+        The bracket's width before the last step.
+    steps
+        The iteration's evaluations so far.
     done
         True once settled.
     """
 
-    def __init__(self, lo, hi, d_lo, d_hi, ends, step):
+    def __init__(self, lo, hi, d_lo, d_hi, ends, step, flat=False):
         self.lo, self.hi, self.d_lo, self.d_hi, self.ends = lo, hi, d_lo, d_hi, ends
-        self.x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
+        self.flat = flat
         self.d0 = None
+        self.x0 = lo - d_lo * (hi - lo) / (d_hi - d_lo)
         self.delta = step / 8.0
         self.mode = None
         self.x = None
         self.lag = None
         self.round = 0
-        self.bracket = None
+        self.bracket = [lo, hi, d_lo, d_hi, None, None]
+        self.width = hi - lo
+        self.xs = []
+        self.steps = 0
         self.done = False
 
     def fit_requests(self, x, pitch: float) -> list[Request]:
@@ -126,14 +156,15 @@ class HandOver:
                 out.append(Request(x + shift + sign * self.delta, s, h, ("ho", pair, sign)))
         return out
 
-    def iteration_requests(self, x, pitch: float) -> list[Request]:
-        """An iteration step: both pairs at ``x``, started from the middle of each pair's
-        contact points at the bracket's ends."""
-        self.mode, self.x = "iterate", float(x)
+    def iteration_rows(self, xs, pitch: float) -> list[tuple[float, tuple]]:
+        """An iteration step: both pairs at each of the points ``xs``, as ``(relative rotation,
+        tag)`` rows to sample (the lags as at every position; see the module docstring)."""
+        self.mode = "iterate"
+        self.xs = sorted({float(x) for x in np.atleast_1d(xs)})
+        self.x = self.xs[0]
         out = []
-        for pair, shift in ((0, 0.0), (1, -pitch)):
-            (s0, h0), (s1, h1) = self.ends[pair]
-            out.append(Request(x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ("ho", pair, 0)))
+        for j, x in enumerate(self.xs):
+            out += [(x, ("ho", 0, j)), (x - pitch, ("ho", 1, j))]
         return out
 
     def take_fit(self, got: list, ex: FieldSample) -> tuple[str, float]:
@@ -172,24 +203,81 @@ class HandOver:
         self.round = 0  # not smooth there after all: the iteration on the bracket
         return "iterate", self.x0
 
-    def take_iteration(self, d: float) -> float | None:
-        """Take in D at ``x``: the next point to evaluate, or None once settled (at ``x``)."""
+    def take_iteration(self, lags) -> list[float] | None:
+        """Take in both pairs' lags ``(leaving, incoming)`` at each point of ``xs``: the next
+        points to evaluate, or None once settled (at ``x``).
+
+        The bracket moves to the first sign change of D = leaving - incoming along the points;
+        D is +-inf where one pair is off the flanks (its sign still tells the side), NaN
+        (both off) drops the point. Next: the secant (regula falsi) point on the bracket, a
+        hundredth of the bracket either side of it (on smooth lags the root falls between
+        them) and the bracket's middle (where a lag steps, at least a halving); where a step left
+        more than a quarter of the bracket, eight points evenly across it. Settled once
+        the bracket is narrower than :data:`TOLERANCE_RAD`, at its middle, ``lag`` the greater
+        of the lower lags at its ends: at a crossing of continuous lags their common value,
+        where a pair's lag steps across the other's (its least clearance jumping to another
+        part of its flank) the TE's trough there.
+        """
+        self.steps += 1
+        a, b, d_a, d_b, low_a, low_b = self.bracket
+        points = [(a, d_a, low_a)]
+        with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
+            for x, (g_l, g_i) in zip(self.xs, lags, strict=True):
+                d = g_l - g_i
+                if a < x < b and not np.isnan(d):
+                    points.append((x, d, min(g_l, g_i)))
+        points.append((b, d_b, low_b))
+        for (x0, d0, l0), (x1, d1, l1) in zip(points[:-1], points[1:], strict=True):
+            if d0 <= 0.0 < d1 or d1 == 0.0:
+                a, b, d_a, d_b, low_a, low_b = x0, x1, d0, d1, l0, l1
+                break
+        self.bracket = [a, b, d_a, d_b, low_a, low_b]
+        if d_b == 0.0:
+            self.done, self.x, self.lag = True, float(b), low_b
+            return None
+        if b - a <= TOLERANCE_RAD or self.steps >= ITERATIONS:
+            self.done, self.x = True, float(0.5 * (a + b))
+            if b - a <= TOLERANCE_RAD and low_a is not None and low_b is not None:
+                self.lag = float(max(low_a, low_b))
+            return None
+        width, self.width = self.width, b - a
+        if b - a > 0.25 * width:  # not closing in (a lag steps): eight points across it
+            return list(a + (b - a) * np.arange(1, 9) / 9.0)
+        mid = 0.5 * (a + b)
+        secant = a - d_a * (b - a) / (d_b - d_a) if np.isfinite(d_a - d_b) else mid
+        if not a < secant < b:
+            secant = mid
+        guard = 0.01 * (b - a)
+        xs = [secant, secant - guard, secant + guard, mid]
+        return [x for x in xs if a < x < b]
+
+    def flat_requests(self, x, pitch: float) -> list[Request]:
+        """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from
+        the middle of each pair's contact points at the bracket's ends."""
+        self.mode, self.x = "iterate", float(x)
+        out = []
+        for pair, shift in ((0, 0.0), (1, -pitch)):
+            (s0, h0), (s1, h1) = self.ends[pair]
+            out.append(Request(x + shift, 0.5 * (s0 + s1), 0.5 * (h0 + h1), ITERATION_TAGS[pair]))
+        return out
+
+    def take_flat(self, d: float) -> float | None:
+        """Take in D at ``x`` for a line contact (``flat``): the secant guess, the parabola
+        through three differences, a last secant step; None once settled (at ``x``)."""
         if not np.isfinite(d):
             self.done = True
             return None
         lo, hi, d_lo, d_hi = self.lo, self.hi, self.d_lo, self.d_hi
-        if self.round == 0:
-            x0 = self.x
-            self.x0, self.d0 = x0, d
+        if self.steps == 0:
+            self.steps, self.d0, x0 = 1, d, self.x
             a, b, c = parabola(lo - x0, hi - x0, d_lo, d, d_hi)
             roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
             roots = np.real(roots[np.isreal(roots)]) + x0
-            self.bracket = (lo, x0) if d > 0.0 else (x0, hi)
+            self.bracket = [lo, x0] if d > 0.0 else [x0, hi]
             good = roots[(roots >= self.bracket[0]) & (roots <= self.bracket[1])]
-            self.round = 1
             return float(good[0]) if good.size else x0
         x0, d0, x1 = self.x0, self.d0, self.x
-        if d != d0:  # one last secant step between the two best points
+        if d != d0:
             x2 = x1 - d * (x1 - x0) / (d - d0)
             if self.bracket[0] <= x2 <= self.bracket[1]:
                 self.x = float(x2)

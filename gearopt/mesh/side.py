@@ -74,6 +74,9 @@ class SideCycle:
         ``(n, pairs)`` the pairs' contact points (pinion grid face and profile coordinates).
     requests
         The refinements to evaluate at the next joint evaluation.
+    probes
+        ``(relative rotation, tag)`` rows to sample (refined) at the next joint evaluation,
+        their minima filed under ``answers`` like the requests'.
     answers
         The answers ``(minimum_rad, face, profile, edge)`` of evaluated requests, by tag, until
         taken.
@@ -142,6 +145,7 @@ class SideCycle:
         self.cs = sample.contact_face_mm[inv].reshape(shape)
         self.ch = sample.contact_profile_mm[inv].reshape(shape)
         self.requests: list[Request] = []
+        self.probes: list[tuple[float, tuple]] = []
         self.answers: dict = {}
         self.interval: tuple[float, float] | None = None
         self.interval_done = False
@@ -160,6 +164,10 @@ class SideCycle:
         self.ex: FieldSample | None = None
         self.start_interval()
         self.start_handover()
+        self.g_peak: float | None = None
+        self.peak_at = self.peak_guess()
+        self.peak_lags: dict = {}
+        self.ask_peak([-1, 0, 1])
 
     # -- the contact interval ---------------------------------------------------------------
 
@@ -279,7 +287,9 @@ class SideCycle:
                     ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
                     for c in (col_l, col_i)
                 ]
-                self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step)
+                # a line contact: the TE flat, or the lags differing by noise
+                flat = min(np.ptp(self.lag), d_hi - d_lo) < FLAT_ARCSEC / ARCSEC
+                self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step, flat)
                 guess = self.crossing(lo, hi)
                 if guess is None:
                     self.ask_iteration(self.ho.x0)
@@ -301,9 +311,13 @@ class SideCycle:
         self.requests += self.ho.fit_requests(x, self.pitch)
 
     def ask_iteration(self, x) -> None:
-        """Evaluate both pairs at ``x`` for the iteration on the bracket."""
-        self.v_star = float(x)
-        self.requests += self.ho.iteration_requests(x, self.pitch)
+        """Sample both pairs at ``x`` (a point, or the points of a step) for the iteration on
+        the bracket."""
+        self.v_star = float(np.atleast_1d(x)[0])
+        if self.ho.flat:
+            self.requests += self.ho.flat_requests(x, self.pitch)
+        else:
+            self.probes += self.ho.iteration_rows(x, self.pitch)
 
     def handover_step(self) -> None:
         """Take in the hand-over's evaluations, if they are in: ask for the next ones, or
@@ -323,14 +337,25 @@ class SideCycle:
                 self.ex = None
                 self.ask_iteration(x)
             return
-        if not all(tag in self.answers for tag in ITERATION_TAGS):
+        if ho.flat:
+            if not all(tag in self.answers for tag in ITERATION_TAGS):
+                return
+            leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
+            x = ho.take_flat(float(leaving - incoming))
+            if x is None:
+                self.v_star = ho.x
+            else:
+                self.ask_iteration(x)
             return
-        leaving, incoming = (self.answers.pop(tag)[0] for tag in ITERATION_TAGS)
-        x = ho.take_iteration(float(leaving - incoming))
-        if x is None:
-            self.v_star = ho.x
+        tags = [(("ho", 0, j), ("ho", 1, j)) for j in range(len(ho.xs))]
+        if not all(tag in self.answers for pair in tags for tag in pair):
+            return
+        lags = [tuple(float(self.answers.pop(tag)[0]) for tag in pair) for pair in tags]
+        xs = ho.take_iteration(lags)
+        if xs is None:
+            self.v_star, self.g_hand = ho.x, ho.lag
         else:
-            self.ask_iteration(x)
+            self.ask_iteration(xs)
 
     # -- the extra positions ----------------------------------------------------------------
 
@@ -374,6 +399,11 @@ class SideCycle:
         requests, self.requests = self.requests, []
         return requests
 
+    def take_probes(self) -> list[tuple[float, tuple]]:
+        """The pending rows to sample, handed over to the driver."""
+        probes, self.probes = self.probes, []
+        return probes
+
     def extra_angles(self) -> list[float]:
         """The extra positions: the hand-over (both pairs), the TE peak, the mean point M and
         its neighbours for the path direction; a flat TE (line contact, no hand-over) is
@@ -386,6 +416,39 @@ class SideCycle:
         v_mid = v_star - 0.5 * pitch
         dv = 0.25 * self.step
         return [v_star, v_star - pitch, self.peak_guess(), v_mid, v_mid - dv, v_mid + dv]
+
+    # -- the TE peak (the least lag) ---------------------------------------------------------
+
+    def ask_peak(self, offsets) -> None:
+        """Sample the carrying pair at the peak's guess plus ``offsets`` eighths of a step."""
+        delta = self.step / 8.0
+        self.probes += [(self.peak_at + k * delta, ("pk", k)) for k in offsets]
+
+    def peak_step(self) -> None:
+        """Take in the peak's evaluations: the parabola through the lags an eighth of a step
+        either side of the guess and at it, then its vertex once (where within half a step),
+        then ``g_peak``: the least lag evaluated. The samples' parabola the guess comes from
+        (:meth:`peak_guess`) misses the least lag by up to 0.02 arcsec where the lag is not
+        symmetric about its minimum (a hand-over in edge contact nearby)."""
+        if self.g_peak is not None:
+            return
+        for key in [k for k in self.answers if k[0] == "pk"]:
+            self.peak_lags[key[1]] = float(self.answers.pop(key)[0])
+        if "vertex" in self.peak_lags:
+            self.g_peak = min(self.peak_lags.values())
+            return
+        if len(self.peak_lags) < 3:
+            return
+        g = np.array([self.peak_lags[k] for k in (-1, 0, 1)])
+        curvature = g[0] - 2.0 * g[1] + g[2]
+        if not (np.all(np.isfinite(g)) and curvature > 0.0):
+            self.g_peak = float(np.min(np.where(np.isfinite(g), g, np.inf)))
+            return
+        z = 0.5 * (g[0] - g[2]) / curvature
+        if abs(z) > 4.0:
+            self.g_peak = float(g.min())
+            return
+        self.probes.append((self.peak_at + z * self.step / 8.0, ("pk", "vertex")))
 
     def peak_guess(self) -> float:
         """The TE maximum's relative rotation: the parabola through the least sample of the
@@ -457,6 +520,8 @@ class SideCycle:
         if g_hand is None:
             g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
         g_min = float(min(ex.minimum_rad[2], lag.min()))
+        if self.g_peak is not None:
+            g_min = min(g_min, self.g_peak)
         te = (g_min - lag) * ARCSEC
         pair_te = ((g_min - g) * ARCSEC).T
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
