@@ -62,7 +62,6 @@ def _coordinator(study: Path, trials: int, barrier, errors) -> None:
 
 def main(folder: Path, pairs: int, trials: int) -> None:
     import gearopt_toy
-
     from gearopt.warmup import warm_kernels
 
     warm_kernels(announce=False)  # loaded once here, not in every coordinator
@@ -87,7 +86,8 @@ def main(folder: Path, pairs: int, trials: int) -> None:
         while not errors.empty():
             said.append(errors.get())
         codes = [proc.exitcode for proc in procs]
-        print(json.dumps({"pair": k, "db": str(pair / "toy_probe.db"), "codes": codes, "errors": said}))
+        db = str(pair / "toy_probe.db")
+        print(json.dumps({"pair": k, "db": db, "codes": codes, "errors": said}))
         sys.stdout.flush()
 
 
