@@ -1,16 +1,20 @@
 """The study coordinator: Optuna ask/tell over a pool of worker processes.
 
-One coordinator process owns the storage (Optuna discourages several processes writing one
-SQLite file): it asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to a
-joblib/loky pool of ``jobs`` workers, writes the gearopt tables (:mod:`gearopt.results`) and
-tells Optuna, in that order. Workers never touch the database. :class:`Coordinator` holds a
-run's state; :func:`run_study` runs one. Only Optuna's public API is used (its study, trial and
-storage methods), never its private attributes or its tables through SQL.
+A coordinator asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to its
+workers, writes the gearopt tables (:mod:`gearopt.results`) and tells Optuna, in that order.
+With ``jobs = 1``, ``deterministic`` or Dask the workers are a joblib pool (loky, Dask) and
+never touch the database. Otherwise (``jobs`` > 1 on loky) each of the ``jobs`` worker
+processes is a coordinator of its own that evaluates its trials itself, and this process
+supervises them (:mod:`gearopt.study_workers`: Optuna's own multi-process pattern, so the
+sampler's and the storage's cost per trial is paid side by side rather than by one process).
+:class:`Coordinator` holds a run's state; :func:`run_study` runs one. Only Optuna's public API
+is used (its study, trial and storage methods), never its private attributes or its tables
+through SQL.
 
 Counting: a run ends when the study holds ``trials`` COMPLETE trials (infeasible ones count,
 FAIL ones do not), so the same command again continues a study and is a no-op on a finished one.
 
-Crashes:
+Crashes (a supervised worker that dies: :mod:`gearopt.study_workers`):
 
 - a worker that dies fails its trial (the one whose start marker names the dead process), which
   is re-enqueued with the same parameters, at most twice; loky fails every pending future when
@@ -26,7 +30,7 @@ them again.
 
 Reproducibility: with ``jobs = 1``, or ``deterministic``, trials are asked in synchronous batches
 of ``jobs`` and told in order, so a seeded sampler suggests the same sequence of parameters;
-otherwise the workers are kept busy asynchronously.
+otherwise the workers sample side by side (each its seed plus its number).
 """
 
 from __future__ import annotations
