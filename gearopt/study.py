@@ -220,9 +220,7 @@ class RunSummary:
     kernels_s: float = 0.0  # the compiled kernels' compilation or loading, before the trials
     coordinator_s: float  # asking, telling, writing the tables, recovering: waits excluded
     coordinator_cpu_s: float = 0.0  # the same, the coordinator thread's CPU time
-    #: asking, telling and writing the tables wherever it ran (the coordinator's, and the
-    #: workers' when they ask and tell themselves, side by side), CPU time
-    ask_tell_cpu_s: float = 0.0
+    ask_tell_cpu_s: float = 0.0  # the same, and the supervised workers' own (CPU time)
     jobs: int
     best: optuna.trial.FrozenTrial | None = None
     best_design_path: str | None = None
@@ -305,9 +303,7 @@ class Coordinator:
         self.backend, self.scheduler, self.progress = backend, scheduler, progress
         self.url = storage or default_storage_url(spec)
         self.batch = deterministic or jobs == 1 or backend == "dask"
-        #: a worker of :mod:`gearopt.study_workers` (None: a coordinator of its own): its
-        #: ``stream``, the run's places (``take``, ``give``) and ``told``, called per trial
-        self.role = role
+        self.role = role  # a worker of :mod:`gearopt.study_workers` (None: a coordinator)
         #: workers that ask and tell themselves, this process their supervisor
         self.supervised = role is None and not self.batch and backend == "loky"
         self.limit = max(10, trials) if max_failures is None else max_failures
@@ -360,7 +356,7 @@ class Coordinator:
 
     def recover(self) -> None:
         if self.role is not None:
-            return  # the workers' supervisor recovers (it knows which of its workers died)
+            return  # its supervisor recovers (it knows which of its workers died)
         o = self.opened
         self.recovered += recover(o.study, o.storage, o.results, self.spec, self.tag)
 
@@ -520,8 +516,7 @@ class Coordinator:
         self.opened = _open(self.spec, self.url, 0 if self.role is None else self.role.stream)
         self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
         self.recover()
-        # the workers' start markers (none in this process: its own death says whose trial)
-        self.markers = trial_markers(self.pid) if self.role is None else ""
+        self.markers = trial_markers(self.pid) if self.role is None else ""  # (a worker: none)
         # the compiled kernels compiled (or loaded) here once, before the workers start (they
         # load the cache rather than compile it side by side) and before the trials' clock
         self.kernels_s = warm_kernels(announce=self.progress)
@@ -590,9 +585,7 @@ class Coordinator:
                     self.spec.name,
                     f"{self.failed} trials failed in this run (limit {self.limit})",
                 )
-            if self.role is not None:
-                # a supervised worker: the run's places say whether to ask (and ``ask``
-                # gives back a place another coordinator's trial took), no count needed
+            if self.role is not None:  # a supervised worker: the run's places say, no count
                 complete, free = 0, 1
             else:
                 complete, running = self.counts()
@@ -609,7 +602,7 @@ class Coordinator:
             asked = self.asked
             if not self.batch or not self.pending:
                 self.refill(free)
-            if self.role is not None and not (self.pending or self.held or self.suspects):
+            if self.role is not None and not self.pending:
                 break  # no place left for this worker: the others hold them
             futures = [h.future for h in self.pending.values()]
             self.busy_s += time.perf_counter() - mark
@@ -773,7 +766,6 @@ def _upload(spec: StudySpec, trial, figures) -> None:
 def _progress(progress: bool, total: int, spec: StudySpec):
     if not progress:
         return None
-
     return tqdm(total=total, desc=spec.name, unit="trial", file=sys.stderr, dynamic_ncols=True)
 
 
