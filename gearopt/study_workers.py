@@ -252,6 +252,13 @@ class Supervisor:
         and re-enqueued, and another worker takes its place."""
         child.finished = True
         child.process.join()
+        if child.tag is None and self.error is None:  # it never started: no use starting more
+            self.error = StudyError(
+                "--jobs",
+                self.c.jobs,
+                f"a worker process ended before it started (exit code {child.process.exitcode})",
+            )
+            return
         failed = self._fail_trials_of(child, "its worker process died", charge=True)
         self.c.failed += failed
         if failed:
