@@ -81,15 +81,14 @@ class WorkerRole:
         self.conn.send(("told", outcome.seconds, outcome.failed))
 
 
-def _worker(spec: StudySpec, trials: int, url: str, role: WorkerRole, limit: int | None):
-    """A worker process: one coordinator on :class:`~gearopt.pools.InlineCalls`."""
-    from gearopt.study import Coordinator
-
+def _worker(kind, spec: StudySpec, trials: int, url: str, role: WorkerRole, limit: int | None):
+    """A worker process: one coordinator (``kind``: the supervisor's class, given rather than
+    imported) on :class:`~gearopt.pools.InlineCalls`."""
     signal.signal(signal.SIGTERM, _interrupt)
     parent = os.getppid()
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    coordinator = Coordinator(
+    coordinator = kind(
         spec,
         trials=trials,
         jobs=1,
@@ -155,7 +154,7 @@ class Supervisor:
         role = WorkerRole(stream=self.streams, places=self.places, conn=theirs)
         limit = c.limit
         process = self.context.Process(
-            target=_worker, args=(c.spec, c.trials, c.url, role, limit), daemon=True
+            target=_worker, args=(type(c), c.spec, c.trials, c.url, role, limit), daemon=True
         )
         process.start()
         theirs.close()
