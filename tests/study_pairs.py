@@ -17,6 +17,7 @@ import sys
 import traceback
 from pathlib import Path
 
+from gearopt.storage import check_own_tables, create_sqlite
 from gearopt.study import Coordinator
 from gearopt.studyfile import load_study_spec
 
@@ -65,6 +66,9 @@ def main(folder: Path, pairs: int, trials: int) -> None:
     from gearopt.warmup import warm_kernels
 
     warm_kernels(announce=False)  # loaded once here, not in every coordinator
+    warm = f"sqlite:///{folder / 'warm.db'}"
+    create_sqlite(warm)
+    check_own_tables(warm)  # Optuna's table names, read once here likewise
     design = Path(gearopt_toy.__file__).with_name("toy_design.toml")
     context = mp.get_context("fork")
     for k in range(pairs):
