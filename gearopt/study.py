@@ -8,8 +8,7 @@ processes is a coordinator of its own that evaluates its trials itself, and this
 supervises them (:mod:`gearopt.study_workers`: Optuna's own multi-process pattern, so the
 sampler's and the storage's cost per trial is paid side by side rather than by one process).
 :class:`Coordinator` holds a run's state; :func:`run_study` runs one. Only Optuna's public API
-is used (its study, trial and storage methods), never its private attributes or its tables
-through SQL.
+is used, never its private attributes or its tables through SQL.
 
 Counting: a run ends when the study holds ``trials`` COMPLETE trials (infeasible ones count,
 FAIL ones do not), so the same command again continues a study and is a no-op on a finished one.
@@ -672,7 +671,8 @@ def run_study(
     trials
         COMPLETE trials the study must hold at the end (FAIL ones do not count).
     jobs
-        Worker processes (loky).
+        Worker processes (several, not deterministic: spawned by multiprocessing, so a
+        script calling this needs ``if __name__ == "__main__":``).
     storage
         SQLAlchemy URL (default :func:`default_storage_url`); PostgreSQL works the same, and
         several coordinators may share one study there.
