@@ -62,6 +62,7 @@ class WorkerRole:
     stream: int
     places: Any  # a multiprocessing Value('i'): the places no worker holds
     conn: Any
+    owner: str  # the supervisor's id: the ``coordinator`` of the workers' gearopt rows
 
     def take(self) -> bool:
         """Take a place for a trial; False when every place is held."""
@@ -100,6 +101,7 @@ def _worker(kind, spec: StudySpec, trials: int, url: str, role: WorkerRole, limi
         scheduler=None,
         role=role,
     )
+    coordinator.me = role.owner  # its rows are the run's (its trials' tag stays its own)
     role.conn.send(("tag", coordinator.tag))
     try:
         coordinator.run(save_best=False)
@@ -151,7 +153,7 @@ class Supervisor:
         """Start a worker."""
         c = self.c
         ours, theirs = self.context.Pipe(duplex=False)
-        role = WorkerRole(stream=self.streams, places=self.places, conn=theirs)
+        role = WorkerRole(stream=self.streams, places=self.places, conn=theirs, owner=c.me)
         limit = c.limit
         process = self.context.Process(
             target=_worker, args=(type(c), c.spec, c.trials, c.url, role, limit), daemon=True
