@@ -60,7 +60,7 @@ class Resubmit(Exception):
     """A batch stopped before this task ran: submit it again."""
 
 
-class JoblibBatches:
+class JoblibBatches(InlineCalls):
     """Runs submitted calls in batches through joblib's ``dask`` backend on a Dask cluster
     (``scheduler``: its address; default a local cluster of ``jobs`` workers) and resolves
     their futures in order. A task that kills Dask workers ends as ``KilledWorker`` (Dask
@@ -76,16 +76,10 @@ class JoblibBatches:
         else:
             cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True)
             self.client = Client(cluster)
+        super().__init__()
         self.jobs = jobs
-        self.queue: list[tuple[cf.Future, Callable, tuple]] = []
-
-    def submit(self, fn, *args) -> cf.Future:
-        future: cf.Future = cf.Future()
-        self.queue.append((future, fn, args))
-        return future
 
     def flush(self) -> None:
-
         queue, self.queue = self.queue, []
         if not queue:
             return
