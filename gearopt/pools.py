@@ -1,5 +1,7 @@
 """The worker pools of a study run (:func:`gearopt.study.run_study`): loky's reusable process
-pool, or joblib's dask backend in synchronous batches; and which errors say a worker died."""
+pool, joblib's dask backend in synchronous batches, or the coordinator's own process
+(:class:`InlineCalls`, the workers of :mod:`gearopt.study_workers`); and which errors say a
+worker died."""
 
 from __future__ import annotations
 
@@ -13,7 +15,7 @@ from joblib.externals.loky.process_executor import TerminatedWorkerError
 
 from gearopt.errors import StudyError
 
-__all__ = ["JoblibBatches", "Resubmit", "broken_pool", "worker_pool"]
+__all__ = ["InlineCalls", "JoblibBatches", "Resubmit", "broken_pool", "worker_pool"]
 
 
 def worker_pool(jobs: int, backend: str = "loky", scheduler: str | None = None):
@@ -21,15 +23,44 @@ def worker_pool(jobs: int, backend: str = "loky", scheduler: str | None = None):
     :class:`JoblibBatches` on a Dask cluster."""
     if backend == "dask":
         return JoblibBatches(jobs, scheduler)
+    if backend == "inline":
+        return InlineCalls()
 
     return get_reusable_executor(max_workers=jobs, timeout=60)
+
+
+class InlineCalls:
+    """Runs submitted calls in this process, in order, when :meth:`flush` is called (not when
+    they are submitted: a stop signal then finds the trial in hand, not in a hand-over). A
+    call's exception is its future's; a call that kills the process kills its coordinator."""
+
+    def __init__(self) -> None:
+        self.queue: list[tuple[cf.Future, Callable, tuple]] = []
+
+    def submit(self, fn, *args) -> cf.Future:
+        future: cf.Future = cf.Future()
+        self.queue.append((future, fn, args))
+        return future
+
+    def flush(self) -> None:
+        while self.queue:
+            future, fn, args = self.queue.pop(0)
+            try:
+                result = fn(*args)
+            except Exception as exc:  # noqa: BLE001 - the trial's own error, told as a failure
+                future.set_exception(exc)
+            else:
+                future.set_result(result)
+
+    def shutdown(self, wait: bool = True, **_) -> None:
+        self.queue.clear()
 
 
 class Resubmit(Exception):
     """A batch stopped before this task ran: submit it again."""
 
 
-class JoblibBatches:
+class JoblibBatches(InlineCalls):
     """Runs submitted calls in batches through joblib's ``dask`` backend on a Dask cluster
     (``scheduler``: its address; default a local cluster of ``jobs`` workers) and resolves
     their futures in order. A task that kills Dask workers ends as ``KilledWorker`` (Dask
@@ -45,16 +76,10 @@ class JoblibBatches:
         else:
             cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True)
             self.client = Client(cluster)
+        super().__init__()
         self.jobs = jobs
-        self.queue: list[tuple[cf.Future, Callable, tuple]] = []
-
-    def submit(self, fn, *args) -> cf.Future:
-        future: cf.Future = cf.Future()
-        self.queue.append((future, fn, args))
-        return future
 
     def flush(self) -> None:
-
         queue, self.queue = self.queue, []
         if not queue:
             return

@@ -165,10 +165,13 @@ def recover(
     results: ResultsStore,
     spec: StudySpec,
     me: str,
+    skip: frozenset[str] | set[str] = frozenset(),
 ) -> list[int]:
     """Fail and re-enqueue the RUNNING trials whose coordinator is gone (Optuna's stale-trial
     handling, then this host's dead coordinators, then trials without a coordinator); the
-    numbers of the trials failed here (the stale ones are Optuna's, its callback requeues)."""
+    numbers of the trials failed here (the stale ones are Optuna's, its callback requeues).
+    ``skip``: the coordinator tags whose trials the caller sees to itself (a supervisor's
+    workers: it fails a dead worker's trial as the worker's death, not a coordinator's)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)
@@ -184,6 +187,8 @@ def recover(
     done = []
     for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         owner = trial.user_attrs.get(COORDINATOR)
+        if owner in skip:
+            continue
         if owner is not None and ":" not in owner:  # an earlier gearopt's: its table heartbeat
             if owner == me or owner in living:
                 continue

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 import re
 import sqlite3
 import time
@@ -17,13 +18,14 @@ import sqlalchemy as sa
 import sqlalchemy.exc
 
 from gearopt.errors import StudyError
-from gearopt.results import SCHEMA_NAMES
+from gearopt.results import SCHEMA_NAMES, ResultsStore
 from gearopt.studyfile import StudySpec
 
 __all__ = [
     "check_integrity",
     "check_own_tables",
     "check_storage_url",
+    "create_sqlite",
     "default_storage_url",
     "fast_sqlite",
     "masked_url",
@@ -79,8 +81,9 @@ def check_storage_url(url: str) -> None:
 def check_integrity(url: str) -> None:
     """Refuse a SQLite file that is not a sound database (a damaged page, a file that is not
     SQLite at all) before anything reads or writes it: SQLite's ``quick_check``, on a
-    read-only connection. An empty (0-byte) file is a sound empty database. Other dialects
-    keep their own consistency."""
+    read-only connection. An empty (0-byte) file is refused too: gearopt never leaves one
+    (:func:`create_sqlite` makes a new database whole), so it is someone else's (a file
+    truncated, a name taken by mistake). Other dialects keep their own consistency."""
     try:
         parsed = sa.engine.make_url(url)
     except Exception:
@@ -88,6 +91,13 @@ def check_integrity(url: str) -> None:
     if parsed.get_backend_name() != "sqlite" or not Path(parsed.database or "").is_file():
         return
     path = Path(parsed.database).resolve()
+    if path.stat().st_size == 0:
+        raise StudyError(
+            "storage",
+            masked_url(url),
+            "is an empty file (0 bytes), not a database gearopt made, left untouched: "
+            "remove it to start a new study there, or give another --storage",
+        )
     try:
         con = sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, timeout=30.0)
     except sqlite3.Error as exc:
@@ -106,6 +116,42 @@ def check_integrity(url: str) -> None:
             f"{f'; {len(rows) - 1} more problems' if len(rows) > 1 else ''}): restore it from "
             "a copy, or give another --storage",
         )
+
+
+def create_sqlite(url: str) -> bool:
+    """Make a new SQLite database whole: Optuna's schema and gearopt's tables are created in
+    a temporary file beside it, which is then linked under the database's name (``os.link``,
+    which fails when the name exists: another coordinator made it first, and that one is
+    used). No coordinator ever sees a half-made file, so two starting together never race on
+    the schema, and a 0-byte file is never gearopt's. True when this call made it; nothing to
+    do for other dialects or an existing file."""
+    try:
+        parsed = sa.engine.make_url(url)
+    except Exception:
+        return False
+    if parsed.get_backend_name() != "sqlite" or not parsed.database:
+        return False
+    path = Path(parsed.database)
+    if path.exists() or not path.parent.is_dir():
+        return False  # an existing file is checked; a missing folder, the driver says so
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.new")
+    temp_url = f"sqlite:///{temporary}"
+    try:
+        storage = optuna.storages.RDBStorage(temp_url, engine_kwargs=_engine_kwargs(temp_url))
+        ResultsStore(temp_url, engine=storage.engine)
+        storage.engine.dispose()
+        try:
+            os.link(temporary, path)
+        except FileExistsError:
+            return False
+        except OSError:  # no hard links here: the first rename wins the name all the same
+            if path.exists():
+                return False
+            os.replace(temporary, path)
+        return True
+    finally:
+        for leftover in (temporary, *temporary.parent.glob(f"{temporary.name}-*")):
+            Path(leftover).unlink(missing_ok=True)
 
 
 def check_own_tables(url: str) -> None:

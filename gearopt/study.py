@@ -1,16 +1,19 @@
 """The study coordinator: Optuna ask/tell over a pool of worker processes.
 
-One coordinator process owns the storage (Optuna discourages several processes writing one
-SQLite file): it asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to a
-joblib/loky pool of ``jobs`` workers, writes the gearopt tables (:mod:`gearopt.results`) and
-tells Optuna, in that order. Workers never touch the database. :class:`Coordinator` holds a
-run's state; :func:`run_study` runs one. Only Optuna's public API is used (its study, trial and
-storage methods), never its private attributes or its tables through SQL.
+A coordinator asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to its
+workers, writes the gearopt tables (:mod:`gearopt.results`) and tells Optuna, in that order.
+With ``jobs = 1``, ``deterministic`` or Dask the workers are a joblib pool (loky, Dask) and
+never touch the database. Otherwise (``jobs`` > 1 on loky) each of the ``jobs`` worker
+processes is a coordinator of its own that evaluates its trials itself, and this process
+supervises them (:mod:`gearopt.study_workers`: Optuna's own multi-process pattern, so the
+sampler's and the storage's cost per trial is paid side by side rather than by one process).
+:class:`Coordinator` holds a run's state; :func:`run_study` runs one. Only Optuna's public API
+is used, never its private attributes or its tables through SQL.
 
 Counting: a run ends when the study holds ``trials`` COMPLETE trials (infeasible ones count,
 FAIL ones do not), so the same command again continues a study and is a no-op on a finished one.
 
-Crashes:
+Crashes (a supervised worker that dies: :mod:`gearopt.study_workers`):
 
 - a worker that dies fails its trial (the one whose start marker names the dead process), which
   is re-enqueued with the same parameters, at most twice; loky fails every pending future when
@@ -26,7 +29,7 @@ them again.
 
 Reproducibility: with ``jobs = 1``, or ``deterministic``, trials are asked in synchronous batches
 of ``jobs`` and told in order, so a seeded sampler suggests the same sequence of parameters;
-otherwise the workers are kept busy asynchronously.
+otherwise the workers sample side by side (each its seed plus its number).
 """
 
 from __future__ import annotations
@@ -74,12 +77,14 @@ from gearopt.storage import (
     check_integrity,
     check_own_tables,
     check_storage_url,
+    create_sqlite,
     default_storage_url,
     fast_sqlite,
     masked_url,
     rdb_storage,
     storage_error,
 )
+from gearopt.study_workers import supervise
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 from gearopt.warmup import warm_kernels
@@ -102,8 +107,10 @@ __all__ = [
 ]
 
 
-def _sampler(spec: StudySpec) -> optuna.samplers.BaseSampler:
-    seed = spec.seed
+def _sampler(spec: StudySpec, stream: int = 0) -> optuna.samplers.BaseSampler:
+    """The study file's sampler; ``stream`` (a worker's number) offsets its seed, so that
+    workers sampling side by side do not suggest the same designs."""
+    seed = None if spec.seed is None else (spec.seed + stream) % 2**32
     if spec.sampler == "tpe":
         return optuna.samplers.TPESampler(seed=seed, multivariate=True, constant_liar=True)
     if spec.sampler == "random":
@@ -133,9 +140,10 @@ def open_study(spec: StudySpec, storage: str | None = None):
     return opened.study, opened.results
 
 
-def _open(spec: StudySpec, storage: str | None) -> OpenStudy:
+def _open(spec: StudySpec, storage: str | None, stream: int = 0) -> OpenStudy:
     url = storage or default_storage_url(spec)
     check_storage_url(url)
+    create_sqlite(url)  # a new SQLite file made whole, schema and all
     check_integrity(url)
     if not spec.shared_storage:
         check_own_tables(url)
@@ -152,7 +160,7 @@ def _open(spec: StudySpec, storage: str | None) -> OpenStudy:
             )
         study = optuna.create_study(
             storage=rdb,
-            sampler=_sampler(spec),
+            sampler=_sampler(spec, stream),
             study_name=spec.name,
             directions=spec.directions,
             load_if_exists=True,
@@ -211,6 +219,7 @@ class RunSummary:
     kernels_s: float = 0.0  # the compiled kernels' compilation or loading, before the trials
     coordinator_s: float  # asking, telling, writing the tables, recovering: waits excluded
     coordinator_cpu_s: float = 0.0  # the same, the coordinator thread's CPU time
+    ask_tell_cpu_s: float = 0.0  # the same, and the supervised workers' own (CPU time)
     jobs: int
     best: optuna.trial.FrozenTrial | None = None
     best_design_path: str | None = None
@@ -240,6 +249,11 @@ class RunSummary:
     def coordinator_cpu_ms_per_trial(self) -> float:
         """:attr:`coordinator_ms_per_trial` in CPU time (not inflated by a busy machine)."""
         return 1e3 * self.coordinator_cpu_s / max(self.evaluated_this_run, 1)
+
+    @property
+    def ask_tell_cpu_ms_per_trial(self) -> float:
+        """:attr:`ask_tell_cpu_s` per trial evaluated."""
+        return 1e3 * self.ask_tell_cpu_s / max(self.evaluated_this_run, 1)
 
 
 @dataclass(kw_only=True)
@@ -276,17 +290,21 @@ class Coordinator:
         max_failures: int | None,
         backend: str,
         scheduler: str | None,
+        role: Any = None,
     ) -> None:
         if not isinstance(trials, int) or trials < 1:
             raise StudyError("--trials", trials, "must be a positive integer")
         if not isinstance(jobs, int) or jobs < 1:
             raise StudyError("--jobs", jobs, "must be a positive integer")
-        if backend not in ("loky", "dask"):
+        if backend not in ("loky", "dask") and not (backend == "inline" and jobs == 1):
             raise StudyError("--backend", backend, "must be loky or dask")
         self.spec, self.trials, self.jobs = spec, trials, jobs
         self.backend, self.scheduler, self.progress = backend, scheduler, progress
         self.url = storage or default_storage_url(spec)
         self.batch = deterministic or jobs == 1 or backend == "dask"
+        self.role = role  # a worker of :mod:`gearopt.study_workers` (None: a coordinator)
+        #: workers that ask and tell themselves, this process their supervisor
+        self.supervised = role is None and not self.batch and backend == "loky"
         self.limit = max(10, trials) if max_failures is None else max_failures
         self.labels = {o.label: "objective" for o in spec.objectives}
         self.labels.update({c.label: "constraint" for c in spec.constraints})
@@ -298,6 +316,7 @@ class Coordinator:
         self.alone: set[int] = set()
         self.failed = self.evaluated = self.asked = 0
         self.worker_s = self.busy_s = self.busy_cpu_s = self.kernels_s = 0.0
+        self.workers_cpu_s = 0.0  # the workers' own asking and telling (supervised)
         self.recovered: list[int] = []
         self.executor: Any = None
         self.markers = ""
@@ -335,6 +354,8 @@ class Coordinator:
             self.opened.storage.record_heartbeat(hand.trial_id)
 
     def recover(self) -> None:
+        if self.role is not None:
+            return  # its supervisor recovers (it knows which of its workers died)
         o = self.opened
         self.recovered += recover(o.study, o.storage, o.results, self.spec, self.tag)
 
@@ -345,6 +366,8 @@ class Coordinator:
             self.opened.requeue if charge else Requeue(self.spec, self.opened.results, charge=False)
         )
         fail_and_requeue(self.study, self.opened.storage, requeue, frozen, reason)
+        if self.role is not None:
+            self.role.give()
 
     # --- trials changing hands -----------------------------------------------------------
 
@@ -393,6 +416,8 @@ class Coordinator:
         else:
             hand.trial.set_user_attr("gearopt_error", reason)
             self.study.tell(hand.trial, state=TrialState.FAIL)
+            if self.role is not None:
+                self.role.give()
 
     def tell(self, number: int, outcome: TrialOutcome) -> None:
         with _held_stops():  # out of hand and told at once
@@ -407,6 +432,9 @@ class Coordinator:
             self.failed += 1
             trial.set_user_attr("gearopt_error", (outcome.error or "")[:500])
             self.study.tell(trial, state=TrialState.FAIL)
+            if self.role is not None:
+                self.role.give()
+                self.role.told(outcome)
             return
         self.opened.results.write(
             self.spec.name, outcome, attempt=hand.attempt, coordinator=self.me, labels=self.labels
@@ -419,6 +447,8 @@ class Coordinator:
         if outcome.warnings:
             trial.set_user_attr("gearopt_warnings", outcome.warnings[:20])
         self.study.tell(trial, list(outcome.values))
+        if self.role is not None:
+            self.role.told(outcome)
         if self.bar is not None:
             self.bar.update(1)
             if time.monotonic() - self.shown > 1.0:  # reading every trial costs: once a second
@@ -470,6 +500,8 @@ class Coordinator:
         if self.batch and self.pending and not self.held:
             return
         for _ in range(min(self.jobs - busy, max(free, 0))):
+            if self.role is not None and not self.role.take():
+                break  # the run's places are in the hands of the other workers
             if not self.ask():
                 break
 
@@ -477,20 +509,24 @@ class Coordinator:
 
     def run(self, *, save_best: bool = True) -> RunSummary:
         start = time.perf_counter()
-        self.opened = _open(self.spec, self.url)
+        self.opened = _open(self.spec, self.url, 0 if self.role is None else self.role.stream)
         self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
         self.recover()
-        self.markers = trial_markers(self.pid)
+        self.markers = trial_markers(self.pid) if self.role is None else ""  # (a worker: none)
         # the compiled kernels compiled (or loaded) here once, before the workers start (they
         # load the cache rather than compile it side by side) and before the trials' clock
         self.kernels_s = warm_kernels(announce=self.progress)
         self.bar = _progress(self.progress, self.trials, self.spec)
         self.last_beat = time.monotonic()
-        self.executor = worker_pool(self.jobs, self.backend, self.scheduler)
         try:
-            self._loop()
+            if self.supervised:
+                supervise(self)  # (it stops its workers itself)
+            else:
+                self.executor = worker_pool(self.jobs, self.backend, self.scheduler)
+                self._loop()
         except BaseException as exc:
-            self._stop(exc)
+            if not self.supervised:
+                self._stop(exc)
             raise
         finally:
             if self.bar is not None:
@@ -499,9 +535,10 @@ class Coordinator:
                 self.bar.close()
             if isinstance(self.executor, JoblibBatches):
                 self.executor.client.close()
-            shutil.rmtree(self.markers, ignore_errors=True)
+            if self.markers:
+                shutil.rmtree(self.markers, ignore_errors=True)
         complete, _ = self.counts()
-        best = pick_best(self.study, self.spec)
+        best = pick_best(self.study, self.spec) if self.role is None else None
         path = save_design(self.spec, best, self.url) if (save_best and best is not None) else None
         return RunSummary(
             study=self.spec.name,
@@ -514,6 +551,7 @@ class Coordinator:
             worker_s=self.worker_s,
             coordinator_s=self.busy_s,
             coordinator_cpu_s=self.busy_cpu_s,
+            ask_tell_cpu_s=self.busy_cpu_s + self.workers_cpu_s,
             jobs=self.jobs,
             best=best,
             best_design_path=path,
@@ -543,11 +581,16 @@ class Coordinator:
                     self.spec.name,
                     f"{self.failed} trials failed in this run (limit {self.limit})",
                 )
-            complete, running = self.counts()
-            free = self.trials - complete - running
+            if self.role is not None:  # a supervised worker: the run's places say, no count
+                complete, free = 0, 1
+            else:
+                complete, running = self.counts()
+                free = self.trials - complete - running
             if not (self.pending or self.held or self.suspects):
                 if complete >= self.trials:
                     break
+                if free <= 0 and self.role is not None:
+                    break  # the supervisor waits for the others
                 if free <= 0:  # the rest runs on other coordinators
                     time.sleep(0.5)
                     mark, cpu = time.perf_counter(), time.thread_time()
@@ -555,6 +598,8 @@ class Coordinator:
             asked = self.asked
             if not self.batch or not self.pending:
                 self.refill(free)
+            if self.role is not None and not self.pending:
+                break  # no place left for this worker: the others hold them
             futures = [h.future for h in self.pending.values()]
             self.busy_s += time.perf_counter() - mark
             self.busy_cpu_s += time.thread_time() - cpu
@@ -623,7 +668,8 @@ def run_study(
     trials
         COMPLETE trials the study must hold at the end (FAIL ones do not count).
     jobs
-        Worker processes (loky).
+        Worker processes (several, not deterministic: spawned by multiprocessing, so a
+        script calling this needs ``if __name__ == "__main__":``).
     storage
         SQLAlchemy URL (default :func:`default_storage_url`); PostgreSQL works the same, and
         several coordinators may share one study there.
@@ -717,7 +763,6 @@ def _upload(spec: StudySpec, trial, figures) -> None:
 def _progress(progress: bool, total: int, spec: StudySpec):
     if not progress:
         return None
-
     return tqdm(total=total, desc=spec.name, unit="trial", file=sys.stderr, dynamic_ncols=True)
 
 

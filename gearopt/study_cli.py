@@ -68,6 +68,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "worker_efficiency": round(summary.worker_efficiency, 4),
         "coordinator_ms_per_trial": round(summary.coordinator_ms_per_trial, 2),
         "coordinator_cpu_ms_per_trial": round(summary.coordinator_cpu_ms_per_trial, 2),
+        "ask_tell_cpu_ms_per_trial": round(summary.ask_tell_cpu_ms_per_trial, 2),
         "best": None
         if best is None
         else {

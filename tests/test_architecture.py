@@ -117,6 +117,7 @@ LAYERS = (
             "gearopt.pools",
             "gearopt.recovery",
             "gearopt.best",
+            "gearopt.study_workers",
             "gearopt.study",
             "gearopt.export",
             "gearopt.dashboard",

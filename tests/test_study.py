@@ -29,7 +29,7 @@ from optuna.trial import TrialState
 import gearopt
 from gearopt.errors import StudyError
 from gearopt.evaluation import Evaluation
-from gearopt.storage import check_integrity
+from gearopt.storage import check_integrity, create_sqlite
 from gearopt.study import pick_best
 from gearopt.studyfile import load_study_spec, parse_study_spec
 from gearopt.trial import pattern_outline
@@ -811,6 +811,63 @@ def test_two_coordinators_starting_together_on_a_fresh_sqlite_file(tmp_path, toy
         # exactly the count (issue 27: 4 of 3 in 3 of 13 pairs); a surplus trial given back
         assert states.get("COMPLETE", 0) == 3 and set(states) <= {"COMPLETE", "FAIL"}
         assert all(_surplus(t) for t in trials if t.state == TrialState.FAIL)
+
+
+def test_twenty_pairs_of_coordinators_on_fresh_sqlite_files_count_exactly(tmp_path, toy_site):
+    # issue 27: two coordinators starting together on a fresh SQLite file, 20 times, with
+    # exact counts; cheap: one process imports gearopt once and forks each pair, which meets
+    # at a barrier and runs the toy study's coordinators (evaluating in their own processes)
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    helper = Path(__file__).with_name("study_pairs.py")
+    run = subprocess.run(
+        [sys.executable, str(helper), str(tmp_path), "20", "3"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    pairs = [json.loads(line) for line in run.stdout.splitlines()]
+    assert len(pairs) == 20
+    for pair in pairs:
+        assert pair["codes"] == [0, 0], pair["errors"]
+        trials = _trials(Path(pair["db"]))
+        states = _states(trials)
+        assert states.get("COMPLETE", 0) == 3 and set(states) <= {"COMPLETE", "FAIL"}, pair
+        assert all(_surplus(t) for t in trials if t.state == TrialState.FAIL)
+        assert len({t.number for t in trials}) == len(trials)
+        # the gearopt tables hold the COMPLETE trials' rows, once
+        engine = sa.create_engine(f"sqlite:///{pair['db']}")
+        with engine.connect() as con:
+            numbers = con.execute(sa.text("SELECT trial_number FROM gearopt_trials")).scalars()
+            complete = sorted(t.number for t in trials if t.state == TrialState.COMPLETE)
+            assert sorted(numbers) == complete
+        engine.dispose()
+    # no temporary database file is left beside any of them
+    assert not list(tmp_path.rglob(".toy_probe.db.*"))
+
+
+def test_an_empty_sqlite_file_is_refused_and_left_untouched(tmp_path, toy_site):
+    # issue 27: a 0-byte file was taken as a new study. gearopt makes a new database whole
+    # (schema built aside, then linked under its name), so an empty file is never its own
+    study = _toy_study(tmp_path)
+    empty = tmp_path / "toy_probe.db"
+    empty.write_bytes(b"")
+    run = _gearopt(["study", "run", study, "--trials", 2, "--no-progress"], toy_site, check=False)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr[-2000:]
+    assert "empty file (0 bytes)" in lines[0] and empty.read_bytes() == b""
+    with pytest.raises(StudyError, match="empty file"):
+        check_integrity(f"sqlite:///{empty}")
+    # a new file: made whole by the first of two, the other keeps it
+    fresh = tmp_path / "fresh.db"
+    assert create_sqlite(f"sqlite:///{fresh}") and not create_sqlite(f"sqlite:///{fresh}")
+    check_integrity(f"sqlite:///{fresh}")
+    engine = sa.create_engine(f"sqlite:///{fresh}")
+    tables = set(sa.inspect(engine).get_table_names())
+    engine.dispose()
+    assert {"studies", "trials", "gearopt_trials", "gearopt_metrics"} <= tables
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
 def test_a_database_of_someone_elses_is_refused_unless_shared(tmp_path, toy_site):
