@@ -167,7 +167,9 @@ class SideCycle:
         self.g_peak: float | None = None
         self.peak_at = self.peak_guess()
         self.peak_lags: dict = {}
-        self.ask_peak([-1, 0, 1])
+        finite = self.lag[np.isfinite(self.lag)]
+        if finite.size and np.ptp(finite) >= FLAT_ARCSEC / ARCSEC:
+            self.ask_peak([-1, 0, 1])  # a flat TE (line contact): its least lag is noise
 
     # -- the contact interval ---------------------------------------------------------------
 
