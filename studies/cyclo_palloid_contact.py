@@ -75,7 +75,13 @@ SPEC = parse_study_spec(
                 PINION + "outer_cutter_radius_mm": 75.5,
                 PINION + "additional_slope_angle_deg": 0.0523,
                 PINION + "blade_parabola_coefficient_per_mm": 0.0015,
-            }
+            },
+            {  # a feasible start (the study file says why)
+                PINION + "inner_cutter_radius_mm": 74.11,
+                PINION + "outer_cutter_radius_mm": 75.77,
+                PINION + "additional_slope_angle_deg": -0.0746,
+                PINION + "blade_parabola_coefficient_per_mm": 0.00101,
+            },
         ],
     },
     path=HERE / "cyclo_palloid_contact.py",
