@@ -32,7 +32,7 @@ from gearopt.evaluation import Evaluation
 from gearopt.storage import check_integrity, create_sqlite
 from gearopt.study import pick_best
 from gearopt.studyfile import load_study_spec, parse_study_spec
-from gearopt.trial import pattern_outline
+from gearopt.trial import evaluate_trial, pattern_outline
 
 from .conftest import ROOT, STUDIES, TOY
 
@@ -112,7 +112,13 @@ def test_example_study_file_is_valid():
     assert spec.metric_names == ["worst_te_arcsec", "pattern_movement_mm"]
     assert [c.label for c in spec.constraints] == ["backlash_window_um", "edge_contact"]
     assert spec.directions == ["minimize", "minimize"]
-    assert len(spec.enqueue) == 1
+    # the published section 5.3 settings, then a design inside both constraints (the file says
+    # so: a short run's sampler starts from a feasible design)
+    published, feasible = spec.enqueue
+    assert published["machine.pinion.additional_slope_angle_deg"] == 0.0523
+    outcome = evaluate_trial(spec, 1, feasible)
+    assert not outcome.failed and outcome.constraints
+    assert all(value <= 0.0 for value in outcome.constraints.values()), outcome.constraints
 
 
 @pytest.mark.parametrize(
