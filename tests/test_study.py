@@ -435,6 +435,23 @@ def test_a_dead_worker_fails_only_its_trial_retried_at_most_twice(tmp_path, toy_
     assert len({t.number for t in trials}) == len(trials)
 
 
+def _ran_and_runs(db: Path, *, complete: int, wait_s: float = 120.0) -> bool:
+    """Poll the study's database until it holds ``complete`` COMPLETE trials and one RUNNING;
+    False when that did not happen within ``wait_s``."""
+    deadline = time.monotonic() + wait_s
+    while time.monotonic() < deadline:
+        time.sleep(0.2)
+        if not db.exists():
+            continue
+        try:
+            states = _states(_trials(db))
+        except Exception:  # the study is being created
+            continue
+        if states.get("COMPLETE", 0) >= complete and states.get("RUNNING", 0) >= 1:
+            return True
+    return False
+
+
 def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
     study = _toy_study(tmp_path, conditions="{sleep_s = 0.4}")
     db = tmp_path / "toy_probe.db"
@@ -447,18 +464,8 @@ def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
         proc = subprocess.Popen(
             args, env=env, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE
         )
-        deadline = time.monotonic() + 120
         try:
-            while time.monotonic() < deadline:
-                time.sleep(0.2)
-                if db.exists():
-                    try:
-                        states = _states(_trials(db))
-                    except Exception:  # the study is being created
-                        continue
-                    if states.get("COMPLETE", 0) >= 3 and states.get("RUNNING", 0) >= 1:
-                        break
-            else:
+            if not _ran_and_runs(db, complete=3):
                 pytest.fail("the study did not start")
         finally:
             os.killpg(proc.pid, signal.SIGKILL)  # coordinator and its workers
@@ -752,15 +759,7 @@ def test_a_terminated_coordinator_puts_its_trials_back_in_the_queue(tmp_path, to
     args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study)]
     args += ["--trials", "8", "--jobs", "2", "--no-progress"]
     proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        time.sleep(0.2)
-        try:
-            states = _states(_trials(db))
-        except Exception:  # the study is being created
-            continue
-        if states.get("COMPLETE", 0) >= 2 and states.get("RUNNING", 0) >= 1:
-            break
+    _ran_and_runs(db, complete=2)
     proc.send_signal(signal.SIGTERM)  # the coordinator only: it stops its workers itself
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
