@@ -26,15 +26,19 @@ from gearopt_plugins.cutters.catalogue import (
     EPICYCLOID,
     FACE_MILLING,
     INCH_MM,
+    Catalogue,
+    CutterSize,
     face_hobbing_rules,
     filtered,
 )
 from gearopt_plugins.face_milling.cutters import suitable
 
-from .conftest import STUDIES
+from .conftest import ROOT, STUDIES
 from .test_iso23509 import PAIR_1439  # issue 24's 14/39 basic data
 
 DRIVE_COAST = STUDIES / "iso23509" / "face_milling_14x39_drive_coast.toml"
+#: NASA CR-191009's printed blank and settings (provenance: tests/data/README.md)
+NASA_CR191009 = json.loads((ROOT / "tests" / "data" / "nasa_cr191009.json").read_text())
 
 
 def test_every_catalogue_entry_names_its_source():
@@ -49,7 +53,7 @@ def test_every_catalogue_entry_names_its_source():
         diameter_in = float(size.nominal.split()[0])
         assert size.radius_mm == pytest.approx(0.5 * diameter_in * INCH_MM, abs=1e-9)
     sourced = {s.radius_mm for s in FACE_MILLING.sizes if s.sourced}
-    assert sourced == {114.3}  # ISO 23509 Annex F sample 1's r_c0
+    assert sourced == {76.2, 114.3}  # NASA CR-191009's gear cutter, ISO 23509 Annex F's r_c0
     assert [(s.radius_mm, s.blade_groups) for s in CYCLO_PALLOID.sizes] == [(75.0, 5)]
     assert [(s.radius_mm, s.blade_groups) for s in EPICYCLOID.sizes] == [(135.0, 5)]
 
@@ -85,6 +89,63 @@ def test_face_hobbing_filter_applies_blade_groups_and_the_slope_angle_limit():
     # sin nu = z0 m / (2 r) < 1: a 30 mm module needs r > 75 mm
     kept, note = filtered(CYCLO_PALLOID, face_hobbing_rules(blade_groups=5, module_mm=30.0))
     assert kept == () and "radius <= z0 m / 2 = 75.000 mm" in note
+
+
+def test_the_6_in_face_mill_is_the_gear_cutter_nasa_cr191009_prints():
+    """The sourced 6 in entry is the mean of the gear's printed outside and inside blade point
+    radii (tests/data/nasa_cr191009.json, transcribed from the report), and the face-mill
+    filter keeps it for the report's own 12 x 36 blank (a pair that was cut with it)."""
+    settings = NASA_CR191009["settings"]
+    outside, inside = settings["gear_flank_1"]["r"], settings["gear_flank_2"]["r"]
+    (six,) = [s for s in FACE_MILLING.sizes if s.nominal == "6 in diameter"]
+    assert six.sourced and "CR-191009" in six.source
+    assert six.radius_mm == pytest.approx(0.5 * (outside + inside) * INCH_MM, abs=1e-9)
+    assert f"{outside:g} in" in six.source and f"{inside:g} in" in six.source
+    blank = NASA_CR191009["blank"]
+    pair, _ = pair_from_tables(
+        {
+            "pinion_teeth": blank["pinion"]["teeth"],
+            "gear_teeth": blank["gear"]["teeth"],
+            "mean_spiral_angle_deg": blank["mean_spiral_angle_deg"],
+            "pressure_angle_deg": blank["pressure_angle_deg"],
+            "face_width_mm": blank["face_width_in"] * INCH_MM,
+            "mean_cone_distance_mm": blank["mean_cone_distance_in"] * INCH_MM,
+        },
+        {
+            "standard": "iso23509",
+            "cutter_radius_mm": six.radius_mm,
+            "gear_addendum_angle_deg": blank["gear"]["addendum_angle_deg"],
+            "gear_dedendum_angle_deg": blank["gear"]["dedendum_angle_deg"],
+        },
+    )
+    kept, _ = suitable(pair)
+    assert six in kept
+
+
+def test_the_module_range_drops_heads_made_for_other_modules():
+    """No public source at hand gives a head's module range (docs/cutters.md), so the built-in
+    heads have none; the rule is exercised on heads that have one."""
+    heads = Catalogue(
+        name="heads with module ranges",
+        method="face hobbing",
+        sizes=tuple(
+            CutterSize(
+                radius_mm=r,
+                blade_groups=5,
+                module_range_mm=rng,
+                nominal=f"r = {r:g} mm",
+                source="test data, not a catalogue",
+            )
+            for r, rng in ((55.0, (1.0, 3.0)), (75.0, (2.5, 5.0)), (100.0, None))
+        ),
+    )
+    kept, note = filtered(heads, face_hobbing_rules(blade_groups=5, module_mm=4.0))
+    assert [s.radius_mm for s in kept] == [75.0, 100.0]  # 100 mm: range unknown, kept
+    assert "1 dropped: module range without m = 4 mm" in note
+    kept, note = filtered(heads, face_hobbing_rules(blade_groups=5, module_mm=2.75))
+    assert [s.radius_mm for s in kept] == [55.0, 75.0, 100.0]
+    # the built-in heads carry no module range: the rule drops none of them
+    assert all(s.module_range_mm is None for c in (CYCLO_PALLOID, EPICYCLOID) for s in c.sizes)
 
 
 def test_categorical_dimension_suggests_only_its_choices():

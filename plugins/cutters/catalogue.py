@@ -48,6 +48,13 @@ _ISO_SAMPLE = (
     "ISO 23509:2016 Annex F sample 1 (face milling, 14/39): r_c0 = 114.3 mm (4.5 in), as "
     "issue 24 quotes the standard's data"
 )
+_NASA_CR191009 = (
+    "Bibel, Reddy, Kumar, NASA Contractor Report CR-191009 (1994), pp. 4-6, as transcribed in "
+    "tests/data/nasa_cr191009.json: the 12 x 36 pair's gear is cut by one spread-blade face "
+    "mill whose outside and inside blade point radii are printed as r = 3.0325 in and "
+    "2.9675 in, so its nominal (mean point) radius is 3.0 in, a 6 in diameter, point width "
+    "0.065 in"
+)
 _GEARFILE = (
     "unsourced: gearopt's list since commit b4d1a09 (plugins/face_milling/synthesis/gear.py, "
     "'Gleason's face-mill diameters 1.1 to 18 in'); no public document found here confirms it"
@@ -95,6 +102,10 @@ class Catalogue:
         return sum(1 for s in self.sizes if s.sourced)
 
 
+#: the face mills a public document uses, by nominal diameter in inches, with that document
+_SOURCED_FACE_MILLS_IN = {6.0: _NASA_CR191009, 9.0: _ISO_SAMPLE}
+
+
 def _face_mill(diameter_in: float, source: str, sourced: bool) -> CutterSize:
     return CutterSize(
         radius_mm=round(0.5 * diameter_in * INCH_MM, 6),
@@ -110,7 +121,9 @@ FACE_MILLING = Catalogue(
     name="Gleason face mills",
     method="face milling",
     sizes=tuple(
-        _face_mill(d, _ISO_SAMPLE, True) if d == 9.0 else _face_mill(d, _GEARFILE, False)
+        _face_mill(d, _SOURCED_FACE_MILLS_IN[d], True)
+        if d in _SOURCED_FACE_MILLS_IN
+        else _face_mill(d, _GEARFILE, False)
         for d in (1.1, 1.5, 2.0, 3.5, 5.0, 6.0, 7.5, 9.0, 10.5, 12.0, 15.0, 18.0)
     ),
 )
