@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -55,6 +56,12 @@ PAIR_1439 = {
     "face_width_mm": 25.4,
     "outer_pitch_diameter_mm": 176.893,
 }
+
+
+@pytest.fixture(scope="module")
+def nasa_cr191009() -> dict:
+    """NASA CR-191009's printed blank and settings (provenance: tests/data/README.md)."""
+    return json.loads((Path(__file__).parent / "data" / "nasa_cr191009.json").read_text())
 
 
 def _blank(pair: dict, blank: dict):
@@ -144,6 +151,76 @@ def test_seed003_face_hobbing_circles(seed_cases):
         )
         # three printed decimals, the inputs (R_m, beta_m, pitch angle) rounded too: 2e-3 mm
         assert_allclose((md, rho_p, rho_c), printed, atol=2e-3)
+
+
+def test_seed003_table1_from_basic_data(seed_cases):
+    """Seed 003 Table 1 (19/34 epicycloid pair): the pitch angles (three printed decimals) and
+    the mean cone distance (two) from the teeth, the normal module 6.1 mm, the spiral angle
+    29.686 deg and b = 53 mm; each must round to the printed value."""
+    ref = seed_cases["epicycloid_seed003"]["blank"]
+    out = _blank(
+        {
+            "pinion_teeth": ref["pinion_teeth"],
+            "gear_teeth": ref["gear_teeth"],
+            "mean_spiral_angle_deg": ref["mean_spiral_angle_deg"],
+            "pressure_angle_deg": ref["pressure_angle_deg"],
+            "mean_normal_module_mm": ref["normal_module_mm"],
+            "face_width_mm": ref["face_width_mm"],
+        },
+        {"cutter_radius_mm": 135.0, "blade_groups": ref["cutter_groups"], "taper": "uniform"},
+    )
+    print(
+        f"seed 003 pitch angles {ref['pitch_angle_deg']}, A_m {ref['mean_cone_distance_mm']}; "
+        f"gearopt {np.round(out.pitch_angle_deg, 4).tolist()}, {out.mean_cone_distance_mm:.4f}"
+    )
+    assert_allclose(out.pitch_angle_deg, ref["pitch_angle_deg"], atol=5e-4 + 1e-9)
+    assert_allclose(out.mean_cone_distance_mm, ref["mean_cone_distance_mm"], atol=5e-3 + 1e-9)
+
+
+def test_nasa_cr191009_blank(nasa_cr191009):
+    """NASA CR-191009's 12 x 36 blank (pp. 4-6, tests/data/nasa_cr191009.json). The report
+    prints its angles as decimals of whole arc-minutes (18.4333333 = 18 deg 26 min): the pitch
+    angles from the teeth (18 deg 26.10 min, 71 deg 33.90 min) must round to the printed
+    minute. Given the gear's addendum and dedendum angles (data type II), the pinion's follow
+    from the constant clearance of the standard (theta_a1 = theta_f2, theta_f1 = theta_a2)
+    and must equal the printed pinion angles, which the report prints in single precision
+    (notes of the data file): to 1e-6 deg. The report prints no module or depths, so depths
+    and thicknesses are not compared."""
+    ref = nasa_cr191009["blank"]
+    inch = 25.4
+    out = _blank(
+        {
+            "pinion_teeth": ref["pinion"]["teeth"],
+            "gear_teeth": ref["gear"]["teeth"],
+            "mean_spiral_angle_deg": ref["mean_spiral_angle_deg"],
+            "pressure_angle_deg": ref["pressure_angle_deg"],
+            "face_width_mm": ref["face_width_in"] * inch,
+            "mean_cone_distance_mm": ref["mean_cone_distance_in"] * inch,
+        },
+        {
+            "cutter_radius_mm": 76.2,  # the gear cutter's printed blade radii: 3.0 in mean
+            "gear_addendum_angle_deg": ref["gear"]["addendum_angle_deg"],
+            "gear_dedendum_angle_deg": ref["gear"]["dedendum_angle_deg"],
+        },
+    )
+    members = ("pinion", "gear")
+    printed = {
+        key: [ref[m][key] for m in members]
+        for key in ("pitch_angle_deg", "addendum_angle_deg", "dedendum_angle_deg")
+    }
+    for key, ours in (
+        ("pitch_angle_deg", out.pitch_angle_deg),
+        ("addendum_angle_deg", out.addendum_angle_deg),
+        ("dedendum_angle_deg", out.dedendum_angle_deg),
+    ):
+        print(f"{key:20s} CR-191009 {printed[key]}  gearopt {np.round(ours, 7).tolist()}")
+    minutes = np.round(np.asarray(out.pitch_angle_deg) * 60.0) / 60.0
+    assert_allclose(minutes, printed["pitch_angle_deg"], atol=1e-6)
+    assert not np.allclose(out.pitch_angle_deg, printed["pitch_angle_deg"], atol=1e-3)
+    assert_allclose(out.addendum_angle_deg, printed["addendum_angle_deg"], atol=1e-6)
+    assert_allclose(out.dedendum_angle_deg, printed["dedendum_angle_deg"], atol=1e-6)
+    assert_allclose(out.outer_cone_distance_mm, (3.191 + 0.5) * inch, rtol=1e-12)
+    assert out.warnings == ()
 
 
 def _traced_spiral_angles_deg(md, rho_p, rho_c, rc, radii):
