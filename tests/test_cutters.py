@@ -33,12 +33,10 @@ from gearopt_plugins.cutters.catalogue import (
 )
 from gearopt_plugins.face_milling.cutters import suitable
 
-from .conftest import ROOT, STUDIES
-from .test_iso23509 import PAIR_1439  # issue 24's 14/39 basic data
+from .conftest import STUDIES
+from .test_iso23509 import NASA_CR191009, NASA_PAIR, PAIR_1439  # printed basic data
 
 DRIVE_COAST = STUDIES / "iso23509" / "face_milling_14x39_drive_coast.toml"
-#: NASA CR-191009's printed blank and settings (provenance: tests/data/README.md)
-NASA_CR191009 = json.loads((ROOT / "tests" / "data" / "nasa_cr191009.json").read_text())
 
 
 def test_every_catalogue_entry_names_its_source():
@@ -103,14 +101,7 @@ def test_the_6_in_face_mill_is_the_gear_cutter_nasa_cr191009_prints():
     assert f"{outside:g} in" in six.source and f"{inside:g} in" in six.source
     blank = NASA_CR191009["blank"]
     pair, _ = pair_from_tables(
-        {
-            "pinion_teeth": blank["pinion"]["teeth"],
-            "gear_teeth": blank["gear"]["teeth"],
-            "mean_spiral_angle_deg": blank["mean_spiral_angle_deg"],
-            "pressure_angle_deg": blank["pressure_angle_deg"],
-            "face_width_mm": blank["face_width_in"] * INCH_MM,
-            "mean_cone_distance_mm": blank["mean_cone_distance_in"] * INCH_MM,
-        },
+        NASA_PAIR,
         {
             "standard": "iso23509",
             "cutter_radius_mm": six.radius_mm,

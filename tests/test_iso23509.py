@@ -58,10 +58,18 @@ PAIR_1439 = {
 }
 
 
-@pytest.fixture(scope="module")
-def nasa_cr191009() -> dict:
-    """NASA CR-191009's printed blank and settings (provenance: tests/data/README.md)."""
-    return json.loads((Path(__file__).parent / "data" / "nasa_cr191009.json").read_text())
+#: NASA CR-191009's printed blank and settings (provenance: tests/data/README.md)
+NASA_CR191009 = json.loads((Path(__file__).parent / "data" / "nasa_cr191009.json").read_text())
+_NASA_BLANK = NASA_CR191009["blank"]
+#: the report's 12 x 36 basic data (inches printed, mm here)
+NASA_PAIR = {
+    "pinion_teeth": _NASA_BLANK["pinion"]["teeth"],
+    "gear_teeth": _NASA_BLANK["gear"]["teeth"],
+    "mean_spiral_angle_deg": _NASA_BLANK["mean_spiral_angle_deg"],
+    "pressure_angle_deg": _NASA_BLANK["pressure_angle_deg"],
+    "face_width_mm": _NASA_BLANK["face_width_in"] * 25.4,
+    "mean_cone_distance_mm": _NASA_BLANK["mean_cone_distance_in"] * 25.4,
+}
 
 
 def _blank(pair: dict, blank: dict):
@@ -177,7 +185,7 @@ def test_seed003_table1_from_basic_data(seed_cases):
     assert_allclose(out.mean_cone_distance_mm, ref["mean_cone_distance_mm"], atol=5e-3 + 1e-9)
 
 
-def test_nasa_cr191009_blank(nasa_cr191009):
+def test_nasa_cr191009_blank():
     """NASA CR-191009's 12 x 36 blank (pp. 4-6, tests/data/nasa_cr191009.json). The report
     prints its angles as decimals of whole arc-minutes (18.4333333 = 18 deg 26 min): the pitch
     angles from the teeth (18 deg 26.10 min, 71 deg 33.90 min) must round to the printed
@@ -186,17 +194,9 @@ def test_nasa_cr191009_blank(nasa_cr191009):
     and must equal the printed pinion angles, which the report prints in single precision
     (notes of the data file): to 1e-6 deg. The report prints no module or depths, so depths
     and thicknesses are not compared."""
-    ref = nasa_cr191009["blank"]
-    inch = 25.4
+    ref = _NASA_BLANK
     out = _blank(
-        {
-            "pinion_teeth": ref["pinion"]["teeth"],
-            "gear_teeth": ref["gear"]["teeth"],
-            "mean_spiral_angle_deg": ref["mean_spiral_angle_deg"],
-            "pressure_angle_deg": ref["pressure_angle_deg"],
-            "face_width_mm": ref["face_width_in"] * inch,
-            "mean_cone_distance_mm": ref["mean_cone_distance_in"] * inch,
-        },
+        NASA_PAIR,
         {
             "cutter_radius_mm": 76.2,  # the gear cutter's printed blade radii: 3.0 in mean
             "gear_addendum_angle_deg": ref["gear"]["addendum_angle_deg"],
@@ -219,7 +219,7 @@ def test_nasa_cr191009_blank(nasa_cr191009):
     assert not np.allclose(out.pitch_angle_deg, printed["pitch_angle_deg"], atol=1e-3)
     assert_allclose(out.addendum_angle_deg, printed["addendum_angle_deg"], atol=1e-6)
     assert_allclose(out.dedendum_angle_deg, printed["dedendum_angle_deg"], atol=1e-6)
-    assert_allclose(out.outer_cone_distance_mm, (3.191 + 0.5) * inch, rtol=1e-12)
+    assert_allclose(out.outer_cone_distance_mm, (3.191 + 0.5) * 25.4, rtol=1e-12)
     assert out.warnings == ()
 
 
