@@ -168,6 +168,7 @@ def test_study_file_catalogue_search_is_categorical_and_checks_given_designs():
     spec = parse_study_spec(_study({key: "catalogue"}), path=STUDIES / "x.toml")
     (dim,) = spec.search
     assert dim.choices == (75.0,) and "cyclo-palloid heads: 1 of 1 sizes" in dim.note
+    assert dim.note.endswith("module range known for 0 of the 1 kept")
     with pytest.raises(StudyError, match="must be one of the catalogue's"):
         parse_study_spec(_study({key: "catalogue"}, enqueue=[{key: 76.0}]), path=STUDIES / "x.toml")
     with pytest.raises(StudyError, match="offers the catalogue for"):

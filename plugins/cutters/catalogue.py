@@ -245,11 +245,15 @@ def face_hobbing_dimensions(
     catalogue: Catalogue, keys: tuple[str, ...], *, blade_groups: int, module_mm: float
 ) -> tuple[SearchDimension, ...]:
     """Categorical dimensions of ``keys`` over the heads of ``catalogue`` that suit a
-    face-hobbing design (:func:`face_hobbing_rules`); () when none does."""
+    face-hobbing design (:func:`face_hobbing_rules`); () when none does. The note says for
+    how many of the kept heads a module range is known (the others pass the module rule
+    unchecked)."""
     sizes, note = filtered(
         catalogue, face_hobbing_rules(blade_groups=blade_groups, module_mm=module_mm)
     )
     if not sizes:
         return ()
+    ranged = sum(1 for s in sizes if s.module_range_mm is not None)
+    note += f"; module range known for {ranged} of the {len(sizes)} kept"
     radii = [s.radius_mm for s in sizes]
     return tuple(SearchDimension.categorical(key, radii, note) for key in keys)
