@@ -198,6 +198,22 @@ def test_face_milling_offers_the_catalogue_for_the_gear_cutter_of_its_synthesis(
     assert len(default) == 1 and "9 in diameter (r_c0 = 114.3 mm)" in default[0]
 
 
+def test_the_epicycloid_model_offers_seed003s_head_for_seed003s_design():
+    """Seed 003 case A cuts its pinion with the R_h = 135 mm, z0 = 5 head (m_mn 6.1 mm): the
+    epicycloid model's catalogue keeps that head for the seed's design, for the machine's and
+    each member's head radius."""
+    design = load_design(STUDIES / "seed003_case_A.toml")
+    dims = get_machine_model(design.model).cutter_catalogue(design)
+    assert [d.key for d in dims] == [
+        "machine.cutter_head_radius_mm",
+        "machine.pinion.cutter_head_radius_mm",
+        "machine.gear.cutter_head_radius_mm",
+    ]
+    for dim in dims:
+        assert dim.choices == (135.0,)
+        assert dim.note.startswith("Klingelnberg epicycloid heads: 1 of 1 sizes")
+
+
 @pytest.mark.slow
 def test_a_short_catalogue_study_ends_with_a_catalogue_cutter(tmp_path):
     shutil.copy(STUDIES / "seed001_section5_3.toml", tmp_path)
