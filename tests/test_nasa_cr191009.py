@@ -267,6 +267,7 @@ def test_flanks_are_the_reports_surfaces(printed, source, member):
     [
         ("blank_offset_mm",),  # E_m negated
         ("machine_center_to_back_mm", "sliding_base_mm"),  # the apex at +L_m
+        ("cradle_angle_deg", "blank_offset_mm"),  # the pinion read in the gear's frame
     ],
 )
 def test_another_sign_is_not_the_reports_surface(printed, source, keys):
