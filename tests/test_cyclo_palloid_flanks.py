@@ -18,6 +18,7 @@ from gearopt.errors import GearoptError
 from gearopt.flank import MEMBERS, FlankGrid
 from gearopt.plugins import get_machine_model
 from gearopt.thickness import chordal_thickness, design_chordal_thickness
+from gearopt_plugins.face_hobbing import generation as hobbing_generation
 
 from .conftest import STUDIES
 
@@ -360,3 +361,31 @@ def test_cutter_radii_that_leave_no_tooth_space_are_a_clear_error():
     )
     with pytest.raises(GearoptError):
         gearopt.basic_settings(design)
+
+
+def test_generations_are_remembered_by_their_settings(table3_design, monkeypatch):
+    """A study that changes only the pinion keeps the gear's flanks (the same FlankMaps, with
+    their interpolants); a changed gear setting generates anew, bit for bit what a model
+    without the memory generates."""
+    grid = FlankGrid(n_face=9, n_profile=7)
+    gear = flanks(table3_design, "gear", grid=grid)
+    pinion_changed = gearopt.with_overrides(
+        table3_design, {"machine.pinion.blade_parabola_coefficient_per_mm": 0.001}
+    )
+    assert all(flanks(pinion_changed, "gear", grid=grid)[f] is gear[f] for f in gear)
+    assert (
+        flanks(pinion_changed, "pinion", grid=grid)["convex"]
+        is not (flanks(table3_design, "pinion", grid=grid)["convex"])
+    )
+    gear_changed = gearopt.with_overrides(
+        table3_design, {"machine.gear.blade_parabola_coefficient_per_mm": 0.001}
+    )
+    remembered = flanks(gear_changed, "gear", grid=grid)
+    monkeypatch.setattr(hobbing_generation, "RECENT_GENERATIONS", 0)
+    fresh = flanks(gear_changed, "gear", grid=grid)
+    for f in ("convex", "concave"):
+        assert fresh[f] is not remembered[f]
+        on = gear[f].mask & fresh[f].mask
+        assert np.abs(fresh[f].points_mm - gear[f].points_mm)[on].max() > 1e-4  # a new flank
+        for name in ("points_mm", "normals", "polar_angle_rad", "mask", "residual"):
+            assert np.array_equal(getattr(fresh[f], name), getattr(remembered[f], name)), name

@@ -360,7 +360,7 @@ def hobbing_family(blank: Blank, member: str, blades) -> FaceHobbingFamily:
 #: reads: a study that changes one member's settings generates the other member once per
 #: worker, and its FlankMaps keep their interpolants (FlankMaps are never changed in place)
 _RECENT: dict[tuple, dict[str, FlankMap]] = {}
-#: how many generations :data:`_RECENT` keeps
+#: how many generations :func:`generate_flanks` remembers (0: none)
 RECENT_GENERATIONS = 8
 
 
@@ -395,7 +395,7 @@ def generate_flanks(
         tool_pass,
         tuple((f, tuple(notes.get(f, ()))) for f in systems),
     )
-    found = _RECENT.pop(key, None)
+    found = _RECENT.pop(key, None) if RECENT_GENERATIONS > 0 else None
     if found is None:
         found = _generated(blank, member, teeth, systems, turns_rad, grid, tool_pass, notes)
     _RECENT[key] = found
