@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import RectBivariateSpline
 
 from gearopt.errors import GearoptError
+from gearopt.jit import ENABLED, compiled
 
 __all__ = [
     "axial_plane",
@@ -44,12 +45,14 @@ __all__ = [
     "FlankMap",
     "HermiteCells",
     "hermite_cells",
+    "hermite_coefficients",
     "MEMBERS",
     "FLANKS",
     "HANDS",
     "check_member_and_flank",
     "mirror_image",
     "turned",
+    "warm_kernels",
 ]
 
 MEMBERS = ("pinion", "gear")
@@ -424,20 +427,12 @@ class FlankMap:
         """The local bicubic Hermite interpolant of Theta, cell by cell (:class:`HermiteCells`):
         in each cell the polynomial through the values and first derivatives at its four
         corners (:attr:`node_derivatives`), in the cell's unit coordinates."""
-        d_s, d_h, d_sh = self.node_derivatives
-        a = np.diff(self.face_mm)[:, None]
-        b = np.diff(self.profile_mm)[None, :]
-        th = self.polar_angle_rad
-        f = np.empty(th[:-1, :-1].shape + (4, 4))
-        for di in (0, 1):
-            for dj in (0, 1):
-                sl = (slice(di, th.shape[0] - 1 + di), slice(dj, th.shape[1] - 1 + dj))
-                f[..., di, dj] = th[sl]
-                f[..., di, 2 + dj] = d_h[sl] * b
-                f[..., 2 + di, dj] = d_s[sl] * a
-                f[..., 2 + di, 2 + dj] = d_sh[sl] * a * b
-        m = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [-3, 3, -2, -1], [2, -2, 1, 1]], float)
-        coef = np.einsum("ai,...ij,bj->...ab", m, f, m)
+        coef = hermite_coefficients(
+            self.polar_angle_rad,
+            *self.node_derivatives,
+            np.diff(self.face_mm),
+            np.diff(self.profile_mm),
+        )
         k = self.mask
         ok = k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:]
         fs, fp = self.face_mm, self.profile_mm
@@ -449,7 +444,7 @@ class FlankMap:
             profile_scale=(len(fp) - 1) / float(fp[-1] - fp[0]),
             last_column=float(len(fp) - 2),
             columns=len(fp) - 1,
-            coefficients=np.ascontiguousarray(coef.reshape(-1, 16)),
+            coefficients=coef,
             generated=ok.ravel(),
         )
 
@@ -580,6 +575,70 @@ class FlankMap:
             if self.taper is None
             else float((self.heights_mm[:, -1] - depth).min()),
         }
+
+
+#: the cubic Hermite basis: the coefficients of x^a in the polynomial with value v0, v1 and
+#: derivatives d0, d1 at x = 0, 1 are ``HERMITE @ (v0, v1, d0, d1)``
+HERMITE = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [-3, 3, -2, -1], [2, -2, 1, 1]], float)
+
+
+def hermite_coefficients(theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm) -> NDArray:
+    """``(n_cells, 16)`` coefficients of the cells' bicubic Hermite polynomials
+    (:class:`HermiteCells`): in cell ``(i, j)`` the polynomial through the values ``theta``
+    and the derivatives ``d_s``, ``d_h``, ``d_sh`` (``(n_f, n_p)``, grid units) at its four
+    corners, in unit coordinates (the cell steps ``(n_f - 1,)`` and ``(n_p - 1,)`` scale the
+    derivatives). Compiled when the kernels are (the numpy path gives the same bits)."""
+    theta, d_s, d_h, d_sh, a, b = (
+        np.ascontiguousarray(v, float)
+        for v in (theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm)
+    )
+    if ENABLED:
+        out = np.empty(((theta.shape[0] - 1) * (theta.shape[1] - 1), 16))
+        _hermite_kernel(theta, d_s, d_h, d_sh, a, b, HERMITE, out)
+        return out
+    f = np.empty(theta[:-1, :-1].shape + (4, 4))
+    for di in (0, 1):
+        for dj in (0, 1):
+            sl = (slice(di, theta.shape[0] - 1 + di), slice(dj, theta.shape[1] - 1 + dj))
+            f[..., di, dj] = theta[sl]
+            f[..., di, 2 + dj] = d_h[sl] * b[None, :]
+            f[..., 2 + di, dj] = d_s[sl] * a[:, None]
+            f[..., 2 + di, 2 + dj] = d_sh[sl] * a[:, None] * b[None, :]
+    coef = np.einsum("ai,...ij,bj->...ab", HERMITE, f, HERMITE)
+    return np.ascontiguousarray(coef.reshape(-1, 16))
+
+
+@compiled
+def _hermite_kernel(theta, d_s, d_h, d_sh, a, b, m, out):
+    """:func:`hermite_coefficients` cell by cell into ``out``: the corners' values and scaled
+    derivatives f, then ``m f m^T`` summed term by term in the order numpy's einsum sums."""
+    n_f, n_p = theta.shape
+    f = np.empty((4, 4))
+    for ci in range(n_f - 1):
+        for cj in range(n_p - 1):
+            for di in range(2):
+                for dj in range(2):
+                    i, j = ci + di, cj + dj
+                    f[di, dj] = theta[i, j]
+                    f[di, 2 + dj] = d_h[i, j] * b[cj]
+                    f[2 + di, dj] = d_s[i, j] * a[ci]
+                    f[2 + di, 2 + dj] = d_sh[i, j] * a[ci] * b[cj]
+            k = ci * (n_p - 1) + cj
+            for p in range(4):
+                for q in range(4):
+                    total = 0.0
+                    for i in range(4):
+                        for j in range(4):
+                            total += (m[p, i] * f[i, j]) * m[q, j]
+                    out[k, 4 * p + q] = total
+
+
+def warm_kernels() -> None:
+    """Compile the cells' kernel (:func:`hermite_coefficients`), or load it from numba's disk
+    cache, in this process (:func:`gearopt.warmup.warm_kernels`). Nothing without kernels."""
+    if ENABLED:
+        zeros = np.zeros((2, 2))
+        hermite_coefficients(zeros, zeros, zeros, zeros, np.ones(1), np.ones(1))
 
 
 def hermite_cells(coef: NDArray, k: NDArray | None, u: NDArray, v: NDArray) -> NDArray:
