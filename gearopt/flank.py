@@ -634,11 +634,13 @@ def _hermite_kernel(theta, d_s, d_h, d_sh, a, b, m, out):
 
 
 def warm_kernels() -> None:
-    """Compile the cells' kernel (:func:`hermite_coefficients`), or load it from numba's disk
-    cache, in this process (:func:`gearopt.warmup.warm_kernels`). Nothing without kernels."""
+    """Compile the kernels of the cells (:func:`hermite_coefficients`, the node derivatives),
+    or load them from numba's disk cache, in this process
+    (:func:`gearopt.warmup.warm_kernels`). Nothing without kernels."""
     if ENABLED:
         zeros = np.zeros((2, 2))
         hermite_coefficients(zeros, zeros, zeros, zeros, np.ones(1), np.ones(1))
+        _masked_gradient(zeros, np.ones((2, 2), np.bool_), 1.0, 1)
 
 
 def hermite_cells(coef: NDArray, k: NDArray | None, u: NDArray, v: NDArray) -> NDArray:
@@ -667,7 +669,14 @@ def hermite_cells(coef: NDArray, k: NDArray | None, u: NDArray, v: NDArray) -> N
 def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> NDArray:
     """Derivative along ``axis`` of a uniformly spaced field: central differences where both
     neighbours are in ``mask``, second-order one-sided differences into the mask where one is
-    not (values off the mask are not used when the mask allows)."""
+    not (values off the mask are not used when the mask allows). Compiled for 2-D fields when
+    the kernels are (the same bits as the numpy path)."""
+    if ENABLED and np.ndim(values) == 2:
+        v = np.ascontiguousarray(np.moveaxis(values, axis, 0), float)
+        m = np.ascontiguousarray(np.moveaxis(mask, axis, 0), np.bool_)
+        out = np.empty_like(v)
+        _masked_gradient_kernel(v, m, float(step), out)
+        return np.moveaxis(out, 0, axis)
     v = np.moveaxis(values, axis, 0)
     m = np.moveaxis(mask, axis, 0)
     n = v.shape[0]
@@ -689,3 +698,26 @@ def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> 
     use_bwd = m & ~hi & lo & lo2 & (idx >= 2)
     out = np.where(use_fwd, fwd, np.where(use_bwd, bwd, out))
     return np.moveaxis(out, 0, axis)
+
+
+@compiled
+def _masked_gradient_kernel(v, m, step, out):
+    """:func:`_masked_gradient` along the first axis of ``(n, k)`` fields, node by node in
+    numpy's arithmetic (np.gradient's differences, then the one-sided ones into the mask)."""
+    n, k = v.shape
+    for c in range(k):
+        for r in range(n):
+            if r == 0:
+                g = (v[1, c] - v[0, c]) / step
+            elif r == n - 1:
+                g = (v[n - 1, c] - v[n - 2, c]) / step
+            else:
+                g = (v[r + 1, c] - v[r - 1, c]) / (2.0 * step)
+            if m[r, c]:
+                lo = r >= 1 and m[r - 1, c]
+                hi = r + 1 < n and m[r + 1, c]
+                if not lo and hi and r < n - 2 and m[r + 2, c]:
+                    g = (-3.0 * v[r, c] + 4.0 * v[r + 1, c] - v[r + 2, c]) / (2.0 * step)
+                elif not hi and lo and r >= 2 and m[r - 2, c]:
+                    g = (3.0 * v[r, c] - 4.0 * v[r - 1, c] + v[r - 2, c]) / (2.0 * step)
+            out[r, c] = g

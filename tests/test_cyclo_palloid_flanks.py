@@ -8,6 +8,7 @@ tests/test_cyclo_palloid.py through gearopt.testing.FlankContract.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -394,7 +395,7 @@ def test_generations_are_remembered_by_their_settings(table3_design, monkeypatch
 
 def test_cell_polynomials_take_the_nodes_values_and_derivatives(table3_design, monkeypatch):
     """Each cell's bicubic Hermite polynomial (compiled) takes the flank's values and node
-    derivatives at its four corners, and the numpy path gives the same bits."""
+    derivatives at its four corners, and the numpy paths give the same bits."""
     fm = flanks(table3_design, "pinion", grid=FlankGrid(n_face=9, n_profile=7))["convex"]
     coef = fm.cells.coefficients
     d_s, d_h, d_sh = fm.node_derivatives
@@ -422,3 +423,6 @@ def test_cell_polynomials_take_the_nodes_values_and_derivatives(table3_design, m
     monkeypatch.setattr(flank_module, "ENABLED", False)
     plain = hermite_coefficients(fm.polar_angle_rad, d_s, d_h, d_sh, a, b)
     assert np.array_equal(plain, coef) and np.array_equal(np.signbit(plain), np.signbit(coef))
+    assert not fm.mask.all()  # the fold: one-sided differences into the mask
+    for mine, theirs in zip(replace(fm).node_derivatives, (d_s, d_h, d_sh), strict=True):
+        assert np.array_equal(mine, theirs)
