@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import RectBivariateSpline
 
 from gearopt.errors import GearoptError
+from gearopt.jit import ENABLED, compiled
 
 __all__ = [
     "axial_plane",
@@ -44,12 +45,14 @@ __all__ = [
     "FlankMap",
     "HermiteCells",
     "hermite_cells",
+    "hermite_coefficients",
     "MEMBERS",
     "FLANKS",
     "HANDS",
     "check_member_and_flank",
     "mirror_image",
     "turned",
+    "warm_kernels",
 ]
 
 MEMBERS = ("pinion", "gear")
@@ -424,20 +427,12 @@ class FlankMap:
         """The local bicubic Hermite interpolant of Theta, cell by cell (:class:`HermiteCells`):
         in each cell the polynomial through the values and first derivatives at its four
         corners (:attr:`node_derivatives`), in the cell's unit coordinates."""
-        d_s, d_h, d_sh = self.node_derivatives
-        a = np.diff(self.face_mm)[:, None]
-        b = np.diff(self.profile_mm)[None, :]
-        th = self.polar_angle_rad
-        f = np.empty(th[:-1, :-1].shape + (4, 4))
-        for di in (0, 1):
-            for dj in (0, 1):
-                sl = (slice(di, th.shape[0] - 1 + di), slice(dj, th.shape[1] - 1 + dj))
-                f[..., di, dj] = th[sl]
-                f[..., di, 2 + dj] = d_h[sl] * b
-                f[..., 2 + di, dj] = d_s[sl] * a
-                f[..., 2 + di, 2 + dj] = d_sh[sl] * a * b
-        m = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [-3, 3, -2, -1], [2, -2, 1, 1]], float)
-        coef = np.einsum("ai,...ij,bj->...ab", m, f, m)
+        coef = hermite_coefficients(
+            self.polar_angle_rad,
+            *self.node_derivatives,
+            np.diff(self.face_mm),
+            np.diff(self.profile_mm),
+        )
         k = self.mask
         ok = k[:-1, :-1] & k[1:, :-1] & k[:-1, 1:] & k[1:, 1:]
         fs, fp = self.face_mm, self.profile_mm
@@ -449,7 +444,7 @@ class FlankMap:
             profile_scale=(len(fp) - 1) / float(fp[-1] - fp[0]),
             last_column=float(len(fp) - 2),
             columns=len(fp) - 1,
-            coefficients=np.ascontiguousarray(coef.reshape(-1, 16)),
+            coefficients=coef,
             generated=ok.ravel(),
         )
 
@@ -582,6 +577,72 @@ class FlankMap:
         }
 
 
+#: the cubic Hermite basis: the coefficients of x^a in the polynomial with value v0, v1 and
+#: derivatives d0, d1 at x = 0, 1 are ``HERMITE @ (v0, v1, d0, d1)``
+HERMITE = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [-3, 3, -2, -1], [2, -2, 1, 1]], float)
+
+
+def hermite_coefficients(theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm) -> NDArray:
+    """``(n_cells, 16)`` coefficients of the cells' bicubic Hermite polynomials
+    (:class:`HermiteCells`): in cell ``(i, j)`` the polynomial through the values ``theta``
+    and the derivatives ``d_s``, ``d_h``, ``d_sh`` (``(n_f, n_p)``, grid units) at its four
+    corners, in unit coordinates (the cell steps ``(n_f - 1,)`` and ``(n_p - 1,)`` scale the
+    derivatives). Compiled when the kernels are (the numpy path gives the same bits)."""
+    theta, d_s, d_h, d_sh, a, b = (
+        np.ascontiguousarray(v, float)
+        for v in (theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm)
+    )
+    if ENABLED:
+        out = np.empty(((theta.shape[0] - 1) * (theta.shape[1] - 1), 16))
+        _hermite_kernel(theta, d_s, d_h, d_sh, a, b, HERMITE, out)
+        return out
+    f = np.empty(theta[:-1, :-1].shape + (4, 4))
+    for di in (0, 1):
+        for dj in (0, 1):
+            sl = (slice(di, theta.shape[0] - 1 + di), slice(dj, theta.shape[1] - 1 + dj))
+            f[..., di, dj] = theta[sl]
+            f[..., di, 2 + dj] = d_h[sl] * b[None, :]
+            f[..., 2 + di, dj] = d_s[sl] * a[:, None]
+            f[..., 2 + di, 2 + dj] = d_sh[sl] * a[:, None] * b[None, :]
+    coef = np.einsum("ai,...ij,bj->...ab", HERMITE, f, HERMITE)
+    return np.ascontiguousarray(coef.reshape(-1, 16))
+
+
+@compiled
+def _hermite_kernel(theta, d_s, d_h, d_sh, a, b, m, out):
+    """:func:`hermite_coefficients` cell by cell into ``out``: the corners' values and scaled
+    derivatives f, then ``m f m^T`` summed term by term in the order numpy's einsum sums."""
+    n_f, n_p = theta.shape
+    f = np.empty((4, 4))
+    for ci in range(n_f - 1):
+        for cj in range(n_p - 1):
+            for di in range(2):
+                for dj in range(2):
+                    i, j = ci + di, cj + dj
+                    f[di, dj] = theta[i, j]
+                    f[di, 2 + dj] = d_h[i, j] * b[cj]
+                    f[2 + di, dj] = d_s[i, j] * a[ci]
+                    f[2 + di, 2 + dj] = d_sh[i, j] * a[ci] * b[cj]
+            k = ci * (n_p - 1) + cj
+            for p in range(4):
+                for q in range(4):
+                    total = 0.0
+                    for i in range(4):
+                        for j in range(4):
+                            total += (m[p, i] * f[i, j]) * m[q, j]
+                    out[k, 4 * p + q] = total
+
+
+def warm_kernels() -> None:
+    """Compile the kernels of the cells (:func:`hermite_coefficients`, the node derivatives),
+    or load them from numba's disk cache, in this process
+    (:func:`gearopt.warmup.warm_kernels`). Nothing without kernels."""
+    if ENABLED:
+        zeros = np.zeros((2, 2))
+        hermite_coefficients(zeros, zeros, zeros, zeros, np.ones(1), np.ones(1))
+        _masked_gradient(zeros, np.ones((2, 2), np.bool_), 1.0, 1)
+
+
 def hermite_cells(coef: NDArray, k: NDArray | None, u: NDArray, v: NDArray) -> NDArray:
     """Bicubic polynomials sum_ab c_ab u^a v^b of cells ``k`` at unit coordinates ``(u, v)``:
     ``coef`` is ``(n_cells, 16)``, column ``4 a + b`` holding c_ab (:class:`HermiteCells`);
@@ -608,7 +669,14 @@ def hermite_cells(coef: NDArray, k: NDArray | None, u: NDArray, v: NDArray) -> N
 def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> NDArray:
     """Derivative along ``axis`` of a uniformly spaced field: central differences where both
     neighbours are in ``mask``, second-order one-sided differences into the mask where one is
-    not (values off the mask are not used when the mask allows)."""
+    not (values off the mask are not used when the mask allows). Compiled for 2-D fields when
+    the kernels are (the same bits as the numpy path)."""
+    if ENABLED and np.ndim(values) == 2:
+        v = np.ascontiguousarray(np.moveaxis(values, axis, 0), float)
+        m = np.ascontiguousarray(np.moveaxis(mask, axis, 0), np.bool_)
+        out = np.empty_like(v)
+        _masked_gradient_kernel(v, m, float(step), out)
+        return np.moveaxis(out, 0, axis)
     v = np.moveaxis(values, axis, 0)
     m = np.moveaxis(mask, axis, 0)
     n = v.shape[0]
@@ -630,3 +698,26 @@ def _masked_gradient(values: NDArray, mask: NDArray, step: float, axis: int) -> 
     use_bwd = m & ~hi & lo & lo2 & (idx >= 2)
     out = np.where(use_fwd, fwd, np.where(use_bwd, bwd, out))
     return np.moveaxis(out, 0, axis)
+
+
+@compiled
+def _masked_gradient_kernel(v, m, step, out):
+    """:func:`_masked_gradient` along the first axis of ``(n, k)`` fields, node by node in
+    numpy's arithmetic (np.gradient's differences, then the one-sided ones into the mask)."""
+    n, k = v.shape
+    for c in range(k):
+        for r in range(n):
+            if r == 0:
+                g = (v[1, c] - v[0, c]) / step
+            elif r == n - 1:
+                g = (v[n - 1, c] - v[n - 2, c]) / step
+            else:
+                g = (v[r + 1, c] - v[r - 1, c]) / (2.0 * step)
+            if m[r, c]:
+                lo = r >= 1 and m[r - 1, c]
+                hi = r + 1 < n and m[r + 1, c]
+                if not lo and hi and r < n - 2 and m[r + 2, c]:
+                    g = (-3.0 * v[r, c] + 4.0 * v[r + 1, c] - v[r + 2, c]) / (2.0 * step)
+                elif not hi and lo and r >= 2 and m[r - 2, c]:
+                    g = (3.0 * v[r, c] - 4.0 * v[r - 1, c] + v[r - 2, c]) / (2.0 * step)
+            out[r, c] = g

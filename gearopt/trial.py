@@ -64,22 +64,27 @@ class TrialOutcome:
 def _curves(label: str, evaluation) -> list[tuple]:
     """Rows of the curves table: the curves the evaluation carries (its evaluator's declared
     :attr:`~gearopt.evaluation.BaseEvaluator.curves`), non-finite points left out."""
-    return [
-        (label, curve, side, i, float(a), float(b))
-        for curve, by_side in evaluation.curves.items()
-        for side, (x, y) in by_side.items()
-        for i, (a, b) in enumerate(zip(np.ravel(x), np.ravel(y), strict=True))
-        if math.isfinite(a) and math.isfinite(b)
-    ]
+    rows = []
+    for curve, by_side in evaluation.curves.items():
+        for side, (x, y) in by_side.items():
+            x, y = np.ravel(np.asarray(x, float)), np.ravel(np.asarray(y, float))
+            if x.size != y.size:
+                raise ValueError(f"curve {curve!r} ({side}): x and y of different lengths")
+            keep = np.flatnonzero(np.isfinite(x) & np.isfinite(y))
+            rows += [
+                (label, curve, side, i, a, b)
+                for i, a, b in zip(keep.tolist(), x[keep].tolist(), y[keep].tolist(), strict=True)
+            ]
+    return rows
 
 
 def _patterns(label: str, evaluation) -> list[tuple]:
     """Rows of the patterns table: the pattern outline of each side the evaluation carries
     (its evaluator's declared :attr:`~gearopt.evaluation.BaseEvaluator.pattern`)."""
     return [
-        (label, side, i, float(f), float(p))
+        (label, side, i, f, p)
         for side, outline in evaluation.patterns.items()
-        for i, (f, p) in enumerate(np.asarray(outline, float))
+        for i, (f, p) in enumerate(np.asarray(outline, float).tolist())
     ]
 
 

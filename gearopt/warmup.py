@@ -9,6 +9,7 @@ import sys
 import threading
 import time
 
+from gearopt import flank
 from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
@@ -22,8 +23,8 @@ ANNOUNCE_AFTER_S = 1.0
 
 
 def warm_kernels(*, announce: bool = True) -> float:
-    """Compile every compiled kernel (contact engine, mesh cycle, loaded contact, the machine
-    models' :meth:`~gearopt.machine.BaseMachineModel.warm_kernels`) in this
+    """Compile every compiled kernel (FlankMap cells, contact engine, mesh cycle, loaded
+    contact, the machine models' :meth:`~gearopt.machine.BaseMachineModel.warm_kernels`) in this
     process, or load it from numba's disk cache, and return the seconds it took. A first use
     after an install compiles them (about half a minute); ``announce``: said on stderr when it
     takes longer than :data:`ANNOUNCE_AFTER_S` (a cached load takes well under a second)."""
@@ -44,6 +45,7 @@ def warm_kernels(*, announce: bool = True) -> float:
         timer.daemon = True
         timer.start()
     try:
+        flank.warm_kernels()
         contact_kernels.warm()
         mesh_kernels.warm()
         loaded_kernels.warm()

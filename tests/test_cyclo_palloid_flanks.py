@@ -8,16 +8,19 @@ tests/test_cyclo_palloid.py through gearopt.testing.FlankContract.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
 import gearopt
+from gearopt import flank as flank_module
 from gearopt.errors import GearoptError
-from gearopt.flank import MEMBERS, FlankGrid
+from gearopt.flank import MEMBERS, FlankGrid, hermite_coefficients
 from gearopt.plugins import get_machine_model
 from gearopt.thickness import chordal_thickness, design_chordal_thickness
+from gearopt_plugins.face_hobbing import generation as hobbing_generation
 
 from .conftest import STUDIES
 
@@ -360,3 +363,66 @@ def test_cutter_radii_that_leave_no_tooth_space_are_a_clear_error():
     )
     with pytest.raises(GearoptError):
         gearopt.basic_settings(design)
+
+
+def test_generations_are_remembered_by_their_settings(table3_design, monkeypatch):
+    """A study that changes only the pinion keeps the gear's flanks (the same FlankMaps, with
+    their interpolants); a changed gear setting generates anew, bit for bit what a model
+    without the memory generates."""
+    grid = FlankGrid(n_face=9, n_profile=7)
+    gear = flanks(table3_design, "gear", grid=grid)
+    pinion_changed = gearopt.with_overrides(
+        table3_design, {"machine.pinion.blade_parabola_coefficient_per_mm": 0.001}
+    )
+    assert all(flanks(pinion_changed, "gear", grid=grid)[f] is gear[f] for f in gear)
+    assert (
+        flanks(pinion_changed, "pinion", grid=grid)["convex"]
+        is not (flanks(table3_design, "pinion", grid=grid)["convex"])
+    )
+    gear_changed = gearopt.with_overrides(
+        table3_design, {"machine.gear.blade_parabola_coefficient_per_mm": 0.001}
+    )
+    remembered = flanks(gear_changed, "gear", grid=grid)
+    monkeypatch.setattr(hobbing_generation, "RECENT_GENERATIONS", 0)
+    fresh = flanks(gear_changed, "gear", grid=grid)
+    for f in ("convex", "concave"):
+        assert fresh[f] is not remembered[f]
+        on = gear[f].mask & fresh[f].mask
+        assert np.abs(fresh[f].points_mm - gear[f].points_mm)[on].max() > 1e-4  # a new flank
+        for name in ("points_mm", "normals", "polar_angle_rad", "mask", "residual"):
+            assert np.array_equal(getattr(fresh[f], name), getattr(remembered[f], name)), name
+
+
+def test_cell_polynomials_take_the_nodes_values_and_derivatives(table3_design, monkeypatch):
+    """Each cell's bicubic Hermite polynomial (compiled) takes the flank's values and node
+    derivatives at its four corners, and the numpy paths give the same bits."""
+    fm = flanks(table3_design, "pinion", grid=FlankGrid(n_face=9, n_profile=7))["convex"]
+    coef = fm.cells.coefficients
+    d_s, d_h, d_sh = fm.node_derivatives
+    a, b = np.diff(fm.face_mm), np.diff(fm.profile_mm)
+    scale = np.abs(fm.polar_angle_rad).max()
+    for ci in range(len(a)):
+        for cj in range(len(b)):
+            c = coef[ci * len(b) + cj].reshape(4, 4)
+            for di in (0, 1):
+                for dj in (0, 1):
+                    x, dx = np.array([1.0, di, di, di]), np.array([0.0, 1.0, 2 * di, 3 * di])
+                    y, dy = np.array([1.0, dj, dj, dj]), np.array([0.0, 1.0, 2 * dj, 3 * dj])
+                    node = (ci + di, cj + dj)
+                    assert_allclose(
+                        [x @ c @ y, dx @ c @ y / a[ci], x @ c @ dy / b[cj], dx @ c @ dy],
+                        [
+                            fm.polar_angle_rad[node],
+                            d_s[node],
+                            d_h[node],
+                            d_sh[node] * a[ci] * b[cj],
+                        ],
+                        rtol=1e-12,
+                        atol=1e-12 * scale,
+                    )
+    monkeypatch.setattr(flank_module, "ENABLED", False)
+    plain = hermite_coefficients(fm.polar_angle_rad, d_s, d_h, d_sh, a, b)
+    assert np.array_equal(plain, coef) and np.array_equal(np.signbit(plain), np.signbit(coef))
+    assert not fm.mask.all()  # the fold: one-sided differences into the mask
+    for mine, theirs in zip(replace(fm).node_derivatives, (d_s, d_h, d_sh), strict=True):
+        assert np.array_equal(mine, theirs)

@@ -356,6 +356,14 @@ def hobbing_family(blank: Blank, member: str, blades) -> FaceHobbingFamily:
     )
 
 
+#: the most recent generations (the last most recent) by everything :func:`generate_flanks`
+#: reads: a study that changes one member's settings generates the other member once per
+#: worker, and its FlankMaps keep their interpolants (FlankMaps are never changed in place)
+_RECENT: dict[tuple, dict[str, FlankMap]] = {}
+#: how many generations :func:`generate_flanks` remembers (0: none)
+RECENT_GENERATIONS = 8
+
+
 def generate_flanks(
     blank: Blank,
     member: str,
@@ -371,7 +379,33 @@ def generate_flanks(
     system that cuts it), solved in one batch; each is turned by ``turns_rad[flank]`` about the
     work axis onto tooth 0, or onto the tooth cut by blade group ``tool_pass`` (tooth
     ``tool_pass`` of a right-hand member, ``-tool_pass`` of a left-hand one, when the work
-    indexes exactly: m_gb = N_b / N)."""
+    indexes exactly: m_gb = N_b / N).
+
+    A pure function of its arguments: the last :data:`RECENT_GENERATIONS` results are
+    remembered by their arguments' values and returned again (the same FlankMaps, in a new
+    dict)."""
+    notes = notes or {}
+    key = (
+        blank,
+        member,
+        teeth,
+        tuple(systems.items()),
+        tuple((f, float(turns_rad[f])) for f in systems),
+        grid,
+        tool_pass,
+        tuple((f, tuple(notes.get(f, ()))) for f in systems),
+    )
+    found = _RECENT.pop(key, None) if RECENT_GENERATIONS > 0 else None
+    if found is None:
+        found = _generated(blank, member, teeth, systems, turns_rad, grid, tool_pass, notes)
+    _RECENT[key] = found
+    while len(_RECENT) > RECENT_GENERATIONS:
+        del _RECENT[next(iter(_RECENT))]
+    return dict(found)
+
+
+def _generated(blank, member, teeth, systems, turns_rad, grid, tool_pass, notes):
+    """:func:`generate_flanks` itself (not remembered)."""
     index = MEMBERS.index(member)
     flanks = tuple(systems)
     family_ = hobbing_family(blank, member, [systems[f] for f in flanks])
@@ -395,7 +429,7 @@ def generate_flanks(
             hand=blank.hand[index],
             teeth=teeth,
             turn_rad=turns_rad[flank],
-            notes=(notes or {}).get(flank, ()),
+            notes=notes.get(flank, ()),
             tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
         )
     return out
