@@ -142,10 +142,13 @@ def _utcnow() -> dt.datetime:
 
 
 class ResultsStore:
-    """The gearopt tables of one database (created on first use, next to Optuna's)."""
+    """The gearopt tables of one database (created on first use, next to Optuna's; ``create``
+    False: known to be there, as for a study's supervised workers)."""
 
-    def __init__(self, url: str, *, engine: sa.Engine | None = None) -> None:
+    def __init__(self, url: str, *, engine: sa.Engine | None = None, create: bool = True) -> None:
         self.engine = engine or sa.create_engine(url)
+        if not create:
+            return
         for attempt in range(5):  # another coordinator may be creating the same tables
             try:
                 _meta.create_all(self.engine)
