@@ -42,7 +42,6 @@ import shutil
 import signal
 import socket
 import sys
-import tempfile
 import threading
 import time
 import uuid
@@ -53,7 +52,6 @@ from pathlib import Path
 from typing import Any
 
 import optuna
-from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from optuna.trial import TrialState
 from tqdm import tqdm
 
@@ -73,7 +71,7 @@ from gearopt.recovery import (
     recover,
     trial_markers,
 )
-from gearopt.results import ResultsStore
+from gearopt.results import ResultsStore, artifact_dir, upload_figures
 from gearopt.storage import (
     check_integrity,
     check_own_tables,
@@ -453,7 +451,7 @@ class Coordinator:
             self.spec.name, outcome, attempt=hand.attempt, coordinator=self.me, labels=self.labels
         )
         if outcome.figures:
-            _upload(self.spec, trial, outcome.figures)
+            upload_figures(artifact_dir(self.spec), trial, outcome.figures)
         if outcome.constraints:
             values = list(outcome.constraints.values())
             storage.set_trial_system_attr(hand.trial_id, CONSTRAINTS_KEY, values)
@@ -750,28 +748,6 @@ def _held_stops():
         _swap_handlers(previous)
         if caught:
             signal.raise_signal(caught[0])
-
-
-def artifact_dir(spec: StudySpec) -> Path:
-    """Where a study's artifacts go: ``<study name>_artifacts`` beside the study file (give
-    it to ``optuna-dashboard --artifact-dir``)."""
-    return spec.folder / f"{spec.name}_artifacts"
-
-
-def _upload(spec: StudySpec, trial, figures) -> None:
-    base = artifact_dir(spec)
-    base.mkdir(parents=True, exist_ok=True)
-    store = FileSystemArtifactStore(str(base))
-    with tempfile.TemporaryDirectory() as folder:
-        for name, data in figures:
-            path = Path(folder, f"trial{trial.number}_{name}")
-            path.write_bytes(data)
-            upload_artifact(
-                artifact_store=store,
-                file_path=str(path),
-                study_or_trial=trial,
-                mimetype="image/png",
-            )
 
 
 def _progress(progress: bool, total: int, spec: StudySpec):
