@@ -166,20 +166,27 @@ def recover(
     spec: StudySpec,
     me: str,
     skip: frozenset[str] | set[str] = frozenset(),
+    *,
+    starting: bool = False,
 ) -> list[int]:
     """Fail and re-enqueue the RUNNING trials whose coordinator is gone (Optuna's stale-trial
     handling, then this host's dead coordinators, then trials without a coordinator); the
     numbers of the trials failed here (the stale ones are Optuna's, its callback requeues).
-    ``skip``: the coordinator tags whose trials the caller sees to itself (a supervisor's
-    workers: it fails a dead worker's trial as the worker's death, not a coordinator's)."""
+    ``me``: the caller's tag (:func:`coordinator_tag`). ``skip``: the coordinator tags whose
+    trials the caller sees to itself (a supervisor's workers: it fails a dead worker's trial as
+    the worker's death, not a coordinator's). ``starting``: the caller holds no trial yet (a
+    run's start, before its workers), so its own heartbeat does not stand for a trial asked a
+    moment ago and not yet marked: with no other coordinator alive, such a trial is failed now,
+    not after the grace period."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)
     now = dt.datetime.now(dt.UTC).replace(tzinfo=None)
+    own = me.rpartition(":")[2] if starting else None  # the caller's row (its id)
     living = {
         c
         for c, (o_host, o_pid, beat) in results.coordinators().items()
-        if c != me
+        if c not in (me, own)
         and (now - beat).total_seconds() < STALE_AFTER_S
         and (o_host != socket.gethostname() or alive(o_pid))
     }

@@ -27,14 +27,18 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import tempfile
 import time
 from collections.abc import Iterable
+from pathlib import Path
 
 import sqlalchemy as sa
+from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 
+from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome
 
-__all__ = ["ResultsStore", "SCHEMA_NAMES", "TABLES", "VIEWS"]
+__all__ = ["ResultsStore", "SCHEMA_NAMES", "TABLES", "VIEWS", "artifact_dir", "upload_figures"]
 
 _meta = sa.MetaData()
 
@@ -142,10 +146,13 @@ def _utcnow() -> dt.datetime:
 
 
 class ResultsStore:
-    """The gearopt tables of one database (created on first use, next to Optuna's)."""
+    """The gearopt tables of one database (created on first use, next to Optuna's; ``create``
+    False: known to be there, as for a study's supervised workers)."""
 
-    def __init__(self, url: str, *, engine: sa.Engine | None = None) -> None:
+    def __init__(self, url: str, *, engine: sa.Engine | None = None, create: bool = True) -> None:
         self.engine = engine or sa.create_engine(url)
+        if not create:
+            return
         for attempt in range(5):  # another coordinator may be creating the same tables
             try:
                 _meta.create_all(self.engine)
@@ -250,4 +257,26 @@ class ResultsStore:
         for table in TABLES:
             con.execute(
                 table.delete().where(table.c.study == study, table.c.trial_number.in_(numbers))
+            )
+
+
+def artifact_dir(spec: StudySpec) -> Path:
+    """Where a study's artifacts go: ``<study name>_artifacts`` beside the study file (give
+    it to ``optuna-dashboard --artifact-dir``)."""
+    return spec.folder / f"{spec.name}_artifacts"
+
+
+def upload_figures(base: Path, trial, figures) -> None:
+    """A trial's figures (``(name, PNG bytes)`` pairs) as Optuna artifacts in ``base``."""
+    base.mkdir(parents=True, exist_ok=True)
+    store = FileSystemArtifactStore(str(base))
+    with tempfile.TemporaryDirectory() as folder:
+        for name, data in figures:
+            path = Path(folder, f"trial{trial.number}_{name}")
+            path.write_bytes(data)
+            upload_artifact(
+                artifact_store=store,
+                file_path=str(path),
+                study_or_trial=trial,
+                mimetype="image/png",
             )

@@ -251,7 +251,8 @@ def rdb_storage(url: str, attempts: int = 5, **heartbeat) -> optuna.storages.RDB
     """Optuna's RDB storage; a new database's schema is created by whichever coordinator comes
     first, and one that meets another creating it at the same moment tries again.
     ``heartbeat``: RDBStorage's ``heartbeat_interval``, ``grace_period`` and
-    ``heartbeat_stale_trial_callback`` (:mod:`gearopt.recovery`)."""
+    ``heartbeat_stale_trial_callback`` (:mod:`gearopt.recovery`), and its other keywords
+    (``skip_table_creation``, ``skip_compatibility_check``)."""
 
     def make() -> optuna.storages.RDBStorage:
         return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url), **heartbeat)

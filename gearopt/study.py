@@ -2,11 +2,11 @@
 
 A coordinator asks trials, sends the pure evaluations (:func:`gearopt.trial.work`) to its
 workers, writes the gearopt tables (:mod:`gearopt.results`) and tells Optuna, in that order.
-With ``jobs = 1``, ``deterministic`` or Dask the workers are a joblib pool (loky, Dask) and
-never touch the database. Otherwise (``jobs`` > 1 on loky) each of the ``jobs`` worker
-processes is a coordinator of its own that evaluates its trials itself, and this process
-supervises them (:mod:`gearopt.study_workers`: Optuna's own multi-process pattern, so the
-sampler's and the storage's cost per trial is paid side by side rather than by one process).
+With ``deterministic`` or Dask the workers are a joblib pool (loky, Dask) and never touch
+the database. Otherwise (loky) each of the ``jobs`` worker processes (one or several) is a
+coordinator of its own that evaluates its trials itself, and this process supervises them
+(:mod:`gearopt.study_workers`: Optuna's own multi-process pattern, so the sampler's and the
+storage's cost per trial is paid side by side rather than by one process).
 :class:`Coordinator` holds a run's state; :func:`run_study` runs one. Only Optuna's public API
 is used, never its private attributes or its tables through SQL.
 
@@ -27,9 +27,10 @@ file's order under Optuna's ``constraints`` system attribute (the form ``optuna-
 reads; Optuna reads it as constraints ``"0"``, ``"1"``, ...): :func:`constraint_values` names
 them again.
 
-Reproducibility: with ``jobs = 1``, or ``deterministic``, trials are asked in synchronous batches
-of ``jobs`` and told in order, so a seeded sampler suggests the same sequence of parameters;
-otherwise the workers sample side by side (each its seed plus its number).
+Reproducibility: with ``deterministic`` trials are asked in synchronous batches of ``jobs`` and
+told in order, so a seeded sampler suggests the same sequence of parameters (so does one
+supervised worker, ``jobs = 1``, unless it dies and another takes over); otherwise the workers
+sample side by side (each its seed plus its number).
 """
 
 from __future__ import annotations
@@ -41,7 +42,6 @@ import shutil
 import signal
 import socket
 import sys
-import tempfile
 import threading
 import time
 import uuid
@@ -52,7 +52,6 @@ from pathlib import Path
 from typing import Any
 
 import optuna
-from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from optuna.trial import TrialState
 from tqdm import tqdm
 
@@ -72,7 +71,7 @@ from gearopt.recovery import (
     recover,
     trial_markers,
 )
-from gearopt.results import ResultsStore
+from gearopt.results import ResultsStore, artifact_dir, upload_figures
 from gearopt.storage import (
     check_integrity,
     check_own_tables,
@@ -140,13 +139,16 @@ def open_study(spec: StudySpec, storage: str | None = None):
     return opened.study, opened.results
 
 
-def _open(spec: StudySpec, storage: str | None, stream: int = 0) -> OpenStudy:
+def _open(spec: StudySpec, storage: str | None, stream: int = 0, *, worker=False) -> OpenStudy:
+    """The study opened (``worker``: by a supervised worker, on a storage its supervisor has
+    checked and opened: no checks, no given designs enqueued again)."""
     url = storage or default_storage_url(spec)
-    check_storage_url(url)
-    create_sqlite(url)  # a new SQLite file made whole, schema and all
-    check_integrity(url)
-    if not spec.shared_storage:
-        check_own_tables(url)
+    if not worker:
+        check_storage_url(url)
+        create_sqlite(url)  # a new SQLite file made whole, schema and all
+        check_integrity(url)
+        if not spec.shared_storage:
+            check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     requeue = Requeue(spec)
     try:
@@ -157,6 +159,8 @@ def _open(spec: StudySpec, storage: str | None, stream: int = 0) -> OpenStudy:
                 heartbeat_interval=HEARTBEAT_S,
                 grace_period=STALE_AFTER_S,
                 heartbeat_stale_trial_callback=requeue,
+                skip_table_creation=worker,
+                skip_compatibility_check=worker,
             )
         study = optuna.create_study(
             storage=rdb,
@@ -182,8 +186,13 @@ def _open(spec: StudySpec, storage: str | None, stream: int = 0) -> OpenStudy:
             f"{[d.name for d in study.directions]}",
         )
     fast_sqlite(rdb.engine)
-    results = ResultsStore(url, engine=rdb.engine)
+    results = ResultsStore(url, engine=rdb.engine, create=not worker)
     requeue.results = results
+    if worker:
+        study_id = rdb.get_study_id_from_name(spec.name)
+        return OpenStudy(
+            study=study, storage=rdb, study_id=study_id, results=results, requeue=requeue
+        )
     search = {d.key: d.describe() for d in spec.search}
     first = results.register_study(spec.name, search)
     if first:
@@ -304,7 +313,7 @@ class Coordinator:
         self.batch = deterministic or jobs == 1 or backend == "dask"
         self.role = role  # a worker of :mod:`gearopt.study_workers` (None: a coordinator)
         #: workers that ask and tell themselves, this process their supervisor
-        self.supervised = role is None and not self.batch and backend == "loky"
+        self.supervised = role is None and not deterministic and backend == "loky"
         self.limit = max(10, trials) if max_failures is None else max_failures
         self.labels = {o.label: "objective" for o in spec.objectives}
         self.labels.update({c.label: "constraint" for c in spec.constraints})
@@ -353,11 +362,13 @@ class Coordinator:
         for hand in [*self.pending.values(), *self.held, *self.suspects]:
             self.opened.storage.record_heartbeat(hand.trial_id)
 
-    def recover(self) -> None:
+    def recover(self, *, starting: bool = False) -> None:
         if self.role is not None:
             return  # its supervisor recovers (it knows which of its workers died)
         o = self.opened
-        self.recovered += recover(o.study, o.storage, o.results, self.spec, self.tag)
+        self.recovered += recover(
+            o.study, o.storage, o.results, self.spec, self.tag, starting=starting
+        )
 
     def fail(self, hand: InHand, reason: str, *, charge: bool) -> None:
         """Fail a trial in hand and put its design back in the queue."""
@@ -440,7 +451,7 @@ class Coordinator:
             self.spec.name, outcome, attempt=hand.attempt, coordinator=self.me, labels=self.labels
         )
         if outcome.figures:
-            _upload(self.spec, trial, outcome.figures)
+            upload_figures(artifact_dir(self.spec), trial, outcome.figures)
         if outcome.constraints:
             values = list(outcome.constraints.values())
             storage.set_trial_system_attr(hand.trial_id, CONSTRAINTS_KEY, values)
@@ -509,9 +520,10 @@ class Coordinator:
 
     def run(self, *, save_best: bool = True) -> RunSummary:
         start = time.perf_counter()
-        self.opened = _open(self.spec, self.url, 0 if self.role is None else self.role.stream)
+        stream = 0 if self.role is None else self.role.stream
+        self.opened = _open(self.spec, self.url, stream, worker=self.role is not None)
         self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
-        self.recover()
+        self.recover(starting=True)
         self.markers = trial_markers(self.pid) if self.role is None else ""  # (a worker: none)
         # the compiled kernels compiled (or loaded) here once, before the workers start (they
         # load the cache rather than compile it side by side) and before the trials' clock
@@ -668,13 +680,13 @@ def run_study(
     trials
         COMPLETE trials the study must hold at the end (FAIL ones do not count).
     jobs
-        Worker processes (several, not deterministic: spawned by multiprocessing, so a
-        script calling this needs ``if __name__ == "__main__":``).
+        Worker processes (not deterministic: started by multiprocessing, forked on Linux,
+        spawned elsewhere, where a script calling this needs ``if __name__ == "__main__":``).
     storage
         SQLAlchemy URL (default :func:`default_storage_url`); PostgreSQL works the same, and
         several coordinators may share one study there.
     deterministic
-        Synchronous batches of ``jobs`` trials told in order (``jobs = 1`` always is).
+        Synchronous batches of ``jobs`` trials told in order, on a loky pool.
     save_best
         Save the best (or picked) design as ``<study name>_best.toml`` beside the study file.
     max_failures
@@ -736,28 +748,6 @@ def _held_stops():
         _swap_handlers(previous)
         if caught:
             signal.raise_signal(caught[0])
-
-
-def artifact_dir(spec: StudySpec) -> Path:
-    """Where a study's artifacts go: ``<study name>_artifacts`` beside the study file (give
-    it to ``optuna-dashboard --artifact-dir``)."""
-    return spec.folder / f"{spec.name}_artifacts"
-
-
-def _upload(spec: StudySpec, trial, figures) -> None:
-    base = artifact_dir(spec)
-    base.mkdir(parents=True, exist_ok=True)
-    store = FileSystemArtifactStore(str(base))
-    with tempfile.TemporaryDirectory() as folder:
-        for name, data in figures:
-            path = Path(folder, f"trial{trial.number}_{name}")
-            path.write_bytes(data)
-            upload_artifact(
-                artifact_store=store,
-                file_path=str(path),
-                study_or_trial=trial,
-                mimetype="image/png",
-            )
 
 
 def _progress(progress: bool, total: int, spec: StudySpec):

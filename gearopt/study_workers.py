@@ -6,9 +6,10 @@ evaluated in its own process (:class:`gearopt.study.Coordinator` on
 :class:`gearopt.pools.InlineCalls`): it asks Optuna (its sampler seeded with the study's seed
 plus its number), evaluates, writes the gearopt tables and tells, on the one storage, so the
 sampler's and the storage's cost per trial is paid by the workers side by side rather than by
-one process for all. The supervisor (:class:`Supervisor`, this process) opens the study,
-recovers what earlier runs left, starts the workers, shows the progress, keeps the heartbeats
-of the workers' trials and watches them:
+one process for all. The workers are forked on Linux (they inherit the supervisor's imports
+and warmed kernels), spawned elsewhere. The supervisor (:class:`Supervisor`, this process)
+opens the study, recovers what earlier runs left, starts the workers, shows the progress,
+keeps the heartbeats of the workers' trials and watches them:
 
 - the run's places (COMPLETE trials still missing, less those running) are shared by the
   workers: one takes a place before it asks and gives it back when its trial does not
@@ -29,6 +30,7 @@ import multiprocessing as mp
 import multiprocessing.connection as mpc
 import os
 import signal
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -51,6 +53,10 @@ __all__ = ["Supervisor", "WorkerRole", "supervise"]
 
 #: seconds a stopped worker has to put its trial back before it is killed
 STOP_WAIT_S = 30.0
+
+#: how workers start: forked on Linux (they inherit the imports and the warmed kernels: a
+#: worker starts in milliseconds, not seconds), spawned elsewhere (fork is unsafe on macOS)
+START_METHOD = "fork" if sys.platform == "linux" else "spawn"
 
 
 @dataclass(kw_only=True)
@@ -138,12 +144,12 @@ class _Child:
 
 
 class Supervisor:
-    """Runs ``coordinator``'s study (a :class:`gearopt.study.Coordinator` of ``jobs`` > 1
-    workers, not in batches) on workers that ask and tell themselves (the module's text)."""
+    """Runs ``coordinator``'s study (a :class:`gearopt.study.Coordinator` of ``jobs`` workers
+    on loky, not deterministic) on workers that ask and tell themselves (the module's text)."""
 
     def __init__(self, coordinator) -> None:
         self.c = coordinator
-        self.context = mp.get_context("spawn")
+        self.context = mp.get_context(START_METHOD)
         self.places = self.context.Value("i", 0)
         self.children: list[_Child] = []
         self.streams = 0
@@ -153,6 +159,9 @@ class Supervisor:
         """Start a worker."""
         c = self.c
         ours, theirs = self.context.Pipe(duplex=False)
+        # no database connection crosses a fork (SQLite's rule): the pool's are closed, and
+        # made again when this process next reads
+        c.opened.storage.engine.dispose()
         role = WorkerRole(stream=self.streams, places=self.places, conn=theirs, owner=c.me)
         limit = c.limit
         process = self.context.Process(
@@ -195,7 +204,13 @@ class Supervisor:
                     for _ in range(min(c.jobs, missing)):
                         self.start()
                     continue
-                time.sleep(0.5)  # the rest runs on other coordinators
+                # the rest runs on other coordinators, or was left RUNNING by a dead one
+                # (recovered by the heartbeats, after the grace period)
+                time.sleep(0.5)
+                mark, cpu = time.perf_counter(), time.thread_time()
+                if time.monotonic() - c.last_beat > HEARTBEAT_S:
+                    self.beat()
+                    c.last_beat = time.monotonic()
                 continue
             c.busy_s += time.perf_counter() - mark
             c.busy_cpu_s += time.thread_time() - cpu

@@ -64,14 +64,14 @@ def _toy_study(folder: Path, *, conditions: str = "{}", sampler: str = "tpe", ex
     return path
 
 
-def _gearopt(args, toy_site, *, check=True, **kw):
+def _gearopt(args, toy_site, *, check=True, timeout_s=300, **kw):
     env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
     run = subprocess.run(
         [sys.executable, "-m", "gearopt.cli", *map(str, args)],
         env=env,
         capture_output=True,
         text=True,
-        timeout=300,
+        timeout=timeout_s,
         **kw,
     )
     if check and run.returncode != 0:

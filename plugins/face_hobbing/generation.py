@@ -236,7 +236,7 @@ class FaceHobbingFamily:
         """Height y_c of the edge point (eqs 2-8) above the cradle plane, toward the tip."""
         if self._compiled(u):
             u = np.asarray(u, float)
-            ff = np.ascontiguousarray(np.broadcast_to(flank, u.shape), dtype=np.intp).ravel()
+            ff = np.array(np.broadcast_to(flank, u.shape), dtype=np.intp).ravel()
             out = np.empty(u.size)
             kernels.blade_heights(self._table, ff, np.ascontiguousarray(u).ravel(), out)
             return out.reshape(u.shape)
@@ -252,7 +252,8 @@ def _flat(q, flank):
     q = np.asarray(q, float)
     shape = q.shape[:-1]
     flat = np.ascontiguousarray(q.reshape(-1, 3))
-    flank = np.ascontiguousarray(np.broadcast_to(flank, shape), dtype=np.intp).reshape(-1)
+    # a writable copy: a read-only one is another type to numba, another compilation
+    flank = np.array(np.broadcast_to(flank, shape), dtype=np.intp).reshape(-1)
     return flat, flank, shape
 
 

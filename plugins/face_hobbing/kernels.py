@@ -454,24 +454,26 @@ def blade_heights(table, flank, u, out):
 
 def warm() -> None:
     """Compile every kernel, or load it from numba's disk cache, in this process (on one
-    point of a straight and a curved blade). Nothing without the kernels."""
+    point of a straight and a curved blade), with the argument types the generation passes
+    (:mod:`~gearopt_plugins.face_hobbing.generation`: writable, contiguous arrays). Nothing
+    without the kernels."""
     if not ENABLED:
         return
     table = np.zeros((2, len(FIELDS)))
     table[:, 0], table[:, 1], table[:, 3] = 1.0, 100.0, 50.0
     table[1, 17] = 1e-3
-    flank, q = np.array([0, 1], np.intp), np.zeros((2, 3))
+    flank, q, u = np.array([0, 1], np.intp), np.zeros((2, 3)), np.zeros(2)
     out, jac = np.empty((2, 3)), np.empty((2, 3, 3))
     meshing(table, flank, q, 100.0, out)
     meshing_jacobians(table, flank, q, 100.0, out, jac)
     geometries(table, flank, q, np.empty((2, 3)), np.empty((2, 3)))
-    blade_heights(table, flank, q[:, 0], np.empty(2))
+    blade_heights(table, flank, u, np.empty(2))
     newton(
         table,
         flank,
         q,
-        q[:, 0],
-        q[:, 1],
+        u,
+        u.copy(),
         100.0,
         np.ones(3),
         1e-14,
