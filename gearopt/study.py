@@ -72,6 +72,7 @@ from gearopt.recovery import (
     trial_markers,
 )
 from gearopt.results import ResultsStore, artifact_dir, upload_figures
+from gearopt.samplers import sampler_for
 from gearopt.storage import (
     check_integrity,
     check_own_tables,
@@ -106,19 +107,6 @@ __all__ = [
 ]
 
 
-def _sampler(spec: StudySpec, stream: int = 0) -> optuna.samplers.BaseSampler:
-    """The study file's sampler; ``stream`` (a worker's number) offsets its seed, so that
-    workers sampling side by side do not suggest the same designs."""
-    seed = None if spec.seed is None else (spec.seed + stream) % 2**32
-    if spec.sampler == "tpe":
-        return optuna.samplers.TPESampler(seed=seed, multivariate=True, constant_liar=True)
-    if spec.sampler == "random":
-        return optuna.samplers.RandomSampler(seed=seed)
-    if spec.sampler == "nsga2":
-        return optuna.samplers.NSGAIISampler(seed=seed)
-    return optuna.samplers.QMCSampler(seed=seed)
-
-
 @dataclass(frozen=True, kw_only=True)
 class OpenStudy:
     """A study opened for a coordinator: the Optuna study, its RDB storage (the public handle
@@ -129,6 +117,8 @@ class OpenStudy:
     study_id: int
     results: ResultsStore
     requeue: Requeue
+    #: the trials the study held when the run opened it, given designs waiting excluded
+    previous: int = 0
 
 
 def open_study(spec: StudySpec, storage: str | None = None):
@@ -139,9 +129,12 @@ def open_study(spec: StudySpec, storage: str | None = None):
     return opened.study, opened.results
 
 
-def _open(spec: StudySpec, storage: str | None, stream: int = 0, *, worker=False) -> OpenStudy:
+def _open(
+    spec: StudySpec, storage: str | None, stream: int = 0, *, worker=False, previous=0
+) -> OpenStudy:
     """The study opened (``worker``: by a supervised worker, on a storage its supervisor has
-    checked and opened: no checks, no given designs enqueued again)."""
+    checked and opened: no checks, no given designs enqueued again, ``previous`` its
+    supervisor's count of the study's trials; otherwise counted here)."""
     url = storage or default_storage_url(spec)
     if not worker:
         check_storage_url(url)
@@ -164,7 +157,7 @@ def _open(spec: StudySpec, storage: str | None, stream: int = 0, *, worker=False
             )
         study = optuna.create_study(
             storage=rdb,
-            sampler=_sampler(spec, stream),
+            sampler=sampler_for(spec, stream),
             study_name=spec.name,
             directions=spec.directions,
             load_if_exists=True,
@@ -188,22 +181,29 @@ def _open(spec: StudySpec, storage: str | None, stream: int = 0, *, worker=False
     fast_sqlite(rdb.engine)
     results = ResultsStore(url, engine=rdb.engine, create=not worker)
     requeue.results = results
-    if worker:
-        study_id = rdb.get_study_id_from_name(spec.name)
-        return OpenStudy(
-            study=study, storage=rdb, study_id=study_id, results=results, requeue=requeue
-        )
-    search = {d.key: d.describe() for d in spec.search}
-    first = results.register_study(spec.name, search)
-    if first:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-            study.set_metric_names(spec.metric_names)
-    # the study file's given designs: all of them the first time, later the ones added since
-    for params in spec.enqueue:
-        study.enqueue_trial(dict(params), user_attrs={ATTEMPT: 1}, skip_if_exists=not first)
+    if not worker:
+        first = results.register_study(spec.name, {d.key: d.describe() for d in spec.search})
+        if first:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                study.set_metric_names(spec.metric_names)
+        # the study file's given designs: all of them the first time, later the ones added since
+        for params in spec.enqueue:
+            study.enqueue_trial(dict(params), user_attrs={ATTEMPT: 1}, skip_if_exists=not first)
+        waiting = optuna.trial.TrialState.WAITING
+        states = tuple(t for t in optuna.trial.TrialState if t != waiting)
+        previous = len(study.get_trials(deepcopy=False, states=states))
+    if previous:
+        study.sampler = sampler_for(spec, stream, previous)
     study_id = rdb.get_study_id_from_name(spec.name)
-    return OpenStudy(study=study, storage=rdb, study_id=study_id, results=results, requeue=requeue)
+    return OpenStudy(
+        study=study,
+        storage=rdb,
+        study_id=study_id,
+        results=results,
+        requeue=requeue,
+        previous=previous,
+    )
 
 
 def enqueue(spec: StudySpec, params: Mapping[str, float], storage: str | None = None) -> None:
@@ -520,8 +520,10 @@ class Coordinator:
 
     def run(self, *, save_best: bool = True) -> RunSummary:
         start = time.perf_counter()
-        stream = 0 if self.role is None else self.role.stream
-        self.opened = _open(self.spec, self.url, stream, worker=self.role is not None)
+        stream, previous = (0, 0) if self.role is None else (self.role.stream, self.role.previous)
+        self.opened = _open(
+            self.spec, self.url, stream, worker=self.role is not None, previous=previous
+        )
         self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
         self.recover(starting=True)
         self.markers = trial_markers(self.pid) if self.role is None else ""  # (a worker: none)

@@ -69,6 +69,7 @@ class WorkerRole:
     places: Any  # a multiprocessing Value('i'): the places no worker holds
     conn: Any
     owner: str  # the supervisor's id: the ``coordinator`` of the workers' gearopt rows
+    previous: int = 0  # the study's trials when the run opened it (the samplers' seeds)
 
     def take(self) -> bool:
         """Take a place for a trial; False when every place is held."""
@@ -162,7 +163,13 @@ class Supervisor:
         # no database connection crosses a fork (SQLite's rule): the pool's are closed, and
         # made again when this process next reads
         c.opened.storage.engine.dispose()
-        role = WorkerRole(stream=self.streams, places=self.places, conn=theirs, owner=c.me)
+        role = WorkerRole(
+            stream=self.streams,
+            places=self.places,
+            conn=theirs,
+            owner=c.me,
+            previous=c.opened.previous,
+        )
         limit = c.limit
         process = self.context.Process(
             target=_worker, args=(type(c), c.spec, c.trials, c.url, role, limit), daemon=True

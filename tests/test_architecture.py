@@ -116,6 +116,7 @@ LAYERS = (
             "gearopt.storage",
             "gearopt.pools",
             "gearopt.recovery",
+            "gearopt.samplers",
             "gearopt.best",
             "gearopt.study_workers",
             "gearopt.study",

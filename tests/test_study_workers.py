@@ -45,3 +45,19 @@ def test_one_worker_repeats_the_parameters_of_the_deterministic_batches(tmp_path
         sequences.append([t.params["machine.tool_tip_width_mm"] for t in trials])
     # past the sampler's 10 random start-up trials: TPE's own suggestions too
     assert sequences[0] == sequences[1] and len(set(sequences[0])) == 12
+
+
+@pytest.mark.parametrize("flags", [["--jobs", 1], ["--jobs", 2], ["--jobs", 1, "--deterministic"]])
+def test_a_continued_study_draws_designs_its_first_run_did_not(tmp_path, toy_site, flags):
+    # the random sampler repeats its whole sequence from one seed: a continued run seeded as
+    # the first one drew the first run's designs again (each worker's seed was the study's
+    # plus its number); the trials the study holds now mix into the seed
+    study = _toy_study(tmp_path, sampler="random")
+    args = ["study", "run", study, "--no-progress", *flags]
+    _gearopt([*args, "--trials", 4], toy_site)
+    first = {t.params["machine.tool_tip_width_mm"] for t in _trials(tmp_path / "toy_probe.db")}
+    _gearopt([*args, "--trials", 8], toy_site)
+    trials = _trials(tmp_path / "toy_probe.db")
+    later = [t.params["machine.tool_tip_width_mm"] for t in trials if t.number >= 4]
+    assert len(first) == 4 and len(later) == 4
+    assert not first & set(later)
