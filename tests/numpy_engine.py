@@ -181,7 +181,10 @@ def clearance_on_rows(self, rows: EngineRows, sh):
     big_r = lin[0]
     delta, valid, _, _ = self.clearance(rows, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:])
     valid &= within
-    valid &= self.refine_cells[cell]
+    limit = self.pinion_table[0].reshape((2,) + (1,) * (xy.ndim - 1))
+    corner = np.trunc(np.fmin(np.fmax(xy, 0.0), limit))
+    u, v = xy[0] - corner[0], xy[1] - corner[1]
+    valid &= v >= self.refine_cells[cell, 0] + self.refine_cells[cell, 1] * u
     return delta, valid
 
 

@@ -47,17 +47,49 @@ def _keep_heap() -> None:
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
     made): its generated nodes (flat indices), their points and normals (components apart),
-    the refinable nodes (two cells above the lowest generated ones) and cells, the grid's cell
-    size."""
-    nodes = np.flatnonzero(pinion.mask.ravel())
+    the refinable nodes and cells, the grid's cell size.
+
+    A refinable cell is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are refinable
+    where ``v >= c0 + c1 u`` (:func:`gearopt.contact.kernels.clearance_at`): the flank's
+    lowest generated profile coordinate, linear across the cell
+    (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`, continuous: the envelope's fold solved),
+    so that the refinement and the zones reach the generated boundary wherever the grid's
+    nodes lie; ``(2, 0)`` off it. A flank known to its nodes only keeps two cells above its
+    lowest generated nodes (the interpolant is poor in the lowest cells, the envelope's fold).
+    ``generated``: the same table of where the flank is generated (the tangency point's
+    exit from it).
+    """
+    mask = pinion.mask
+    nodes = np.flatnonzero(mask.ravel())
     pts = pinion.points_mm.reshape(-1, 3)[nodes]
     nrm = pinion.normals.reshape(-1, 3)[nodes]
-    keep = pinion.mask.copy()
-    for _ in range(2):
-        below = np.zeros_like(keep)
-        below[:, 1:] = keep[:, :-1]
-        keep &= below
-    slot = np.full(pinion.mask.size, -1, np.intp)
+    profile = np.asarray(pinion.profile_mm, float)
+    lowest = getattr(pinion, "lowest_profile_mm", None)
+    limits = np.zeros(((mask.shape[0] - 1) * (mask.shape[1] - 1), 2))
+    if lowest is None:
+        keep = mask.copy()
+        for _ in range(2):
+            below = np.zeros_like(keep)
+            below[:, 1:] = keep[:, :-1]
+            keep &= below
+        cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
+        limits[~cells.ravel(), 0] = 2.0
+        generated = np.zeros_like(limits)
+        generated[~pinion.cells.generated, 0] = 2.0
+    else:
+        keep = mask & (profile[None, :] >= lowest[:, None])
+        dp = float(np.mean(np.diff(profile)))
+        with np.errstate(invalid="ignore"):
+            b0 = (lowest[:-1, None] - profile[None, :-1]) / dp
+            b1 = (lowest[1:, None] - profile[None, :-1]) / dp
+        top = mask[:-1, 1:] & mask[1:, 1:]
+        cells = top & np.isfinite(b0) & np.isfinite(b1) & (np.minimum(b0, b1) < 1.0)
+        full = cells & (b0 <= 0.0) & (b1 <= 0.0)
+        part = cells & ~full
+        limits[:, 0] = np.where(full, 0.0, np.where(part, b0, 2.0)).ravel()
+        limits[:, 1] = np.where(part, b1 - b0, 0.0).ravel()
+        generated = limits
+    slot = np.full(mask.size, -1, np.intp)
     slot[nodes] = np.arange(nodes.size)
     return {
         "nodes": nodes,
@@ -65,10 +97,11 @@ def node_tables(pinion) -> dict:
         "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
         "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
         "keep": keep.ravel(),
-        "cells": (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel(),
+        "cells": limits,
+        "generated": generated,
         "cell_mm": (
             float(np.mean(np.diff(pinion.face_mm))),
-            float(np.mean(np.diff(pinion.profile_mm))),
+            float(np.mean(np.diff(profile))),
         ),
     }
 
@@ -164,16 +197,18 @@ class ContactEngine:
             np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
             for a in range(3)
         )
-        # the interpolant is poor in the lowest generated cells (the envelope's fold):
-        # refinements stay two cells above them
+        # the refinable region: above the generated boundary (node_tables)
         self.refine_nodes = np.stack([t["keep"] for t in tables])
-        self.refine_cells = np.concatenate([t["cells"] for t in tables])
-        self.pinion_cells = tables[0]["cells"].size
+        self.refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
+        self.pinion_cells = len(tables[0]["cells"])
         self.pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
         self.gear_cells = first.gear.cells.generated.size
         self.gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
         self.gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
-        self.pinion_generated = np.concatenate([f.pinion.cells.generated for f in fields])
+        # where the tangency point is inside the pinion flank
+        self.pinion_generated = np.ascontiguousarray(
+            np.concatenate([t["generated"] for t in tables])
+        )
         self._linear_maps(fields)
         self.kernel_tables = self._kernel_tables()
 
