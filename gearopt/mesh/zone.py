@@ -29,14 +29,14 @@ second order in the cell size on a quantity that varies by a few per cent over a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import JointField, kernels
 
-__all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones"]
+__all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones", "extended_factors"]
 
 #: radius of the ring on which the separation's quadratic form is fitted (mm): well inside
 #: the thinnest zone's half-width at the marking compounds in use, and over a patch on which
@@ -109,6 +109,7 @@ class Zones:
     """
 
     def __init__(self, joint: JointField, face_mm, profile_mm, rows: ZoneRows, compound_mm):
+        rows = replace(rows, factor_mm=extended_factors(rows.factor_mm))
         self.joint, self.rows, self.compound_mm = joint, rows, float(compound_mm)
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
@@ -305,6 +306,30 @@ class Zones:
         forward, back = ends[:k], ends[k:]
         middle = origins + 0.5 * (forward - back)[:, None] * axes
         return forward + back, middle
+
+
+def extended_factors(factor_mm: NDArray) -> NDArray:
+    """Node factors ``(R, n_f, n_p)`` (0 off the generated nodes) continued beyond each face
+    column's generated nodes: linearly below its lowest two, the top one's above; a column
+    without generated nodes stays 0. The bilinear interpolation of the factor in a cell
+    through which the generated boundary runs then mixes no zeros in (which shrank the
+    separation toward the boundary by up to a cell's share: a pattern reaching the boundary
+    on a coarse grid that ends above it on a fine one)."""
+    f = np.asarray(factor_mm, float)
+    gen = f > 0.0
+    n_p = f.shape[-1]
+    j = np.arange(n_p)
+    low = np.argmax(gen, axis=-1)[..., None]
+    high = (n_p - 1 - np.argmax(gen[..., ::-1], axis=-1))[..., None]
+    f_low = np.take_along_axis(f, low, axis=-1)
+    up = np.minimum(low + 1, n_p - 1)
+    slope = np.where(
+        np.take_along_axis(gen, up, axis=-1), np.take_along_axis(f, up, axis=-1) - f_low, 0.0
+    )
+    below = f_low + (j - low) * slope
+    above = np.take_along_axis(f, high, axis=-1)
+    out = np.where(j < low, below, np.where(j > high, above, f))
+    return np.where(gen.any(axis=-1, keepdims=True), out, f)
 
 
 def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
