@@ -72,6 +72,9 @@ class ToothContact:
         side of M).
     contact_ratio
         Pinion rotation with interior contact over the angular pitch.
+    outline_mm
+        ``(k, 2)`` the outline polygon of the pattern the zones sweep, in pattern coordinates,
+        on the refined field (:meth:`gearopt.mesh.zone.Zones.outline`; ``(0, 2)`` without).
     compound_um, separation
         The marking compound and how separation is measured.
     """
@@ -100,6 +103,7 @@ class ToothContact:
     center_offset_mm: tuple[float, float]
     mean_point_mm: tuple[float, float]
     contact_ratio: float
+    outline_mm: NDArray
     compound_um: float
     separation: str
 
@@ -440,6 +444,19 @@ class MeshCycle:
             np.array(directions),
             np.tile([False, False, True, True], n_sides),
         ).reshape(n_sides, 4)
+        corner = np.array([frame.toe_mm, frame.root_mm])
+        outlines = [
+            zones.outline(
+                first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
+                x["pattern_contact_mm"],
+                self.sense[k] * x["pattern_phi_rad"],
+                x["pattern_pair"],
+                x["pattern_position"],
+                major[k, 0] + 1.0,
+            )
+            - corner
+            for k, x in enumerate(lines)
+        ]
         out = []
         for k, (_, kw) in enumerate(parts):
             mean = (
@@ -454,6 +471,7 @@ class MeshCycle:
                     ellipse_major_axis_mm=float(major[k, 0]),
                     ellipse_minor_axis_mm=float(ends[k, 0] + ends[k, 1]),
                     mean_point_mm=mean,
+                    outline_mm=outlines[k],
                     center_offset_mm=(mean[0] - centre[0], mean[1] - centre[1]),
                 )
             )

@@ -249,6 +249,68 @@ class Zones:
         )
         return out
 
+    def outline(self, rows, contact_mm, u_rad, pair, position, reach_mm) -> NDArray:
+        """The outline of the pattern one side's zones sweep, on the refined field.
+
+        Stations: the contact points of the rows inside their own zones, in order of their
+        relative rotation (one per rotation: a pair's row repeats another's a pitch on). From
+        each, rays across the path (its direction: the neighbouring stations') to either side,
+        and from the first and the last along it outward, run to the pattern's edge as the
+        width's (:meth:`pattern_exits`, over the rows whose contact points lie within
+        ``reach_mm`` of the station along the path). The stations are fixed by the positions,
+        not the grid, and each vertex is found by root-finding: the outline converges with the
+        grid.
+
+        Parameters
+        ----------
+        rows
+            ``(n,)`` the rows (of :attr:`rows`).
+        contact_mm
+            ``(n, 2)`` their contact points (grid coordinates).
+        u_rad, pair, position
+            ``(n,)`` their relative rotations, tooth pairs and positions.
+        reach_mm
+            How far along the path a row's zone may reach a station.
+
+        Returns
+        -------
+        NDArray
+            ``(k, 2)`` a closed polygon (grid coordinates): the first end, one side of the path,
+            the last end, the other side back; ``(0, 2)`` with fewer than two stations.
+        """
+        rows = np.asarray(rows, np.intp)
+        contact = np.asarray(contact_mm, float)
+        sep = self.separation(rows, contact[:, :1], contact[:, 1:])[:, 0]
+        inside = np.flatnonzero(sep <= self.compound_mm)
+        _, first = np.unique(np.round(np.asarray(u_rad)[inside] * 1e9), return_index=True)
+        station = inside[first]  # (np.unique sorts by the rotation)
+        if station.size < 2:
+            return np.zeros((0, 2))
+        c = contact[station]
+        tangent = np.gradient(c, axis=0)
+        tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
+        across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+        # rays: each station across either way, then the two ends along the path
+        origins = np.concatenate([c, c, c[[0, -1]]])
+        directions = np.concatenate([across, -across, [-tangent[0], tangent[-1]]])
+        from_station = np.concatenate([np.arange(len(c))] * 2 + [[0, len(c) - 1]])
+        offset = np.abs(np.einsum("knd,kd->kn", contact[None, :, :] - c[:, None, :], tangent))
+        ray, near = np.nonzero(offset[from_station] <= reach_mm)
+        ends = self.pattern_exits(
+            ray,
+            rows[near],
+            np.asarray(pair)[near],
+            np.asarray(position)[near],
+            origins,
+            directions,
+            np.ones(len(origins), bool),
+        )
+        points = origins + ends[:, None] * directions
+        n = len(c)
+        return np.concatenate(
+            [points[2 * n : 2 * n + 1], points[:n], points[-1:], points[n : 2 * n][::-1]]
+        )
+
     def tables(self) -> tuple:
         """The compiled evaluations' tables of the rows (made once): the rows' constants, the
         pinion's and the gear's tables (:meth:`gearopt.contact.JointField.point_tables`) and
