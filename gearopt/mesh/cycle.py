@@ -453,6 +453,7 @@ class MeshCycle:
                 x["pattern_pair"],
                 x["pattern_position"],
                 major[k, 0] + 1.0,
+                x["interval"],
             )
             - corner
             for k, x in enumerate(lines)

@@ -249,10 +249,11 @@ class Zones:
         )
         return out
 
-    def outline(self, rows, contact_mm, u_rad, pair, position, reach_mm) -> NDArray:
+    def outline(self, rows, contact_mm, u_rad, pair, position, reach_mm, interval) -> NDArray:
         """The outline of the pattern one side's zones sweep, on the refined field.
 
-        Stations: the contact points of the rows inside their own zones, in order of their
+        Stations: the contact points of the rows inside their own zones within the contact
+        interval (the path; beyond it the contact point stops at an edge), in order of their
         relative rotation (one per rotation: a pair's row repeats another's a pitch on). From
         each, rays across the path (its direction: the neighbouring stations') to either side,
         and from the first and the last along it outward, run to the pattern's edge as the
@@ -271,6 +272,8 @@ class Zones:
             ``(n,)`` their relative rotations, tooth pairs and positions.
         reach_mm
             How far along the path a row's zone may reach a station.
+        interval
+            ``(start, end)`` the contact interval (relative rotations).
 
         Returns
         -------
@@ -281,8 +284,10 @@ class Zones:
         rows = np.asarray(rows, np.intp)
         contact = np.asarray(contact_mm, float)
         sep = self.separation(rows, contact[:, :1], contact[:, 1:])[:, 0]
-        inside = np.flatnonzero(sep <= self.compound_mm)
-        _, first = np.unique(np.round(np.asarray(u_rad)[inside] * 1e9), return_index=True)
+        u = np.asarray(u_rad, float)
+        on = (u >= interval[0] - 1e-9) & (u <= interval[1] + 1e-9)
+        inside = np.flatnonzero((sep <= self.compound_mm) & on)
+        _, first = np.unique(np.round(u[inside] * 1e9), return_index=True)
         station = inside[first]  # (np.unique sorts by the rotation)
         if station.size < 2:
             return np.zeros((0, 2))
