@@ -11,6 +11,7 @@ as 10.50 mm against 12.95 mm at 81 x 161, case C's as 13.23 against 16.68 mm.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import gearopt
@@ -92,3 +93,64 @@ def test_the_default_grid_is_the_analysis_default():
     design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
     options = AnalysisOptions.from_conditions({}, design=design)
     assert list(options.grid.shape) == [25, 21]
+
+
+#: the outline's known gap (measured, Hausdorff distance default / 81 x 161): case A's
+#: pattern ends along the path on the flank's top and root edges, 20 mm wide, where the
+#: outline's single end vertex on each cuts a corner that moves with the stations' last
+#: contact points (0.35 mm)
+OUTLINE_GAPS = {("case A", "drive")}
+
+
+def _to_segments(points, polygon):
+    """Distances from ``points`` ``(m, 2)`` to the closed polygon's edges."""
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    ab = b - a
+    t = np.einsum("mkd,kd->mk", points[:, None, :] - a[None], ab) / np.maximum(
+        np.einsum("kd,kd->k", ab, ab), 1e-300
+    )
+    near = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
+    return np.min(np.linalg.norm(points[:, None, :] - near, axis=-1), axis=1)
+
+
+def _ring(polygon, step_mm=0.02):
+    edges = zip(polygon, np.roll(polygon, -1, axis=0), strict=True)
+    return np.concatenate(
+        [
+            a
+            + np.linspace(0.0, 1.0, max(int(np.hypot(*(b - a)) / step_mm), 1), endpoint=False)[
+                :, None
+            ]
+            * (b - a)
+            for a, b in edges
+        ]
+    )
+
+
+def _area(polygon):
+    x, y = polygon[:, 0], polygon[:, 1]
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _outline_params():
+    for case in CASES:
+        for side in ("drive", "coast") if case == "section 5.3" else ("drive",):
+            marks = ()
+            if (case, side) in OUTLINE_GAPS:
+                marks = pytest.mark.xfail(strict=True, reason="known gap: see OUTLINE_GAPS")
+            yield pytest.param(case, side, marks=marks, id=f"{case}-{side}")
+
+
+@pytest.mark.parametrize(("case", "side"), list(_outline_params()))
+def test_pattern_outline_at_the_default_grid_is_the_fine_grids(case, side):
+    # the outline polygon (ToothContact.outline_mm, what the tca evaluator stores as its
+    # pattern): the Hausdorff distance between the default grid's and 81 x 161's within
+    # 0.05 mm, their areas within 1 % (the node outline, lowest and highest marked node per
+    # column, read 0.85-1.8 mm and 12-16 % less area)
+    coarse = _sides(case, None)[side].outline_mm
+    fine = _sides(case, FINE)[side].outline_mm
+    assert len(coarse) > 4 and len(fine) > 4
+    distance = max(_to_segments(_ring(coarse), fine).max(), _to_segments(_ring(fine), coarse).max())
+    assert distance <= 0.05, distance
+    assert abs(_area(coarse) - _area(fine)) <= 0.01 * _area(fine)
