@@ -36,7 +36,17 @@ from numpy.typing import NDArray
 
 from gearopt.contact import JointField, kernels
 
-__all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones", "extended_factors"]
+__all__ = [
+    "NEAR",
+    "RING_MM",
+    "SCAN",
+    "SPREAD",
+    "STATIONS",
+    "ZOOM",
+    "ZoneRows",
+    "Zones",
+    "extended_factors",
+]
 
 #: radius of the ring on which the separation's quadratic form is fitted (mm): well inside
 #: the thinnest zone's half-width at the marking compounds in use, and over a patch on which
@@ -52,6 +62,8 @@ ZOOM = 33
 #: steps of 2 %, for the zones the motion sweeps over the ray
 NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 31)])
 SPREAD = np.linspace(0.0, 1.0, 32)
+#: the most stations of :meth:`Zones.outline` along the path
+STATIONS = 12
 
 _ZOOM_FRACTIONS = np.linspace(0.0, 1.0, ZOOM)
 _RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
@@ -254,7 +266,8 @@ class Zones:
 
         Stations: the contact points of the rows inside their own zones within the contact
         interval (the path; beyond it the contact point stops at an edge), in order of their
-        relative rotation (one per rotation: a pair's row repeats another's a pitch on). From
+        relative rotation (one per rotation: a pair's row repeats another's a pitch on; at most
+        :data:`STATIONS`, evenly). From
         each, rays across the path (its direction: the neighbouring stations') to either side,
         and from the first and the last along it outward, run to the pattern's edge as the
         width's (:meth:`pattern_exits`, over the rows whose contact points lie within
@@ -289,6 +302,10 @@ class Zones:
         inside = np.flatnonzero((sep <= self.compound_mm) & on)
         _, first = np.unique(np.round(u[inside] * 1e9), return_index=True)
         station = inside[first]  # (np.unique sorts by the rotation)
+        if station.size > STATIONS:  # evenly by rotation, both ends kept
+            station = station[
+                np.unique(np.linspace(0, station.size - 1, STATIONS).round().astype(int))
+            ]
         if station.size < 2:
             return np.zeros((0, 2))
         c = contact[station]
@@ -376,27 +393,21 @@ class Zones:
 
 
 def extended_factors(factor_mm: NDArray) -> NDArray:
-    """Node factors ``(R, n_f, n_p)`` (0 off the generated nodes) continued beyond each face
-    column's generated nodes: linearly below its lowest two, the top one's above; a column
-    without generated nodes stays 0. The bilinear interpolation of the factor in a cell
-    through which the generated boundary runs then mixes no zeros in (which shrank the
-    separation toward the boundary by up to a cell's share: a pattern reaching the boundary
-    on a coarse grid that ends above it on a fine one)."""
-    f = np.asarray(factor_mm, float)
-    gen = f > 0.0
+    """Node factors ``(R, n_f, n_p)`` (0 off the generated nodes) with the node below each
+    face column's lowest generated node continued linearly from the two above it (a copy).
+    The bilinear interpolation of the factor in a cell through which the generated boundary
+    runs then mixes no zero in (which shrank the separation toward the boundary by up to a
+    cell's share: a pattern reaching the boundary on a coarse grid that ends above it on a
+    fine one)."""
+    f = np.array(factor_mm, float)
     n_p = f.shape[-1]
-    j = np.arange(n_p)
-    low = np.argmax(gen, axis=-1)[..., None]
-    high = (n_p - 1 - np.argmax(gen[..., ::-1], axis=-1))[..., None]
-    f_low = np.take_along_axis(f, low, axis=-1)
-    up = np.minimum(low + 1, n_p - 1)
-    slope = np.where(
-        np.take_along_axis(gen, up, axis=-1), np.take_along_axis(f, up, axis=-1) - f_low, 0.0
-    )
-    below = f_low + (j - low) * slope
-    above = np.take_along_axis(f, high, axis=-1)
-    out = np.where(j < low, below, np.where(j > high, above, f))
-    return np.where(gen.any(axis=-1, keepdims=True), out, f)
+    gen = f > 0.0
+    low = np.argmax(gen, axis=-1)
+    r, i = np.nonzero((low >= 1) & (low + 1 < n_p) & gen.any(axis=-1))
+    j = low[r, i]
+    above = f[r, i, j + 1]
+    f[r, i, j - 1] = np.where(above > 0.0, 2.0 * f[r, i, j] - above, f[r, i, j])
+    return f
 
 
 def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
