@@ -338,18 +338,22 @@ def solve_envelope(
     up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
     down = np.flip(np.cumprod(np.flip(good[..., : j0 + 1], axis=-1), axis=-1), axis=-1)
     connected = np.concatenate([down[..., :j0].astype(bool), up], axis=-1)
-    # trim fold_trim_mm above the fold, column by column: the fold's profile coordinate
-    # solved between the first bad node below the pitch row and the good one above it
+    # the nodes: trimmed fold_trim_mm above the first bad node below the pitch row, column by
+    # column
+    first_bad = np.where(~connected & (h < h[j0]), height, -np.inf).max(axis=-1)
+    margin = np.where(np.isfinite(first_bad), fold_trim_mm, 0.0)
+    trimmed = height >= (first_bad + margin)[..., None]
+    within = np.asarray(family.within_tool(q, flank), bool)
+    # the generated boundary, continuous: the fold solved, trimmed by fold_trim_mm
     fold = _fold_profiles(family, q, connected, sign0, s, h, (cg, sg), j0, taper, tol)
     limit = fold + fold_trim_mm  # -inf without a fold
-    trimmed = h[None, None, :] >= limit[..., None]
-    within = np.asarray(family.within_tool(q, flank), bool)
+    above = h[None, None, :] >= limit[..., None]
     lowest = _lowest_profiles(
         family,
         q,
         h,
-        connected & trimmed,
-        connected & trimmed & within,
+        connected & above,
+        connected & above & within,
         limit,
         (s, (cg, sg), taper, tol),
     )

@@ -47,48 +47,48 @@ def _keep_heap() -> None:
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
     made): its generated nodes (flat indices), their points and normals (components apart),
-    the refinable nodes and cells, the grid's cell size.
+    the refinable nodes and cells (two cells above the lowest generated nodes: the
+    interpolant is poor in the lowest cells, the envelope's fold), the generated cells, the
+    grid's cell size.
 
-    A refinable cell is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are refinable
-    where ``v >= c0 + c1 u`` (:func:`gearopt.contact.kernels.clearance_at`): the flank's
-    lowest generated profile coordinate, linear across the cell
-    (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`, continuous: the envelope's fold solved),
-    so that the refinement and the zones reach the generated boundary wherever the grid's
-    nodes lie; ``(2, 0)`` off it. A flank known to its nodes only keeps two cells above its
-    lowest generated nodes (the interpolant is poor in the lowest cells, the envelope's fold).
-    ``generated``: the same table of where the flank is generated (the tangency point's
-    exit from it).
+    A cell's entry is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are in where
+    ``v >= c0 + c1 u`` (:func:`gearopt.contact.kernels.clearance_at`; ``(2, 0)``: none,
+    ``(0, 0)``: all). The generated cells (``generated``: where the tangency point is inside
+    the flank, and the zones' extent, :mod:`gearopt.mesh.zone`) end at the flank's lowest
+    generated profile coordinate, linear across the cell
+    (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`, continuous: the envelope's fold
+    solved), so that the contact interval's ends and the pattern reach the generated
+    boundary wherever the grid's nodes lie; on a flank known to its nodes only, the cells of
+    four generated nodes.
     """
     mask = pinion.mask
     nodes = np.flatnonzero(mask.ravel())
     pts = pinion.points_mm.reshape(-1, 3)[nodes]
     nrm = pinion.normals.reshape(-1, 3)[nodes]
     profile = np.asarray(pinion.profile_mm, float)
+    keep = mask.copy()
+    for _ in range(2):
+        below = np.zeros_like(keep)
+        below[:, 1:] = keep[:, :-1]
+        keep &= below
+    cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
+    limits = np.zeros((cells.size, 2))
+    limits[~cells.ravel(), 0] = 2.0
+    generated = np.zeros_like(limits)
     lowest = getattr(pinion, "lowest_profile_mm", None)
-    limits = np.zeros(((mask.shape[0] - 1) * (mask.shape[1] - 1), 2))
     if lowest is None:
-        keep = mask.copy()
-        for _ in range(2):
-            below = np.zeros_like(keep)
-            below[:, 1:] = keep[:, :-1]
-            keep &= below
-        cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
-        limits[~cells.ravel(), 0] = 2.0
-        generated = np.zeros_like(limits)
         generated[~pinion.cells.generated, 0] = 2.0
     else:
-        keep = mask & (profile[None, :] >= lowest[:, None])
         dp = float(np.mean(np.diff(profile)))
         with np.errstate(invalid="ignore"):
             b0 = (lowest[:-1, None] - profile[None, :-1]) / dp
             b1 = (lowest[1:, None] - profile[None, :-1]) / dp
         top = mask[:-1, 1:] & mask[1:, 1:]
-        cells = top & np.isfinite(b0) & np.isfinite(b1) & (np.minimum(b0, b1) < 1.0)
-        full = cells & (b0 <= 0.0) & (b1 <= 0.0)
-        part = cells & ~full
-        limits[:, 0] = np.where(full, 0.0, np.where(part, b0, 2.0)).ravel()
-        limits[:, 1] = np.where(part, b1 - b0, 0.0).ravel()
-        generated = limits
+        on = top & np.isfinite(b0) & np.isfinite(b1) & (np.minimum(b0, b1) < 1.0)
+        full = on & (b0 <= 0.0) & (b1 <= 0.0)
+        part = on & ~full
+        generated[:, 0] = np.where(full, 0.0, np.where(part, b0, 2.0)).ravel()
+        generated[:, 1] = np.where(part, b1 - b0, 0.0).ravel()
     slot = np.full(mask.size, -1, np.intp)
     slot[nodes] = np.arange(nodes.size)
     return {
@@ -197,7 +197,8 @@ class ContactEngine:
             np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
             for a in range(3)
         )
-        # the refinable region: above the generated boundary (node_tables)
+        # the interpolant is poor in the lowest generated cells (the envelope's fold):
+        # refinements stay two cells above them (node_tables)
         self.refine_nodes = np.stack([t["keep"] for t in tables])
         self.refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
         self.pinion_cells = len(tables[0]["cells"])
@@ -470,13 +471,16 @@ class ContactEngine:
         rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
         return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape))
 
-    def point_tables(self, side, phi):
+    def point_tables(self, side, phi, generated=False):
         """The tables of the compiled point evaluations
         (:func:`gearopt.contact.kernels.clearance_at`) on rows (side, pinion angle; gear angle
-        0), each ``(n,)``: ``(rows, pinion, gear)``."""
+        0), each ``(n,)``: ``(rows, pinion, gear)``; with ``generated``, valid on the
+        generated cells rather than the refinable ones (:func:`node_tables`)."""
         n = len(phi)
         rows = self.rows_of(np.asarray(side, np.intp), np.asarray(phi, float), 0.0)
         gear, pinion, _ = self.kernel_tables
+        if generated:
+            pinion = (*pinion[:-1], self.pinion_generated)
         return rows.kernel_rows(n), pinion, gear
 
     def clearance_on_rows(self, rows: EngineRows, sh):

@@ -283,12 +283,13 @@ class JointField:
         side = np.asarray(side, np.intp)
         return self._engine.at(side, np.stack([s, h]), phi_rad, gear_angle_rad)
 
-    def point_tables(self, side, phi_rad) -> tuple:
+    def point_tables(self, side, phi_rad, generated=False) -> tuple:
         """For compiled callers: the tables of the clearance at pinion grid points on rows
         (field ``side[k]``, pinion angle ``phi_rad[k]``, the gear at its ideal angle), as
         :func:`gearopt.contact.kernels.clearance_at` takes them: ``(rows, pinion, gear)``. Its
-        ``(delta, valid)`` on row k is :meth:`clearance_at_grid`'s."""
-        return self._engine.point_tables(side, phi_rad)
+        ``(delta, valid)`` on row k is :meth:`clearance_at_grid`'s; with ``generated``, valid
+        up to the pinion's generated boundary (:func:`gearopt.contact.engine.node_tables`)."""
+        return self._engine.point_tables(side, phi_rad, generated)
 
     @staticmethod
     def _near_rows(near):

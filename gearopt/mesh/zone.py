@@ -351,7 +351,8 @@ class Zones:
                 float(self.last[1]),
                 self.compound_mm,
             )
-            self._tables = (*self.joint.point_tables(rows.side, rows.phi_rad), zone)
+            tables = self.joint.point_tables(rows.side, rows.phi_rad, generated=True)
+            self._tables = (*tables, zone)
         return self._tables
 
     @staticmethod
