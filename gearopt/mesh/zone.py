@@ -21,10 +21,19 @@ that they converge with the grid instead of moving with its nodes.
   and its neighbours: the zones of discrete positions leave gaps that the motion fills); its
   extent along a ray, found as a chord's.
 
+- The pattern's outline (:meth:`Zones.outline`): rays across the path from the contact points
+  of the positions inside the contact interval (at most :data:`STATIONS`), and along it from
+  the first and the last, run to the pattern's edge as the width's.
+- The zones end at the pinion's generated boundary, continuous across the grid (the
+  evaluations' ``generated`` tables, :func:`gearopt.contact.engine.node_tables`: the
+  envelope's fold solved per face column), not at the nodes or the refinement's margin.
+
 The separation at a point is the angular clearance above the row's lag times the node factor
 (normal or circumferential, :func:`gearopt.mesh.pattern.separation_mm`) interpolated
-bilinearly: a smooth geometric factor, exact at the nodes, whose interpolation error is of
-second order in the cell size on a quantity that varies by a few per cent over a zone.
+bilinearly (the node below each column's lowest generated node continued from the two above
+it, :func:`extended_factors`): a smooth geometric factor, exact at the nodes, whose
+interpolation error is of second order in the cell size on a quantity that varies by a few per
+cent over a zone.
 """
 
 from __future__ import annotations
