@@ -456,20 +456,23 @@ class ContactEngine:
         profile = cells.profile0_mm + out[4] / cells.profile_scale
         return tuple(a.reshape(shape) for a in (*out[:3], valid, face, profile))
 
-    def at(self, side, sh, phi, gear_angle_rad):
+    def at(self, side, sh, phi, gear_angle_rad, generated=False):
         """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
         the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
         beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
         the pinion's lowest generated cells, where the envelope's fold spoils any
-        interpolant."""
+        interpolant; with ``generated``, up to the pinion's generated boundary
+        (:func:`node_tables`)."""
         shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
         if not shape:  # a single point: as a one-element array
-            one = self.at(side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad)
+            one = self.at(
+                side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad, generated
+            )
             return one[0][0], one[1][0]
         side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), gear_angle_rad)
         lead = (1,) * (len(shape) - phi.ndim)
         rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
-        return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape))
+        return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape), generated)
 
     def point_tables(self, side, phi, generated=False):
         """The tables of the compiled point evaluations
@@ -483,10 +486,10 @@ class ContactEngine:
             pinion = (*pinion[:-1], self.pinion_generated)
         return rows.kernel_rows(n), pinion, gear
 
-    def clearance_on_rows(self, rows: EngineRows, sh):
+    def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
         """:meth:`at` on known rows by :func:`gearopt.contact.kernels.clearance_at`: rows
         ``(n, 1)`` and points ``(2, n, m)`` as the refinement has them, anything else one row
-        per point."""
+        per point; ``generated``: valid on the generated cells (:func:`node_tables`)."""
         shape = sh.shape[1:]
         if len(shape) == 2 and rows.turn.shape == (shape[0], 1):
             n, m = shape
@@ -503,6 +506,8 @@ class ContactEngine:
         points = np.array(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
         delta, valid = np.empty((n, m)), np.empty((n, m), bool)
         gear, pinion, _ = self.kernel_tables
+        if generated:
+            pinion = (*pinion[:-1], self.pinion_generated)
         _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 

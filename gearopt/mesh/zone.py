@@ -138,9 +138,12 @@ class Zones:
         self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
-        """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)``."""
+        """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)`` (valid up
+        to the pinion's generated boundary)."""
         rows = self.rows
-        return self.joint.clearance_at_grid(rows.side[r][:, None], s, h, rows.phi_rad[r][:, None])
+        return self.joint.clearance_at_grid(
+            rows.side[r][:, None], s, h, rows.phi_rad[r][:, None], generated=True
+        )
 
     def factor(self, r, s, h) -> NDArray:
         """The node factor of rows ``r`` ``(K,)`` interpolated bilinearly at ``(K, M)``."""
