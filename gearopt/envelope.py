@@ -50,8 +50,8 @@ __all__ = [
 ]
 
 _H = 1e-30  # complex step
-#: bisections of a column's fold between two nodes (to 2**-16 of a cell)
-FOLD_BISECTIONS = 16
+#: bisections of a column's fold between two nodes (to 2**-12 of a cell)
+FOLD_BISECTIONS = 12
 
 
 class GeneratingFamily(Protocol):
