@@ -610,84 +610,6 @@ def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
     return np.where(j[None, :] < low, quadratic, values)
 
 
-def _theta_slopes(point, normal, pitch_angle_rad):
-    """``(Theta, dTheta/ds, dTheta/dh)`` of flank points from their normals (uniform depth:
-    as :attr:`gearopt.flank.FlankMap.node_derivatives`)."""
-    sg, cg = math.sin(pitch_angle_rad), math.cos(pitch_angle_rad)
-    th = np.arctan2(point[..., 1], point[..., 0])
-    big_r = np.hypot(point[..., 0], point[..., 1])
-    n_r = normal[..., 0] * np.cos(th) + normal[..., 1] * np.sin(th)
-    n_t = -normal[..., 0] * np.sin(th) + normal[..., 1] * np.cos(th)
-    d_s = -(sg * n_r + cg * normal[..., 2]) / (big_r * n_t)
-    d_h = -(cg * n_r - sg * normal[..., 2]) / (big_r * n_t)
-    return th, d_s, d_h
-
-
-def _fit_boundary_cells(family, solution, index, polar, normal) -> None:
-    """The node below each column's generated boundary, where it lies past the fold (its
-    polar angle extended, its normal continued), given the polar angle and normal (in place)
-    for which the local interpolant's cubic across the boundary's cell takes the exact
-    surface's Theta and slopes at the boundary (:attr:`EnvelopeSolution.lowest_profile_mm`,
-    solved there by Newton from the node above): the cell is then measured up to the
-    boundary without the extension's error (some 0.05 um on a coarse grid, which moves a
-    long contact ellipse's tangency point by tenths of a mm)."""
-    h, s = solution.profile_mm, solution.face_mm
-    n_p = len(h)
-    low = solution.lowest_profile_mm[index]
-    jl = np.searchsorted(h, low, side="right") - 1
-    cols = np.flatnonzero(np.isfinite(low) & (jl >= 0) & (jl + 1 < n_p))
-    mask = solution.mask[index]
-    cols = cols[~mask[cols, jl[cols]] & mask[cols, jl[cols] + 1]]
-    if not cols.size:
-        return
-    j1 = jl[cols] + 1
-    dt = float(h[1] - h[0])
-    vb = (low[cols] - h[jl[cols]]) / dt
-    g = solution.pitch_angle_rad
-    cg, sg = math.cos(g), math.sin(g)
-    flank = np.full(cols.size, index)
-    qb, _, _, ok, _ = _newton(
-        family,
-        solution.q[index, cols, j1].astype(float),
-        flank,
-        s[cols] * cg - low[cols] * sg,
-        s[cols] * sg + low[cols] * cg,
-        tol=1e-14,
-        max_iter=8,
-    )
-    geo = family.geometry(qb, flank)
-    th_b, ds_b, dh_b = _theta_slopes(geo["point"], geo["normal"], g)
-    geo1 = family.geometry(solution.q[index, cols, j1], flank)
-    th1, ds1, dh1 = _theta_slopes(geo1["point"], normal[cols, j1], g)
-    th_b = th_b + 2.0 * np.pi * np.round((polar[cols, j1] - th_b) / (2.0 * np.pi))
-    th1 = polar[cols, j1]
-    v = vb
-    h00, h10 = 2 * v**3 - 3 * v**2 + 1, v**3 - 2 * v**2 + v
-    h01, h11 = -2 * v**3 + 3 * v**2, v**3 - v**2
-    d00, d10 = 6 * v**2 - 6 * v, 3 * v**2 - 4 * v + 1
-    d01, d11 = -6 * v**2 + 6 * v, 3 * v**2 - 2 * v
-    det = h00 * d10 - h10 * d00
-    ok &= np.abs(det) > 1e-3
-    r0 = th_b - h01 * th1 - h11 * dh1 * dt
-    r1 = dh_b * dt - d01 * th1 - d11 * dh1 * dt
-    th0 = (r0 * d10 - h10 * r1) / np.where(ok, det, 1.0)
-    dh0 = (h00 * r1 - d00 * r0) / np.where(ok, det, 1.0) / dt
-    # the face slope: linear across the cell through the node above's and the boundary's
-    ds0 = np.where(v < 0.9, (ds_b - v * ds1) / np.maximum(1.0 - v, 0.1), ds1)
-    # the normal giving those slopes at the node (n_t of the node above's sign)
-    radius = s[cols] * sg + h[jl[cols]] * cg
-    n_t = np.sign(-normal[cols, j1, 0] * np.sin(th1) + normal[cols, j1, 1] * np.cos(th1))
-    n_r = -radius * n_t * (sg * ds0 + cg * dh0)
-    n_z = -radius * n_t * (cg * ds0 - sg * dh0)
-    n = np.stack(
-        [n_r * np.cos(th0) - n_t * np.sin(th0), n_r * np.sin(th0) + n_t * np.cos(th0), n_z], -1
-    )
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    c, j = cols[ok], jl[cols][ok]
-    polar[c, j] = th0[ok]
-    normal[c, j] = n[ok]
-
-
 def require_flank(solution: EnvelopeSolution, index: int, *, member: str, flank: str) -> None:
     """A :class:`SettingsError` when flank ``index`` of a solution has fewer than 4 generated
     nodes (the settings generate (almost) nothing of it)."""
@@ -720,12 +642,6 @@ def flank_map(
     point, normal = geo["point"], geo["normal"]
     polar = np.unwrap(np.arctan2(point[..., 1], point[..., 0]), axis=0)
     polar = _extend_below(polar, sheet)
-    # the normals below the sheet continued as the polar angle (those of the folded sheet, or
-    # of a failed solve, would give the interpolant's cells across the fold wrong slopes)
-    normal = np.stack([_extend_below(normal[..., a], sheet) for a in range(3)], axis=-1)
-    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
-    if solution.lowest_profile_mm is not None and solution.taper is None:
-        _fit_boundary_cells(family, solution, index, polar, normal)
     # nodes off the generated flank: the extended surface (finite, smooth for the spline)
     radius = np.hypot(point[..., 0], point[..., 1])
     point = np.where(

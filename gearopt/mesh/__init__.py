@@ -38,15 +38,9 @@ Definitions used by the outputs:
   of its contact interval: bracketed by bisection on the engine's edge flag to an eighth of a
   position step, the points it can visit evaluated at once, then moved to where the tangency
   point -- the solution of the tangency equations, :mod:`gearopt.newton_tca` -- leaves the
-  flanks, where Newton's method finds it, i.e. but for a line contact; the carrying cycle's
-  ends when the contact never leaves the flanks' interior); ``center_offset_mm`` = M minus the
-  flank centre C (the mean cone distance, mid working depth: h = (a1 - a2) / 2 with a the mean
-  addenda);
-- a flat TE (the lags within 0.1 arcsec, seed 003's case A: a point contact whose lag does not
-  change, the hand-over lying in noise): M's position is the middle of the contact interval
-  (not midway between hand-overs found in noise), and the interval's ends are the tangency
-  point's exits from the flanks like any other's (a true line contact, where the tangency
-  point is not unique, keeps the ends the edge flag brackets);
+  flanks, but for line contact; the carrying cycle's ends when the contact never leaves the
+  flanks' interior); ``center_offset_mm`` = M minus the flank centre C (the mean cone
+  distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
 - the zones and the tangency point's exit end at the pinion's generated boundary, continuous
   across the grid (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`: the envelope's fold
   solved per face column, 0.3 mm above it, or the blade tip's line), not at its nodes; the

@@ -244,11 +244,12 @@ class SideCycle:
         clearance beyond it falls by the edge tolerance (a path meeting the boundary at a
         grazing angle to the contact ellipse), and leads it where the tangency point lies in
         the pinion's lowest generated cells, which the engine's refinement does not enter. Kept
-        as it is where Newton's method fails (a line contact, where the tangency point is not
-        unique). A flat lag alone (:data:`FLAT_ARCSEC`: no TE, as seed 003's case A) does not
-        make a line contact: its tangency point is unique and leaves the flanks where the
-        path meets their boundary, which the edge flag brackets only to the grid's cells.
+        as it is where Newton's method fails, and where the pair's lag is flat over its
+        interior contacts (:data:`FLAT_ARCSEC`: a line contact, where the tangency point is not
+        unique, or nearly one).
         """
+        if self.interval_flat:
+            return
         a, b = float(self.end_inside[e]), float(self.end_outside[e])
         start = (float(self.end_face[e]), float(self.end_profile[e]))
         found = self.field.interval_end(a, start, b - a)
@@ -363,7 +364,7 @@ class SideCycle:
     def extras_due(self) -> bool:
         """Whether the extra positions can be evaluated: the hand-over is settled or guessed
         from smooth lags, or (no hand-over) the contact interval is known."""
-        if self.ho is None or (self.ho.flat and not self.interval_done):
+        if self.ho is None:
             return self.interval_done
         return self.ho.done or self.ho.mode == "fit"
 
@@ -415,10 +416,6 @@ class SideCycle:
             self.g_hand = float(np.max(self.g.min(axis=1)))
         v_star, pitch = self.v_star, self.pitch
         v_mid = v_star - 0.5 * pitch
-        if self.ho is not None and self.ho.flat:
-            # a flat TE: its hand-over lies in noise; M's position is the contact
-            # interval's middle (the interval's ends are solved, not noise)
-            v_mid = 0.5 * (self.interval[0] + self.interval[1])
         dv = 0.25 * self.step
         return [v_star, v_star - pitch, self.peak_guess(), v_mid, v_mid - dv, v_mid + dv]
 
