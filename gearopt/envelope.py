@@ -50,6 +50,8 @@ __all__ = [
 ]
 
 _H = 1e-30  # complex step
+#: bisections of a column's fold between two nodes (to 2**-12 of a cell)
+FOLD_BISECTIONS = 12
 
 
 class GeneratingFamily(Protocol):
@@ -115,6 +117,9 @@ class EnvelopeSolution:
     sheet: NDArray  # nodes on the envelope's sheet, connected to the pitch row
     iterations: int
     taper: DepthTaper | None = None  # tapered depth: profile_mm holds the grid coordinate t
+    #: ``(n_flanks, n_f)`` each column's lowest generated profile coordinate (continuous:
+    #: the fold solved, trimmed; +inf without generated nodes)
+    lowest_profile_mm: NDArray | None = None
 
 
 def _residual_and_jacobian(family, q, flank, big_l, big_r):
@@ -333,11 +338,25 @@ def solve_envelope(
     up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
     down = np.flip(np.cumprod(np.flip(good[..., : j0 + 1], axis=-1), axis=-1), axis=-1)
     connected = np.concatenate([down[..., :j0].astype(bool), up], axis=-1)
-    # trim just above the first bad node below the pitch row, column by column
+    # the nodes: trimmed fold_trim_mm above the first bad node below the pitch row, column by
+    # column
     first_bad = np.where(~connected & (h < h[j0]), height, -np.inf).max(axis=-1)
     margin = np.where(np.isfinite(first_bad), fold_trim_mm, 0.0)
     trimmed = height >= (first_bad + margin)[..., None]
     within = np.asarray(family.within_tool(q, flank), bool)
+    # the generated boundary, continuous: the fold solved, trimmed by fold_trim_mm
+    fold = _fold_profiles(family, q, connected, sign0, s, h, (cg, sg), j0, taper, tol)
+    limit = fold + fold_trim_mm  # -inf without a fold
+    above = h[None, None, :] >= limit[..., None]
+    lowest = _lowest_profiles(
+        family,
+        q,
+        h,
+        connected & above,
+        connected & above & within,
+        limit,
+        (s, (cg, sg), taper, tol),
+    )
     return EnvelopeSolution(
         face_mm=s,
         profile_mm=h,
@@ -351,7 +370,72 @@ def solve_envelope(
         sheet=connected,
         iterations=iterations,
         taper=taper,
+        lowest_profile_mm=lowest,
     )
+
+
+def _bisected(family, q_up, fk, fi, lo, up, accept, s, cos_sin, taper, tol) -> NDArray:
+    """The profile coordinates ``(m,)`` where ``accept(q, jac, flank)`` ends between ``lo``
+    (not accepted) and ``up`` (accepted, parameters ``q_up``) on face columns ``fi`` of flanks
+    ``fk``: :data:`FOLD_BISECTIONS` bisections, each Newton solve started from the last
+    accepted point; the last accepted coordinate."""
+    q_up = np.array(q_up, float)
+    cg, sg = cos_sin
+    for _ in range(FOLD_BISECTIONS):
+        mid = 0.5 * (lo + up)
+        hm = mid if taper is None else taper.height_mm(s[fi], mid)
+        big_l, big_r = s[fi] * cg - hm * sg, s[fi] * sg + hm * cg
+        qm, _, jac, ok, _ = _newton(family, q_up.copy(), fk, big_l, big_r, tol=tol, max_iter=8)
+        ok &= accept(qm, jac, fk)
+        up, q_up[ok] = np.where(ok, mid, up), qm[ok]
+        lo = np.where(ok, lo, mid)
+    return up
+
+
+def _fold_profiles(family, q, connected, sign0, s, h, cos_sin, j0, taper, tol) -> NDArray:
+    """``(k, n_f)`` the profile coordinate of each column's fold: the lowest point of the
+    envelope's sheet through the pitch row, between the first node below the pitch row off
+    it (folded, or Newton failed) and the node above it (:func:`_bisected`: Newton converges
+    with the meshing Jacobian's sign unchanged); -inf where the column has no such node."""
+    k, n_f, n_p = connected.shape
+    below = ~connected & (np.arange(n_p) < j0)
+    fold = np.full((k, n_f), -np.inf)
+    fk, fi = np.nonzero(below.any(axis=-1))
+    if not fk.size:
+        return fold
+    jb = n_p - 1 - np.argmax(below[fk, fi, ::-1], axis=-1)  # the highest node off the sheet
+    sheet = sign0[fk, fi]
+
+    def on_sheet(qm, jac, flank):
+        return np.sign(np.linalg.det(jac)) == sheet
+
+    fold[fk, fi] = _bisected(
+        family, q[fk, fi, jb + 1], fk, fi, h[jb], h[jb + 1], on_sheet, s, cos_sin, taper, tol
+    )
+    return fold
+
+
+def _lowest_profiles(family, q, h, trimmed, mask, limit, solve) -> NDArray:
+    """``(k, n_f)`` the lowest generated profile coordinate of each column: the fold's trim
+    ``limit``, or where the tool's reach ends the column higher (its lowest trimmed node not
+    generated), the blade tip's line between its lowest generated node and the one below
+    (:func:`_bisected` on :meth:`GeneratingFamily.within_tool`; ``solve`` its other
+    arguments); the lowest node where neither ends it on the grid; +inf without generated
+    nodes."""
+    n_p = len(h)
+    first = np.where(trimmed.any(axis=-1), np.argmax(trimmed, axis=-1), n_p)
+    low = np.where(mask.any(axis=-1), np.argmax(mask, axis=-1), n_p)
+    out = np.where(low < n_p, h[np.minimum(low, n_p - 1)], np.inf)
+    out = np.where(np.isfinite(limit) & (low == first), limit, out)
+    fk, fi = np.nonzero((low > first) & (low < n_p))
+    if fk.size:
+        jl = low[fk, fi]
+
+        def within(qm, jac, flank):
+            return np.asarray(family.within_tool(qm, flank), bool)
+
+        out[fk, fi] = _bisected(family, q[fk, fi, jl], fk, fi, h[jl - 1], h[jl], within, *solve)
+    return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -599,4 +683,7 @@ def flank_map(
         notes=notes,
         surface=surface,
         taper=solution.taper,
+        lowest_profile_mm=(
+            None if solution.lowest_profile_mm is None else solution.lowest_profile_mm[index]
+        ),
     )

@@ -279,6 +279,11 @@ class FlankMap:
     taper
         :class:`DepthTaper` of a tapered-depth member (the profile coordinate is then t, see
         the module docstring), or None for uniform depth.
+    lowest_profile_mm
+        ``(n_f,)`` each face column's lowest generated profile coordinate, continuous across
+        the nodes (the envelope's fold solved and trimmed,
+        :func:`gearopt.envelope.solve_envelope`; +inf without generated nodes), or None
+        (known to the nodes only: :attr:`mask`).
     """
 
     member: str
@@ -298,6 +303,7 @@ class FlankMap:
     notes: tuple[str, ...] = ()
     surface: Any = field(default=None, repr=False)
     taper: DepthTaper | None = None
+    lowest_profile_mm: NDArray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         n_f, n_p = len(self.face_mm), len(self.profile_mm)

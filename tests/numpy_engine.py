@@ -166,7 +166,7 @@ def node_fields(self, side, phi, angle):
     return field_, fac, rad
 
 
-def clearance_on_rows(self, rows: EngineRows, sh):
+def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
     """``ContactEngine.clearance_on_rows``."""
     origin, scale = self.pinion_unit
     xy = sh - origin.reshape((2,) + (1,) * (sh.ndim - 1))
@@ -181,7 +181,11 @@ def clearance_on_rows(self, rows: EngineRows, sh):
     big_r = lin[0]
     delta, valid, _, _ = self.clearance(rows, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:])
     valid &= within
-    valid &= self.refine_cells[cell]
+    limit = self.pinion_table[0].reshape((2,) + (1,) * (xy.ndim - 1))
+    corner = np.trunc(np.fmin(np.fmax(xy, 0.0), limit))
+    u, v = xy[0] - corner[0], xy[1] - corner[1]
+    table = self.pinion_generated if generated else self.refine_cells
+    valid &= v >= table[cell, 0] + table[cell, 1] * u
     return delta, valid
 
 

@@ -6,11 +6,13 @@ seed 003 sections 5-6).
 Tolerance: the issue's, 1 % of the fine grid's value or 0.05 mm, whichever is larger (the
 contact ratio, a ratio: 1 %). Before the zones were measured on the refined field
 (``gearopt.mesh.zone``) the default grid read the section 5.3 drive side's ellipse major axis
-as 10.50 mm against 12.95 mm at 81 x 161, case C's as 13.23 against 16.68 mm.
+as 10.50 mm against 12.95 mm at 81 x 161, case C's as 13.23 against 16.68 mm. The outline
+polygon (``ToothContact.outline_mm``) is checked the same way: Hausdorff distance and area.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import gearopt
@@ -40,20 +42,24 @@ FIGURES = (
     "bias_mm",
     "contact_ratio",
 )
-#: known gaps, measured (default / 81 x 161). The pinion flank the engine refines on ends at a
-#: node-quantised boundary near the root: the envelope solver's fold trim is a node's height
-#: (gearopt.envelope) and two cell rows above the lowest generated node are not refinable
-#: (gearopt.contact.engine.node_tables); the lowest generated height at the section 5.3
-#: pinion's toe reads -2.21 mm at the default grid, -2.02 mm at 81 x 161. The section 5.3
-#: pattern reaches that boundary across the path (width 4.73 / 4.90 mm drive, 4.22 / 4.65
-#: coast: the end toward the root lies on it) and its drive contact interval starts
-#: at the toe-root corner on it (contact ratio 2.752 / 2.705). Case A is a line contact: its
-#: contact point is any point of a curved line, so the chord through it along the line moves
-#: with the point (M's profile coordinate 7.39 / 6.85 mm), and so do the ends of its contact
-#: path (bias -1.49 / -0.25 mm, contact ratio 1.275 / 1.375).
+#: known gaps, measured (default / 81 x 161). Section 5.3's drive contact interval starts at the
+#: toe-root corner, where the tangency point crosses the gear's toe edge: the point lies along
+#: a 13 mm ellipse's major axis, where a 0.04 um error of the pinion's interpolant in the cell
+#: through the generated boundary (the envelope's fold 0.3 mm below: Theta is not cubic there)
+#: moves it by tenths of a mm (contact ratio 2.752 / 2.705). Fitting that cell's cubic to the
+#: exact surface at the boundary and refining up to it read 2.7016 / 2.7049, but the same cells
+#: then carried the least clearance of line contacts (0.12 arcsec TE on the conjugate Table 3
+#: pair): the refinement keeps two cells above the lowest generated nodes
+#: (gearopt.contact.engine.node_tables), the zones and the interval's ends reach the boundary.
+#: Case A's lag is flat (no TE): its hand-over lies in noise (M's position midway between
+#: hand-overs moves: M's profile coordinate 7.39 / 6.85 mm) and the contact interval's ends
+#: stay as the edge flag brackets them (bias -1.49 / -0.25 mm, contact ratio 1.275 / 1.375),
+#: since a flat lag is taken for a line contact. Its tangency point is unique (the same at
+#: both grids to 1e-3 mm): solving the ends on it and centring M on the interval read M
+#: (26.387, 7.639) / (26.385, 7.639), bias -2.042 / -2.045, contact ratio 1.3209 / 1.3207, but
+#: moved the conjugate face-milled pair's contact ratio 1.975 -> 1.930 (a true line contact
+#: whose tangency solve converges in noise): kept until the two are told apart.
 GAPS = {
-    ("section 5.3", "drive", "width_mm"),
-    ("section 5.3", "coast", "width_mm"),
     ("section 5.3", "drive", "contact_ratio"),
     ("case A", "drive", "mean_point_profile_mm"),
     ("case A", "drive", "bias_mm"),
@@ -107,3 +113,64 @@ def test_the_default_grid_is_the_analysis_default():
     design = gearopt.load_design(STUDIES / "seed001_section5_3.toml")
     options = AnalysisOptions.from_conditions({}, design=design)
     assert list(options.grid.shape) == [25, 21]
+
+
+#: the outline's known gap (measured, Hausdorff distance default / 81 x 161): case A's stations
+#: run over its contact interval, whose ends move with the grid (GAPS), and its pattern ends
+#: along the path on the flank's top and root edges across a 20 mm band, where the single end
+#: vertex cuts a corner (1.77 mm; 0.35 mm with the interval's ends solved)
+OUTLINE_GAPS = {("case A", "drive")}
+
+
+def _to_segments(points, polygon):
+    """Distances from ``points`` ``(m, 2)`` to the closed polygon's edges."""
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    ab = b - a
+    t = np.einsum("mkd,kd->mk", points[:, None, :] - a[None], ab) / np.maximum(
+        np.einsum("kd,kd->k", ab, ab), 1e-300
+    )
+    near = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
+    return np.min(np.linalg.norm(points[:, None, :] - near, axis=-1), axis=1)
+
+
+def _ring(polygon, step_mm=0.02):
+    edges = zip(polygon, np.roll(polygon, -1, axis=0), strict=True)
+    return np.concatenate(
+        [
+            a
+            + np.linspace(0.0, 1.0, max(int(np.hypot(*(b - a)) / step_mm), 1), endpoint=False)[
+                :, None
+            ]
+            * (b - a)
+            for a, b in edges
+        ]
+    )
+
+
+def _area(polygon):
+    x, y = polygon[:, 0], polygon[:, 1]
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _outline_params():
+    for case in CASES:
+        for side in ("drive", "coast") if case == "section 5.3" else ("drive",):
+            marks = ()
+            if (case, side) in OUTLINE_GAPS:
+                marks = pytest.mark.xfail(strict=True, reason="known gap: see OUTLINE_GAPS")
+            yield pytest.param(case, side, marks=marks, id=f"{case}-{side}")
+
+
+@pytest.mark.parametrize(("case", "side"), list(_outline_params()))
+def test_pattern_outline_at_the_default_grid_is_the_fine_grids(case, side):
+    # the outline polygon (ToothContact.outline_mm, what the tca evaluator stores as its
+    # pattern): the Hausdorff distance between the default grid's and 81 x 161's within
+    # 0.05 mm, their areas within 1 % (the node outline, lowest and highest marked node per
+    # column, read 0.85-1.8 mm and 12-16 % less area)
+    coarse = _sides(case, None)[side].outline_mm
+    fine = _sides(case, FINE)[side].outline_mm
+    assert len(coarse) > 4 and len(fine) > 4
+    distance = max(_to_segments(_ring(coarse), fine).max(), _to_segments(_ring(fine), coarse).max())
+    assert distance <= 0.05, distance
+    assert abs(_area(coarse) - _area(fine)) <= 0.01 * _area(fine)

@@ -47,17 +47,49 @@ def _keep_heap() -> None:
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
     made): its generated nodes (flat indices), their points and normals (components apart),
-    the refinable nodes (two cells above the lowest generated ones) and cells, the grid's cell
-    size."""
-    nodes = np.flatnonzero(pinion.mask.ravel())
+    the refinable nodes and cells (two cells above the lowest generated nodes: the
+    interpolant is poor in the lowest cells, the envelope's fold), the generated cells, the
+    grid's cell size.
+
+    A cell's entry is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are in where
+    ``v >= c0 + c1 u`` (:func:`gearopt.contact.kernels.clearance_at`; ``(2, 0)``: none,
+    ``(0, 0)``: all). The generated cells (``generated``: where the tangency point is inside
+    the flank, and the zones' extent, :mod:`gearopt.mesh.zone`) end at the flank's lowest
+    generated profile coordinate, linear across the cell
+    (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`, continuous: the envelope's fold
+    solved), so that the contact interval's ends and the pattern reach the generated
+    boundary wherever the grid's nodes lie; on a flank known to its nodes only, the cells of
+    four generated nodes.
+    """
+    mask = pinion.mask
+    nodes = np.flatnonzero(mask.ravel())
     pts = pinion.points_mm.reshape(-1, 3)[nodes]
     nrm = pinion.normals.reshape(-1, 3)[nodes]
-    keep = pinion.mask.copy()
+    profile = np.asarray(pinion.profile_mm, float)
+    keep = mask.copy()
     for _ in range(2):
         below = np.zeros_like(keep)
         below[:, 1:] = keep[:, :-1]
         keep &= below
-    slot = np.full(pinion.mask.size, -1, np.intp)
+    cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
+    limits = np.zeros((cells.size, 2))
+    limits[~cells.ravel(), 0] = 2.0
+    generated = np.zeros_like(limits)
+    lowest = getattr(pinion, "lowest_profile_mm", None)
+    if lowest is None:
+        generated[~pinion.cells.generated, 0] = 2.0
+    else:
+        dp = float(np.mean(np.diff(profile)))
+        with np.errstate(invalid="ignore"):
+            b0 = (lowest[:-1, None] - profile[None, :-1]) / dp
+            b1 = (lowest[1:, None] - profile[None, :-1]) / dp
+        top = mask[:-1, 1:] & mask[1:, 1:]
+        on = top & np.isfinite(b0) & np.isfinite(b1) & (np.minimum(b0, b1) < 1.0)
+        full = on & (b0 <= 0.0) & (b1 <= 0.0)
+        part = on & ~full
+        generated[:, 0] = np.where(full, 0.0, np.where(part, b0, 2.0)).ravel()
+        generated[:, 1] = np.where(part, b1 - b0, 0.0).ravel()
+    slot = np.full(mask.size, -1, np.intp)
     slot[nodes] = np.arange(nodes.size)
     return {
         "nodes": nodes,
@@ -65,10 +97,11 @@ def node_tables(pinion) -> dict:
         "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
         "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
         "keep": keep.ravel(),
-        "cells": (keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]).ravel(),
+        "cells": limits,
+        "generated": generated,
         "cell_mm": (
             float(np.mean(np.diff(pinion.face_mm))),
-            float(np.mean(np.diff(pinion.profile_mm))),
+            float(np.mean(np.diff(profile))),
         ),
     }
 
@@ -165,15 +198,18 @@ class ContactEngine:
             for a in range(3)
         )
         # the interpolant is poor in the lowest generated cells (the envelope's fold):
-        # refinements stay two cells above them
+        # refinements stay two cells above them (node_tables)
         self.refine_nodes = np.stack([t["keep"] for t in tables])
-        self.refine_cells = np.concatenate([t["cells"] for t in tables])
-        self.pinion_cells = tables[0]["cells"].size
+        self.refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
+        self.pinion_cells = len(tables[0]["cells"])
         self.pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
         self.gear_cells = first.gear.cells.generated.size
         self.gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
         self.gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
-        self.pinion_generated = np.concatenate([f.pinion.cells.generated for f in fields])
+        # where the tangency point is inside the pinion flank
+        self.pinion_generated = np.ascontiguousarray(
+            np.concatenate([t["generated"] for t in tables])
+        )
         self._linear_maps(fields)
         self.kernel_tables = self._kernel_tables()
 
@@ -420,34 +456,40 @@ class ContactEngine:
         profile = cells.profile0_mm + out[4] / cells.profile_scale
         return tuple(a.reshape(shape) for a in (*out[:3], valid, face, profile))
 
-    def at(self, side, sh, phi, gear_angle_rad):
+    def at(self, side, sh, phi, gear_angle_rad, generated=False):
         """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
         the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
         beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
         the pinion's lowest generated cells, where the envelope's fold spoils any
-        interpolant."""
+        interpolant; with ``generated``, up to the pinion's generated boundary
+        (:func:`node_tables`)."""
         shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
         if not shape:  # a single point: as a one-element array
-            one = self.at(side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad)
+            one = self.at(
+                side, np.reshape(sh, (2, 1)), np.reshape(phi, 1), gear_angle_rad, generated
+            )
             return one[0][0], one[1][0]
         side, phi, angle = np.broadcast_arrays(side, np.asarray(phi, float), gear_angle_rad)
         lead = (1,) * (len(shape) - phi.ndim)
         rows = self.rows_of(*(a.reshape(lead + phi.shape) for a in (side, phi, angle)))
-        return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape))
+        return self.clearance_on_rows(rows, np.broadcast_to(sh, (2,) + shape), generated)
 
-    def point_tables(self, side, phi):
+    def point_tables(self, side, phi, generated=False):
         """The tables of the compiled point evaluations
         (:func:`gearopt.contact.kernels.clearance_at`) on rows (side, pinion angle; gear angle
-        0), each ``(n,)``: ``(rows, pinion, gear)``."""
+        0), each ``(n,)``: ``(rows, pinion, gear)``; with ``generated``, valid on the
+        generated cells rather than the refinable ones (:func:`node_tables`)."""
         n = len(phi)
         rows = self.rows_of(np.asarray(side, np.intp), np.asarray(phi, float), 0.0)
         gear, pinion, _ = self.kernel_tables
+        if generated:
+            pinion = (*pinion[:-1], self.pinion_generated)
         return rows.kernel_rows(n), pinion, gear
 
-    def clearance_on_rows(self, rows: EngineRows, sh):
+    def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
         """:meth:`at` on known rows by :func:`gearopt.contact.kernels.clearance_at`: rows
         ``(n, 1)`` and points ``(2, n, m)`` as the refinement has them, anything else one row
-        per point."""
+        per point; ``generated``: valid on the generated cells (:func:`node_tables`)."""
         shape = sh.shape[1:]
         if len(shape) == 2 and rows.turn.shape == (shape[0], 1):
             n, m = shape
@@ -464,6 +506,8 @@ class ContactEngine:
         points = np.array(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
         delta, valid = np.empty((n, m)), np.empty((n, m), bool)
         gear, pinion, _ = self.kernel_tables
+        if generated:
+            pinion = (*pinion[:-1], self.pinion_generated)
         _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 

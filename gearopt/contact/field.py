@@ -275,20 +275,23 @@ class JointField:
             return self._engine.sample(side, phi_rad, gear_angle_rad, refine)
         return self._engine.sample(side, phi_rad, gear_angle_rad, refine, self._near_rows(near))
 
-    def clearance_at_grid(self, side, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0):
+    def clearance_at_grid(
+        self, side, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0, generated=False
+    ):
         """As :meth:`ClearanceField.clearance_at_grid`, on field ``side`` (broadcast with the
         pinion angles): ``side`` and ``phi_rad`` ``(n, 1)`` with points ``(n, m)`` evaluate
-        row by row in one compiled call."""
+        row by row in one compiled call; ``generated`` as :meth:`point_tables`."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
         side = np.asarray(side, np.intp)
-        return self._engine.at(side, np.stack([s, h]), phi_rad, gear_angle_rad)
+        return self._engine.at(side, np.stack([s, h]), phi_rad, gear_angle_rad, generated)
 
-    def point_tables(self, side, phi_rad) -> tuple:
+    def point_tables(self, side, phi_rad, generated=False) -> tuple:
         """For compiled callers: the tables of the clearance at pinion grid points on rows
         (field ``side[k]``, pinion angle ``phi_rad[k]``, the gear at its ideal angle), as
         :func:`gearopt.contact.kernels.clearance_at` takes them: ``(rows, pinion, gear)``. Its
-        ``(delta, valid)`` on row k is :meth:`clearance_at_grid`'s."""
-        return self._engine.point_tables(side, phi_rad)
+        ``(delta, valid)`` on row k is :meth:`clearance_at_grid`'s; with ``generated``, valid
+        up to the pinion's generated boundary (:func:`gearopt.contact.engine.node_tables`)."""
+        return self._engine.point_tables(side, phi_rad, generated)
 
     @staticmethod
     def _near_rows(near):

@@ -22,7 +22,8 @@ def warm() -> None:
     coef, ok = np.zeros((1, 16)), np.ones(1, np.bool_)
     gear = (0.0, 0.0, 0.0, 0.0, 1, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, coef, ok)
     lin, const = np.zeros((5, 2)), np.zeros(5)
-    pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, ok)
+    limits = np.zeros((1, 2))
+    pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, limits)
     rows = (
         np.zeros((4, 1)),
         np.zeros((4, 1)),
@@ -67,7 +68,7 @@ def warm() -> None:
         np.zeros((1, 1)), np.ones((1, 1), np.bool_), side, np.empty((1, 1), ip), np.empty((1, 1))
     )
     maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
-    kernels.interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, ok)
+    kernels.interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, limits)
     zone = (np.zeros(1), np.zeros((1, 2, 2)), 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0)
     start, pair_row, tau = np.array([0, 1], ip), np.zeros(1, ip), np.zeros((1, 2))
     rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)

@@ -218,8 +218,8 @@ def _evaluate(rows, r, s, t, pinion, gear, cells):
 def _point_in(rows, r, s, t, pinion, gear, cells):
     """Clearance of the pinion point at grid coordinates ``(s, t)`` on row ``r`` (as
     :func:`clearance_at`): ``(delta, valid)``, valid on the gear flank and in the pinion's
-    ``cells`` (a flag per cell of the pinion tables: ``pinion[14]``, the refinable ones, or
-    the generated ones)."""
+    ``cells`` (``(c0, c1)`` per cell of the pinion tables, ``pinion[14]``: the point is in
+    where ``v >= c0 + c1 u``, :func:`gearopt.contact.engine.node_tables`)."""
     kx, ky, turn, sense, offset, pinion_offset = rows
     (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef, _) = pinion
     x = (s - s0) * ia
@@ -240,7 +240,8 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     o3 = kx[3, r] * px + ky[3, r] * py + (lin[4, 0] * s + lin[4, 1] * h + const[4])
     theta = math.atan2(o1, o0)
     gap, on, _ = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
-    return gap, on and cells[cell] and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+    inside = v >= cells[cell, 0] + cells[cell, 1] * u  # the generated boundary (node_tables)
+    return gap, on and inside and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
 
 
 @compiled

@@ -41,6 +41,11 @@ Definitions used by the outputs:
   flanks, but for line contact; the carrying cycle's ends when the contact never leaves the
   flanks' interior); ``center_offset_mm`` = M minus the flank centre C (the mean cone
   distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
+- the zones and the tangency point's exit end at the pinion's generated boundary, continuous
+  across the grid (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`: the envelope's fold
+  solved per face column, 0.3 mm above it, or the blade tip's line), not at its nodes; the
+  outline (``outline_mm``) is the pattern's on the refined field
+  (:meth:`gearopt.mesh.zone.Zones.outline`);
 - contact ratio: the pinion rotation over which a pair's contact stays inside the flanks (not
   at an edge), over the angular pitch (sampled on beyond the analysed range when a pair is
   still in contact at its ends, up to 1.5 pitches more).

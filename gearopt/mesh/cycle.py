@@ -6,7 +6,9 @@ Definitions: :mod:`gearopt.mesh`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property, partial
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -72,6 +74,8 @@ class ToothContact:
         side of M).
     contact_ratio
         Pinion rotation with interior contact over the angular pitch.
+    outline_source
+        What :attr:`outline_mm` is measured by (a callable; None: no outline).
     compound_um, separation
         The marking compound and how separation is measured.
     """
@@ -102,6 +106,14 @@ class ToothContact:
     contact_ratio: float
     compound_um: float
     separation: str
+    outline_source: Any = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def outline_mm(self) -> NDArray:
+        """``(k, 2)`` the outline polygon of the pattern the zones sweep, in pattern
+        coordinates, on the refined field (:meth:`gearopt.mesh.zone.Zones.outline`; ``(0, 2)``
+        without), measured when first asked for (it costs about half a TCA)."""
+        return np.zeros((0, 2)) if self.outline_source is None else self.outline_source()
 
     @property
     def edge_contact(self) -> bool:
@@ -440,6 +452,22 @@ class MeshCycle:
             np.array(directions),
             np.tile([False, False, True, True], n_sides),
         ).reshape(n_sides, 4)
+        corner = np.array([frame.toe_mm, frame.root_mm])
+        outlines = [
+            partial(
+                _outline,
+                zones,
+                corner,
+                first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
+                x["pattern_contact_mm"],
+                self.sense[k] * x["pattern_phi_rad"],
+                x["pattern_pair"],
+                x["pattern_position"],
+                major[k, 0] + 1.0,
+                x["interval"],
+            )
+            for k, x in enumerate(lines)
+        ]
         out = []
         for k, (_, kw) in enumerate(parts):
             mean = (
@@ -454,10 +482,16 @@ class MeshCycle:
                     ellipse_major_axis_mm=float(major[k, 0]),
                     ellipse_minor_axis_mm=float(ends[k, 0] + ends[k, 1]),
                     mean_point_mm=mean,
+                    outline_source=outlines[k],
                     center_offset_mm=(mean[0] - centre[0], mean[1] - centre[1]),
                 )
             )
         return out
+
+
+def _outline(zones: Zones, corner, *args) -> NDArray:
+    """:meth:`gearopt.mesh.zone.Zones.outline` in pattern coordinates."""
+    return zones.outline(*args) - corner
 
 
 def tooth_contact(

@@ -575,6 +575,7 @@ class SideCycle:
             pattern_contact_mm=np.stack([self.cs.ravel()[held], self.ch.ravel()[held]], 1),
             pattern_position=held // pairs,
             pattern_pair=self.ids.ravel()[held],
+            interval=self.interval,
         )
         # bias: the contact line's extension along the face from the pair's entry into contact
         # to its exit (seed 003 section 6): the contact points at the ends of its contact

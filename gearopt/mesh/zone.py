@@ -21,22 +21,41 @@ that they converge with the grid instead of moving with its nodes.
   and its neighbours: the zones of discrete positions leave gaps that the motion fills); its
   extent along a ray, found as a chord's.
 
+- The pattern's outline (:meth:`Zones.outline`): rays across the path from the contact points
+  of the positions inside the contact interval (at most :data:`STATIONS`), and along it from
+  the first and the last, run to the pattern's edge as the width's.
+- The zones end at the pinion's generated boundary, continuous across the grid (the
+  evaluations' ``generated`` tables, :func:`gearopt.contact.engine.node_tables`: the
+  envelope's fold solved per face column), not at the nodes or the refinement's margin.
+
 The separation at a point is the angular clearance above the row's lag times the node factor
 (normal or circumferential, :func:`gearopt.mesh.pattern.separation_mm`) interpolated
-bilinearly: a smooth geometric factor, exact at the nodes, whose interpolation error is of
-second order in the cell size on a quantity that varies by a few per cent over a zone.
+bilinearly (the node below each column's lowest generated node continued from the two above
+it, :func:`extended_factors`): a smooth geometric factor, exact at the nodes, whose
+interpolation error is of second order in the cell size on a quantity that varies by a few per
+cent over a zone.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import JointField, kernels
 
-__all__ = ["NEAR", "RING_MM", "SCAN", "SPREAD", "ZOOM", "ZoneRows", "Zones"]
+__all__ = [
+    "NEAR",
+    "RING_MM",
+    "SCAN",
+    "SPREAD",
+    "STATIONS",
+    "ZOOM",
+    "ZoneRows",
+    "Zones",
+    "extended_factors",
+]
 
 #: radius of the ring on which the separation's quadratic form is fitted (mm): well inside
 #: the thinnest zone's half-width at the marking compounds in use, and over a patch on which
@@ -52,6 +71,8 @@ ZOOM = 33
 #: steps of 2 %, for the zones the motion sweeps over the ray
 NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 31)])
 SPREAD = np.linspace(0.0, 1.0, 32)
+#: the most stations of :meth:`Zones.outline` along the path
+STATIONS = 12
 
 _ZOOM_FRACTIONS = np.linspace(0.0, 1.0, ZOOM)
 _RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
@@ -109,6 +130,7 @@ class Zones:
     """
 
     def __init__(self, joint: JointField, face_mm, profile_mm, rows: ZoneRows, compound_mm):
+        rows = replace(rows, factor_mm=extended_factors(rows.factor_mm))
         self.joint, self.rows, self.compound_mm = joint, rows, float(compound_mm)
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
@@ -116,9 +138,12 @@ class Zones:
         self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
-        """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)``."""
+        """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)`` (valid up
+        to the pinion's generated boundary)."""
         rows = self.rows
-        return self.joint.clearance_at_grid(rows.side[r][:, None], s, h, rows.phi_rad[r][:, None])
+        return self.joint.clearance_at_grid(
+            rows.side[r][:, None], s, h, rows.phi_rad[r][:, None], generated=True
+        )
 
     def factor(self, r, s, h) -> NDArray:
         """The node factor of rows ``r`` ``(K,)`` interpolated bilinearly at ``(K, M)``."""
@@ -248,6 +273,78 @@ class Zones:
         )
         return out
 
+    def outline(self, rows, contact_mm, u_rad, pair, position, reach_mm, interval) -> NDArray:
+        """The outline of the pattern one side's zones sweep, on the refined field.
+
+        Stations: the contact points of the rows inside their own zones within the contact
+        interval (the path; beyond it the contact point stops at an edge), in order of their
+        relative rotation (one per rotation: a pair's row repeats another's a pitch on; at most
+        :data:`STATIONS`, evenly). From
+        each, rays across the path (its direction: the neighbouring stations') to either side,
+        and from the first and the last along it outward, run to the pattern's edge as the
+        width's (:meth:`pattern_exits`, over the rows whose contact points lie within
+        ``reach_mm`` of the station along the path). The stations are fixed by the positions,
+        not the grid, and each vertex is found by root-finding: the outline converges with the
+        grid.
+
+        Parameters
+        ----------
+        rows
+            ``(n,)`` the rows (of :attr:`rows`).
+        contact_mm
+            ``(n, 2)`` their contact points (grid coordinates).
+        u_rad, pair, position
+            ``(n,)`` their relative rotations, tooth pairs and positions.
+        reach_mm
+            How far along the path a row's zone may reach a station.
+        interval
+            ``(start, end)`` the contact interval (relative rotations).
+
+        Returns
+        -------
+        NDArray
+            ``(k, 2)`` a closed polygon (grid coordinates): the first end, one side of the path,
+            the last end, the other side back; ``(0, 2)`` with fewer than two stations.
+        """
+        rows = np.asarray(rows, np.intp)
+        contact = np.asarray(contact_mm, float)
+        sep = self.separation(rows, contact[:, :1], contact[:, 1:])[:, 0]
+        u = np.asarray(u_rad, float)
+        on = (u >= interval[0] - 1e-9) & (u <= interval[1] + 1e-9)
+        inside = np.flatnonzero((sep <= self.compound_mm) & on)
+        _, first = np.unique(np.round(u[inside] * 1e9), return_index=True)
+        station = inside[first]  # (np.unique sorts by the rotation)
+        if station.size > STATIONS:  # evenly by rotation, both ends kept
+            station = station[
+                np.unique(np.linspace(0, station.size - 1, STATIONS).round().astype(int))
+            ]
+        if station.size < 2:
+            return np.zeros((0, 2))
+        c = contact[station]
+        tangent = np.gradient(c, axis=0)
+        tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
+        across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+        # rays: each station across either way, then the two ends along the path
+        origins = np.concatenate([c, c, c[[0, -1]]])
+        directions = np.concatenate([across, -across, [-tangent[0], tangent[-1]]])
+        from_station = np.concatenate([np.arange(len(c))] * 2 + [[0, len(c) - 1]])
+        offset = np.abs(np.einsum("knd,kd->kn", contact[None, :, :] - c[:, None, :], tangent))
+        ray, near = np.nonzero(offset[from_station] <= reach_mm)
+        ends = self.pattern_exits(
+            ray,
+            rows[near],
+            np.asarray(pair)[near],
+            np.asarray(position)[near],
+            origins,
+            directions,
+            np.ones(len(origins), bool),
+        )
+        points = origins + ends[:, None] * directions
+        n = len(c)
+        return np.concatenate(
+            [points[2 * n : 2 * n + 1], points[:n], points[-1:], points[n : 2 * n][::-1]]
+        )
+
     def tables(self) -> tuple:
         """The compiled evaluations' tables of the rows (made once): the rows' constants, the
         pinion's and the gear's tables (:meth:`gearopt.contact.JointField.point_tables`) and
@@ -266,7 +363,8 @@ class Zones:
                 float(self.last[1]),
                 self.compound_mm,
             )
-            self._tables = (*self.joint.point_tables(rows.side, rows.phi_rad), zone)
+            tables = self.joint.point_tables(rows.side, rows.phi_rad, generated=True)
+            self._tables = (*tables, zone)
         return self._tables
 
     @staticmethod
@@ -305,6 +403,24 @@ class Zones:
         forward, back = ends[:k], ends[k:]
         middle = origins + 0.5 * (forward - back)[:, None] * axes
         return forward + back, middle
+
+
+def extended_factors(factor_mm: NDArray) -> NDArray:
+    """Node factors ``(R, n_f, n_p)`` (0 off the generated nodes) with the node below each
+    face column's lowest generated node continued linearly from the two above it (a copy).
+    The bilinear interpolation of the factor in a cell through which the generated boundary
+    runs then mixes no zero in (which shrank the separation toward the boundary by up to a
+    cell's share: a pattern reaching the boundary on a coarse grid that ends above it on a
+    fine one)."""
+    f = np.array(factor_mm, float)
+    n_p = f.shape[-1]
+    gen = f > 0.0
+    low = np.argmax(gen, axis=-1)
+    r, i = np.nonzero((low >= 1) & (low + 1 < n_p) & gen.any(axis=-1))
+    j = low[r, i]
+    above = f[r, i, j + 1]
+    f[r, i, j - 1] = np.where(above > 0.0, 2.0 * f[r, i, j] - above, f[r, i, j])
+    return f
 
 
 def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:

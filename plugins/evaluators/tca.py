@@ -171,8 +171,12 @@ class TcaEvaluator(BaseEvaluator):
             arrays[f"{prefix}flank_mask"] = field.pinion.mask
             curves["te"][side.side] = (side.phi1_deg, side.te_arcsec)
             curves["path"][side.side] = (side.path_face_mm, side.path_profile_mm)
-            patterns[side.side] = pattern_outline(
-                side.pattern_um, drive.face_mm, drive.profile_mm, options.compound_um
+            patterns[side.side] = (
+                side.outline_mm
+                if len(side.outline_mm)
+                else pattern_outline(
+                    side.pattern_um, drive.face_mm, drive.profile_mm, options.compound_um
+                )
             )
         report = {SECTIONS["drive"]: drive.as_dict(), SECTIONS["coast"]: coast.as_dict()}
         if design.te_target is not None:  # the designed TE (drive side) beside the achieved
