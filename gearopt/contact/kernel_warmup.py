@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from gearopt.contact import kernels
+from gearopt.contact.minima import sample_minima
 
 __all__ = ["warm"]
 
@@ -74,3 +75,28 @@ def warm() -> None:
     kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     none = np.full(1, -1, ip)
     kernels.swept_exits(rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out)
+    one, flag = np.zeros((1, 1)), np.ones(1, np.bool_)
+    sample_minima(
+        one,
+        one,
+        side,
+        rows,
+        flag,
+        np.ones((1, 1), np.bool_),
+        2,
+        rows,
+        side,
+        np.zeros((2, 1)),
+        False,
+        np.ones((2, 1)),
+        cell,
+        pinion,
+        gear,
+        (np.zeros(1), np.zeros(1)),
+        np.empty(1),
+        np.empty((2, 1)),
+        np.empty(1, np.bool_),
+        np.empty(1),
+        np.empty((2, 1)),
+        np.empty(1, np.bool_),
+    )
