@@ -143,6 +143,7 @@ class ContactEngine:
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
         tables = [f.node_tables for f in fields]
         self.ds, self.dh = tables[0]["cell_mm"]
+        self.cell = np.array([self.ds, self.dh])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
         # the generated pinion nodes of each side, padded to one count with at least one more
         # (padding: the first generated node again, its result dropped); components stored
@@ -187,6 +188,7 @@ class ContactEngine:
         scale = np.array([f.node_factor_mm or 50.0 for f in fields])
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
+        self.tolerances = np.stack([self.tol_rad, self.tol_um])
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -519,8 +521,8 @@ class ContactEngine:
             side_all[n:],
             np.ascontiguousarray(sh.reshape(2, m)),
             near is not None,
-            np.stack([self.tol_rad, self.tol_um]),
-            np.array([self.ds, self.dh]),
+            self.tolerances,
+            self.cell,
             pinion,
             gear,
             (self.pinion_grid.face_mm, self.pinion_grid.profile_mm),
