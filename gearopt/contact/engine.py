@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from gearopt.contact import kernels as _kernels
-from gearopt.contact.minima import sample_minima
+from gearopt.contact.minima import minima_pick, minima_starts
 from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells
@@ -473,8 +473,7 @@ class ContactEngine:
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
         on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
         also :meth:`near` of those rows in the same refinement: ``(sample, near)``. The node
-        fields, then the minima in one compiled call
-        (:func:`gearopt.contact.minima.sample_minima`)."""
+        fields, then the minima in compiled calls (:mod:`gearopt.contact.minima`)."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         n = len(phi)
         side = np.array(np.broadcast_to(np.asarray(side, np.intp), phi.shape))
@@ -506,46 +505,41 @@ class ContactEngine:
             gear,
             out,
         )
-        minimum, contact, edge = np.empty(n), np.empty((2, n)), np.empty(n, bool)
-        near_out = (np.empty(m), np.empty((2, m)), np.zeros(m, bool))
         sh = np.empty((2, 0)) if near is None else np.stack([n_s, n_h]).astype(float)
-        sample_minima(
+        point = np.empty((3, n))
+        at, take, origin, starts, s, h, best, caps, group, tol = minima_starts(
             out[0],
-            out[1],
             side,
             rows,
             np.array(np.broadcast_to(np.asarray(refine, bool), phi.shape)),
             self.refine_nodes,
             2,
-            near_rows,
-            side_all[n:],
-            np.ascontiguousarray(sh.reshape(2, m)),
+            (near_rows, side_all[n:], np.ascontiguousarray(sh.reshape(2, m))),
             near is not None,
             self.tolerances,
-            self.cell,
-            pinion,
-            gear,
             (self.pinion_grid.face_mm, self.pinion_grid.profile_mm),
-            minimum,
-            contact,
-            edge,
-            *near_out,
+            point,
         )
+        flags = np.zeros(len(s), bool)
+        if len(s):
+            _kernels.refine(starts, s, h, best, caps, group, tol, self.cell, pinion, gear, flags)
+        edge = np.empty(n, bool)
+        minima_pick(out[1], side, at, take, origin, s, h, best, flags, self.tolerances, point, edge)
         shape = (n,) + self.shape
         sample = FieldSample(
             phi_rad=phi,
             clearance_rad=out[0].reshape(shape),
             normal_factor_mm=out[1].reshape(shape),
             radius_mm=out[2].reshape(shape),
-            minimum_rad=minimum,
-            contact_face_mm=contact[0],
-            contact_profile_mm=contact[1],
+            minimum_rad=point[0],
+            contact_face_mm=point[1],
+            contact_profile_mm=point[2],
             edge=edge,
         )
         if near is None:
             return sample
-        value, point, flag = near_out
-        return sample, (value, point[0], point[1], flag)
+        k = len(origin)
+        return sample, (best[k:], s[k:], h[k:], flags[k:])
 
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from gearopt.contact import kernels
-from gearopt.contact.minima import sample_minima
+from gearopt.contact.minima import minima_pick, minima_starts
 
 __all__ = ["warm"]
 
@@ -76,27 +76,23 @@ def warm() -> None:
     none = np.full(1, -1, ip)
     kernels.swept_exits(rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out)
     one, flag = np.zeros((1, 1)), np.ones(1, np.bool_)
-    sample_minima(
-        one,
+    tolerances, grid = np.ones((2, 1)), (np.zeros(1), np.zeros(1))
+    near = (rows, side, np.zeros((2, 1)))
+    keep, point = flag.reshape(1, 1), np.empty((3, 1))
+    at, take, origin, *_ = minima_starts(
+        one, side, rows, flag, keep, 2, near, False, tolerances, grid, point
+    )
+    minima_pick(
         one,
         side,
-        rows,
+        at,
+        take,
+        origin,
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros(1),
         flag,
-        np.ones((1, 1), np.bool_),
-        2,
-        rows,
-        side,
-        np.zeros((2, 1)),
-        False,
-        np.ones((2, 1)),
-        cell,
-        pinion,
-        gear,
-        (np.zeros(1), np.zeros(1)),
-        np.empty(1),
-        np.empty((2, 1)),
-        np.empty(1, np.bool_),
-        np.empty(1),
-        np.empty((2, 1)),
+        tolerances,
+        np.zeros((3, 1)),
         np.empty(1, np.bool_),
     )

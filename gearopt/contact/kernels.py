@@ -87,12 +87,11 @@ def _gear_unit(o2, o3, radius, gear):
 
 
 @compiled(inline=True)
-def _gear_gap(o0, o1, o2, o3, nodes, turn, sense, offset, gear):
+def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
     """Angular clearance of a pinion point with linear outputs ``o0..o3`` (``ContactEngine``'s
-    qx, qy and the qz parts of the gear's unit coordinates) on a row: ``(delta, valid, R2)``,
-    the polar angle atan2(o1, o0) by :func:`_atan2` for the ``nodes`` (then +inf where not
-    valid, not evaluated), else by libm's. ``gear``: rho coefficients, limits, columns, taper
-    (flag and constants), coefficients, valid cells."""
+    qx, qy and the qz parts of the gear's unit coordinates; ``theta`` = atan2(o1, o0)) on a
+    row: ``(delta, valid, R2)``. ``gear``: rho coefficients, limits, columns, taper (flag and
+    constants), coefficients, valid cells."""
     _, _, lim0, lim1, n_cols, _, _, _, _, _, _, _, coef, ok = gear
     radius = math.sqrt(o0 * o0 + o1 * o1)
     x, y = _gear_unit(o2, o3, radius, gear)
@@ -102,9 +101,7 @@ def _gear_gap(o0, o1, o2, o3, nodes, turn, sense, offset, gear):
     u = x - a
     v = y - b
     valid = ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0
-    if nodes and not valid:
-        return math.inf, valid, radius
-    gap = _hermite(coef, cell, u, v) - (_atan2(o1, o0) if nodes else math.atan2(o1, o0))
+    gap = _hermite(coef, cell, u, v) - theta
     gap += turn
     gap -= np.rint(gap * _TO_TURNS) * _TURN
     return gap * sense, valid, radius
@@ -165,7 +162,9 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
             o1 = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
             o2 = kx[2, r] * x + ky[2, r] * y + z[2, k, j]
             o3 = kx[3, r] * x + ky[3, r] * y + z[3, k, j]
-            gap, valid, radius = _gear_gap(o0, o1, o2, o3, True, turn[r], sense[r], offset[r], gear)
+            gap, valid, radius = _gear_gap(
+                o0, o1, o2, o3, _atan2(o1, o0), turn[r], sense[r], offset[r], gear
+            )
             nx, ny = nxy[0, k, j], nxy[1, k, j]
             m0 = kx[0, r] * nx + ky[0, r] * ny + nz[0, k, j]
             m1 = kx[1, r] * nx + ky[1, r] * ny + nz[1, k, j]
@@ -194,7 +193,8 @@ def point_fields(rows, points, normals, lin_z, const, gear, out, valid):
             o1 = kx[1, r] * x + ky[1, r] * y + (lin_z[1] * z + const[1])
             o2 = kx[2, r] * x + ky[2, r] * y + (lin_z[2] * z + const[2])
             o3 = kx[3, r] * x + ky[3, r] * y + (lin_z[3] * z + const[3])
-            gap, on, radius = _gear_gap(o0, o1, o2, o3, False, turn[r], sense[r], offset[r], gear)
+            theta = math.atan2(o1, o0)
+            gap, on, radius = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
             nx, ny, nz = normals[r, p, 0], normals[r, p, 1], normals[r, p, 2]
             m0 = kx[0, r] * nx + ky[0, r] * ny + lin_z[0] * nz
             m1 = kx[1, r] * nx + ky[1, r] * ny + lin_z[1] * nz
@@ -238,7 +238,8 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     o1 = kx[1, r] * px + ky[1, r] * py + (lin[2, 0] * s + lin[2, 1] * h + const[2])
     o2 = kx[2, r] * px + ky[2, r] * py + (lin[3, 0] * s + lin[3, 1] * h + const[3])
     o3 = kx[3, r] * px + ky[3, r] * py + (lin[4, 0] * s + lin[4, 1] * h + const[4])
-    gap, on, _ = _gear_gap(o0, o1, o2, o3, False, turn[r], sense[r], offset[r], gear)
+    theta = math.atan2(o1, o0)
+    gap, on, _ = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
     return gap, on and cells[cell] and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
 
 
