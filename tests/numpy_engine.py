@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact.engine import ContactEngine, EngineRows
+from gearopt.contact.samples import FieldSample
 from gearopt.flank import hermite_cells
 
 from . import numpy_zone
@@ -28,7 +29,7 @@ STENCIL = np.array(
 _WORK = threading.local()
 
 #: the engine's methods this module replaces
-METHODS = ("node_fields", "clearance_on_rows", "lowest_nodes", "refine")
+METHODS = ("sample", "clearance_on_rows", "refine")
 
 
 def install(monkeypatch) -> None:
@@ -268,6 +269,123 @@ def refine(self, side, phi, angle, s, h, f0, iterations=4, group=None):
         if need.any():
             f[need], _ = self.clearance_on_rows(every.subset(need), sh[:, need, None] + quarter)
     return best, sh[0], sh[1], edge
+
+
+def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
+    """``ContactEngine.sample`` as numpy ran it before
+    :func:`gearopt.contact.minima.sample_minima`: the clearance field at the nodes for rows
+    (side, phi, gear angle), minima refined on the rows ``refine`` selects; with ``near`` =
+    ``(side, phi, s, h)`` (gear angle 0), also :meth:`near` of those rows in the same
+    refinement: ``(sample, near)``."""
+    phi = np.atleast_1d(np.asarray(phi_rad, float))
+    side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
+    angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
+    n = len(phi)
+    field_, fac, rad = node_fields(self, side, phi, angle)
+    shape = (n,) + self.shape
+    field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
+    i, j = _argmin_nodes(field_)
+    rows = np.arange(len(phi))
+    f0 = field_[rows, i, j]
+    s = self.pinion_grid.face_mm[i]
+    h = self.pinion_grid.profile_mm[j]
+    edge = np.zeros(len(phi), bool)
+    rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
+    near_out = None
+    if near is not None and not rows.size:
+        near_out = self.near(*near)
+    elif rows.size == n:  # every row refined: no copies of the node fields
+        f0, s, h, edge, near_out = _refined(
+            self, side, field_, fac, phi, angle, f0, s, h, near=near, node_min=(i, j)
+        )
+    elif rows.size or near is not None:
+        f0, s, h = f0.copy(), s.copy(), h.copy()
+        f0[rows], s[rows], h[rows], edge[rows], near_out = _refined(
+            self,
+            side[rows],
+            field_[rows],
+            fac[rows],
+            phi[rows],
+            angle[rows],
+            f0[rows],
+            s[rows],
+            h[rows],
+            near=near,
+        )
+    out = FieldSample(
+        phi_rad=phi,
+        clearance_rad=field_,
+        normal_factor_mm=fac,
+        radius_mm=rad,
+        minimum_rad=f0,
+        contact_face_mm=s,
+        contact_profile_mm=h,
+        edge=edge,
+    )
+    return out if near is None else (out, near_out)
+
+
+def _refined(
+    self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None, node_min=None
+):
+    """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
+    Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
+    region (the pinion's lowest cells) lower than that by more than the edge tolerance
+    stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
+    refined alongside (as :meth:`near`); their results come last (None without).
+    ``node_min``: the rows' node minima ``(i, j)`` where known."""
+    n = len(phi)
+    flat = field_.reshape(n, -1)
+    pick = np.empty((n, min(candidates, flat.shape[1])), np.intp)
+    values = np.empty(pick.shape)
+    lowest_nodes(self, flat, np.array(side, np.intp), pick, values)
+    ci, cj = np.unravel_index(pick, self.shape)
+    ok = np.isfinite(values)
+    best = np.full(n, np.inf)
+    s_best, h_best = s.copy(), h.copy()
+    e_best = np.zeros(n, bool)
+    near_out = None
+    if ok.any() or near is not None:
+        rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
+        starts = (
+            side[rows],
+            phi[rows],
+            angle[rows],
+            self.pinion_grid.face_mm[ci[ok]],
+            self.pinion_grid.profile_mm[cj[ok]],
+            values[ok],
+        )
+        if near is None:
+            v, s_r, h_r, e_r = self.refine(*starts)
+        else:  # the near rows: a second group, started from their points
+            m = len(near[0])
+            extra = (near[0], near[1], np.zeros(m), near[2], near[3], np.full(m, np.nan))
+            group = np.repeat([0, 1], [rows.size, m])
+            joined = [np.concatenate(pair) for pair in zip(starts, extra, strict=True)]
+            out = self.refine(*joined, iterations=(4, 3), group=group)
+            near_out = tuple(a[rows.size :] for a in out)
+            v, s_r, h_r, e_r = (a[: rows.size] for a in out)
+        order = np.lexsort((v, rows))
+        rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
+        first = np.ones(rows.size, bool)  # each row's least (none where no node is)
+        first[1:] = rows[1:] != rows[:-1]
+        best[rows[first]] = v[first]
+        s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
+        e_best[rows[first]] = e_r[first]
+    rows = np.arange(n)
+    i, j = _argmin_nodes(field_) if node_min is None else node_min
+    tol = self.tol_um[side] * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
+    with np.errstate(invalid="ignore"):
+        low = np.isfinite(f0) & ~(best - f0 <= tol)
+    value = np.where(low, f0, best)
+    s_best, h_best = np.where(low, s, s_best), np.where(low, h, h_best)
+    return value, s_best, h_best, low | e_best, near_out
+
+
+def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
+    n = field_.shape[0]
+    flat = field_.reshape(n, -1).argmin(axis=1)
+    return np.unravel_index(flat, field_.shape[1:])
 
 
 def _differences() -> NDArray:

@@ -15,9 +15,9 @@ import ctypes
 import math
 
 import numpy as np
-from numpy.typing import NDArray
 
 from gearopt.contact import kernels as _kernels
+from gearopt.contact.minima import minima_pick, minima_starts
 from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells
@@ -176,6 +176,7 @@ class ContactEngine:
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
         tables = [f.node_tables for f in fields]
         self.ds, self.dh = tables[0]["cell_mm"]
+        self.cell = np.array([self.ds, self.dh])
         # node tables (all grid nodes; off-mask nodes are +inf in the fields)
         # the generated pinion nodes of each side, padded to one count with at least one more
         # (padding: the first generated node again, its result dropped); components stored
@@ -223,6 +224,7 @@ class ContactEngine:
         scale = np.array([f.node_factor_mm or 50.0 for f in fields])
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
+        self.tolerances = np.stack([self.tol_rad, self.tol_um])
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -511,76 +513,77 @@ class ContactEngine:
         _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 
-    def node_fields(self, side, phi, angle):
-        """The clearance, normal factor and R2 at every grid node for rows (side, phi, gear
-        angle), each ``(n, nodes)``: +inf, 0, 0 off the pinion's generated nodes
-        (:func:`gearopt.contact.kernels.node_fields`)."""
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
+        """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
+        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
+        also :meth:`near` of those rows in the same refinement: ``(sample, near)``. The node
+        fields, then the minima in compiled calls (:mod:`gearopt.contact.minima`)."""
+        phi = np.atleast_1d(np.asarray(phi_rad, float))
         n = len(phi)
-        rows = self.rows_of(side, phi, angle)
+        side = np.array(np.broadcast_to(np.asarray(side, np.intp), phi.shape))
+        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape)
+        m = 0
+        if near is not None:
+            n_side, n_phi, n_s, n_h = (np.atleast_1d(np.asarray(a)) for a in near)
+            m = len(n_phi)
+            n_side = np.array(np.broadcast_to(n_side, (m,)), np.intp)
+            side_all = np.concatenate([side, n_side])
+            phi_all = np.concatenate([phi, np.broadcast_to(np.asarray(n_phi, float), (m,))])
+            angle_all = np.concatenate([angle, np.zeros(m)])
+        else:
+            side_all, phi_all, angle_all = side, phi, angle
+        constants = self.rows_of(side_all, phi_all, angle_all).kernel_rows(n + m)
+        rows = tuple(np.ascontiguousarray(a[..., :n]) for a in constants)
+        near_rows = tuple(np.ascontiguousarray(a[..., n:]) for a in constants)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
+        gear, pinion, counts = self.kernel_tables
         _kernels.node_fields(
-            rows.kernel_rows(n),
-            np.array(side, np.intp),
-            self.kernel_tables[2],
+            rows,
+            side,
+            counts,
             self.node_index,
             self.node_xy,
             self.node_z,
             self.node_nxy,
             self.node_nz,
-            self.kernel_tables[0],
+            gear,
             out,
         )
-        return out[0], out[1], out[2]
-
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
-        """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
-        on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
-        also :meth:`near` of those rows in the same refinement: ``(sample, near)``."""
-        phi = np.atleast_1d(np.asarray(phi_rad, float))
-        side = np.broadcast_to(np.asarray(side, np.intp), phi.shape)
-        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape).copy()
-        n = len(phi)
-        field_, fac, rad = self.node_fields(side, phi, angle)
+        sh = np.empty((2, 0)) if near is None else np.stack([n_s, n_h]).astype(float)
+        point = np.empty((3, n))
+        at, take, origin, starts, s, h, best, caps, group, tol = minima_starts(
+            out[0],
+            side,
+            rows,
+            np.array(np.broadcast_to(np.asarray(refine, bool), phi.shape)),
+            self.refine_nodes,
+            2,
+            (near_rows, side_all[n:], np.ascontiguousarray(sh.reshape(2, m))),
+            near is not None,
+            self.tolerances,
+            (self.pinion_grid.face_mm, self.pinion_grid.profile_mm),
+            point,
+        )
+        flags = np.zeros(len(s), bool)
+        if len(s):
+            _kernels.refine(starts, s, h, best, caps, group, tol, self.cell, pinion, gear, flags)
+        edge = np.empty(n, bool)
+        minima_pick(out[1], side, at, take, origin, s, h, best, flags, self.tolerances, point, edge)
         shape = (n,) + self.shape
-        field_, fac, rad = field_.reshape(shape), fac.reshape(shape), rad.reshape(shape)
-        i, j = _argmin_nodes(field_)
-        rows = np.arange(len(phi))
-        f0 = field_[rows, i, j]
-        s = self.pinion_grid.face_mm[i]
-        h = self.pinion_grid.profile_mm[j]
-        edge = np.zeros(len(phi), bool)
-        rows = np.flatnonzero(np.broadcast_to(np.asarray(refine, bool), phi.shape))
-        near_out = None
-        if near is not None and not rows.size:
-            near_out = self.near(*near)
-        elif rows.size == n:  # every row refined: no copies of the node fields
-            f0, s, h, edge, near_out = self._refined(
-                side, field_, fac, phi, angle, f0, s, h, near=near, node_min=(i, j)
-            )
-        elif rows.size or near is not None:
-            f0, s, h = f0.copy(), s.copy(), h.copy()
-            f0[rows], s[rows], h[rows], edge[rows], near_out = self._refined(
-                side[rows],
-                field_[rows],
-                fac[rows],
-                phi[rows],
-                angle[rows],
-                f0[rows],
-                s[rows],
-                h[rows],
-                near=near,
-            )
-        out = FieldSample(
+        sample = FieldSample(
             phi_rad=phi,
-            clearance_rad=field_,
-            normal_factor_mm=fac,
-            radius_mm=rad,
-            minimum_rad=f0,
-            contact_face_mm=s,
-            contact_profile_mm=h,
+            clearance_rad=out[0].reshape(shape),
+            normal_factor_mm=out[1].reshape(shape),
+            radius_mm=out[2].reshape(shape),
+            minimum_rad=point[0],
+            contact_face_mm=point[1],
+            contact_profile_mm=point[2],
             edge=edge,
         )
-        return out if near is None else (out, near_out)
+        if near is None:
+            return sample
+        k = len(origin)
+        return sample, (best[k:], s[k:], h[k:], flags[k:])
 
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the
@@ -619,67 +622,6 @@ class ContactEngine:
         s = np.broadcast_to(np.asarray(face_mm, float), phi.shape).copy()
         h = np.broadcast_to(np.asarray(profile_mm, float), phi.shape).copy()
         return self.refine(side, phi, angle, s, h, None, iterations=3)
-
-    def lowest_nodes(self, flat, side, pick, values) -> None:
-        """The ``pick.shape[1]`` lowest refinable nodes of each row of ``flat`` (rows on
-        fields ``side``): their flat indices into ``pick`` and values into ``values``."""
-        _kernels.lowest_nodes(flat, self.refine_nodes, side, pick, values)
-
-    def _refined(
-        self, side, field_, fac, phi, angle, f0, s, h, candidates: int = 2, near=None, node_min=None
-    ):
-        """Refine the minimum from the ``candidates`` lowest refinable nodes (constrained
-        Newton, :meth:`refine`) and keep the least. A node minimum outside the refinable
-        region (the pinion's lowest cells) lower than that by more than the edge tolerance
-        stands as it is, flagged as edge contact. ``near`` rows ``(side, phi, s, h)`` are
-        refined alongside (as :meth:`near`); their results come last (None without).
-        ``node_min``: the rows' node minima ``(i, j)`` where known."""
-        n = len(phi)
-        flat = field_.reshape(n, -1)
-        pick = np.empty((n, min(candidates, flat.shape[1])), np.intp)
-        values = np.empty(pick.shape)
-        self.lowest_nodes(flat, np.array(side, np.intp), pick, values)
-        ci, cj = np.unravel_index(pick, self.shape)
-        ok = np.isfinite(values)
-        best = np.full(n, np.inf)
-        s_best, h_best = s.copy(), h.copy()
-        e_best = np.zeros(n, bool)
-        near_out = None
-        if ok.any() or near is not None:
-            rows = np.broadcast_to(np.arange(n)[:, None], ok.shape)[ok]
-            starts = (
-                side[rows],
-                phi[rows],
-                angle[rows],
-                self.pinion_grid.face_mm[ci[ok]],
-                self.pinion_grid.profile_mm[cj[ok]],
-                values[ok],
-            )
-            if near is None:
-                v, s_r, h_r, e_r = self.refine(*starts)
-            else:  # the near rows: a second group, started from their points
-                m = len(near[0])
-                extra = (near[0], near[1], np.zeros(m), near[2], near[3], np.full(m, np.nan))
-                group = np.repeat([0, 1], [rows.size, m])
-                joined = [np.concatenate(pair) for pair in zip(starts, extra, strict=True)]
-                out = self.refine(*joined, iterations=(4, 3), group=group)
-                near_out = tuple(a[rows.size :] for a in out)
-                v, s_r, h_r, e_r = (a[: rows.size] for a in out)
-            order = np.lexsort((v, rows))
-            rows, v, s_r, h_r, e_r = rows[order], v[order], s_r[order], h_r[order], e_r[order]
-            first = np.ones(rows.size, bool)  # each row's least (none where no node is)
-            first[1:] = rows[1:] != rows[:-1]
-            best[rows[first]] = v[first]
-            s_best[rows[first]], h_best[rows[first]] = s_r[first], h_r[first]
-            e_best[rows[first]] = e_r[first]
-        rows = np.arange(n)
-        i, j = _argmin_nodes(field_) if node_min is None else node_min
-        tol = self.tol_um[side] * 1e-3 / np.maximum(fac[rows, i, j], 1e-9)
-        with np.errstate(invalid="ignore"):
-            low = np.isfinite(f0) & ~(best - f0 <= tol)
-        value = np.where(low, f0, best)
-        s_best, h_best = np.where(low, s, s_best), np.where(low, h, h_best)
-        return value, s_best, h_best, low | e_best, near_out
 
     def refine(self, side, phi, angle, s, h, f0, iterations=4, group=None):
         """Constrained Newton steps on the clearance between the node grid's lines.
@@ -722,9 +664,3 @@ class ContactEngine:
             edge,
         )
         return best, s, h, edge
-
-
-def _argmin_nodes(field_: NDArray) -> tuple[NDArray, NDArray]:
-    n = field_.shape[0]
-    flat = field_.reshape(n, -1).argmin(axis=1)
-    return np.unravel_index(flat, field_.shape[1:])

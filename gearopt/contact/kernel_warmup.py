@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from gearopt.contact import kernels
+from gearopt.contact.minima import minima_pick, minima_starts
 
 __all__ = ["warm"]
 
@@ -75,3 +76,24 @@ def warm() -> None:
     kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     none = np.full(1, -1, ip)
     kernels.swept_exits(rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out)
+    one, flag = np.zeros((1, 1)), np.ones(1, np.bool_)
+    tolerances, grid = np.ones((2, 1)), (np.zeros(1), np.zeros(1))
+    near = (rows, side, np.zeros((2, 1)))
+    keep, point = flag.reshape(1, 1), np.empty((3, 1))
+    at, take, origin, *_ = minima_starts(
+        one, side, rows, flag, keep, 2, near, False, tolerances, grid, point
+    )
+    minima_pick(
+        one,
+        side,
+        at,
+        take,
+        origin,
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros(1),
+        flag,
+        tolerances,
+        np.zeros((3, 1)),
+        np.empty(1, np.bool_),
+    )

@@ -191,12 +191,15 @@ class SideCycle:
         # the unbroken run of interior samples around the least lag (the mesh centre), or the
         # longest run when the least lag is itself at an edge
         gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
-        runs = np.split(np.arange(len(v)), np.flatnonzero(np.diff(inner.astype(int))) + 1)
-        runs = [r for r in runs if inner[r[0]]]
+        # the runs [first, last] of equal flags; of the interior ones, the one holding the
+        # least lag, else the first longest
+        first = np.flatnonzero(np.diff(inner.astype(int))) + 1
+        last = np.append(first - 1, len(v) - 1).tolist()
+        first = [0] + first.tolist()
         centre = int(np.argmin(gs))
-        around = [r for r in runs if r[0] <= centre <= r[-1]]
-        run = around[0] if around else max(runs, key=len)
-        lo_k, hi_k = run[0], run[-1]
+        runs = [(a, b) for a, b in zip(first, last, strict=True) if inner[a]]
+        around = [r for r in runs if r[0] <= centre <= r[1]]
+        lo_k, hi_k = around[0] if around else max(runs, key=lambda r: r[1] - r[0])
         self.interval_flat = bool(np.ptp(gs[lo_k : hi_k + 1]) < FLAT_ARCSEC / ARCSEC)
         self.end_inside = np.array([v[lo_k], v[hi_k]])
         self.end_outside = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])

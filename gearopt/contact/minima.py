@@ -1,0 +1,212 @@
+"""The compiled tail of a clearance-field sample (numba; plain Python without it, as
+:mod:`gearopt.contact.kernels`): from the node fields to the refined minima in three calls.
+
+:meth:`gearopt.contact.engine.ContactEngine.sample` once did these steps array by array (the node
+minimum of each row, its lowest refinable nodes, the refinement of each from there, the least
+of them, the edge test against the node minimum), paying numpy's fixed cost per call on batches
+of a few dozen rows, three times per TCA. :func:`minima_starts` gathers the refinement's starts,
+:func:`gearopt.contact.kernels.refine` refines them and :func:`minima_pick` keeps each row's
+least: the same steps on the same inputs, so the results are the same to the bit. (The
+refinement stays a call of its own, and these two call no other kernel: a kernel called from
+another is compiled again into it, which would lengthen the first use's compile.)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gearopt.jit import ENABLED, compiled
+
+__all__ = ["ENABLED", "minima_pick", "minima_starts"]
+
+
+@compiled
+def minima_starts(
+    field, side, rows, refined, keep, candidates, near, with_near, tolerances, grid, out
+):
+    """The node minima of a sample's rows and the starts of their refinement.
+
+    Parameters
+    ----------
+    field
+        ``(n, nodes)`` the rows' node clearances.
+    side
+        ``(n,)`` each row's field.
+    rows
+        The rows' constants (as :func:`gearopt.contact.kernels.clearance_at` takes them).
+    refined
+        ``(n,)`` True where a row's minimum is refined.
+    keep
+        ``(sides, nodes)`` the refinable nodes.
+    candidates
+        How many of its lowest refinable nodes a row is refined from.
+    near
+        ``(constants, side, sh)``: rows refined from given points (gear angle 0), their
+        constants, fields and pinion grid coordinates ``(2, m)``; used only ``with_near``.
+    with_near
+        Whether there are near rows (else ``near`` is a placeholder).
+    tolerances
+        ``(2, sides)`` each field's refinement tolerance (rad) and edge tolerance (um).
+    grid
+        ``(face_mm, profile_mm)`` the pinion grid.
+    out
+        ``(3, n)`` out: the rows' node minima and their grid coordinates (face, profile).
+
+    Returns
+    -------
+    tuple
+        ``(at, take, origin, constants, s, t, best, caps, group, tol)``: each row's least node
+        (flat index), the refined rows, each start's row (the near rows' starts last, without
+        one), then :func:`gearopt.contact.kernels.refine`'s arguments (none to refine where
+        ``s`` is empty).
+    """
+    near_rows, near_side, near_sh = near
+    face, profile = grid
+    n, size = field.shape
+    n_p = profile.shape[0]
+    at = np.empty(n, np.intp)
+    chosen = 0
+    for r in range(n):  # numpy's argmin: the first least, or the first NaN
+        at[r] = 0
+        least = field[r, 0]
+        for g in range(1, size):
+            if least != least:
+                break
+            v = field[r, g]
+            if v < least or v != v:
+                least, at[r] = v, g
+        out[0, r] = field[r, at[r]]
+        out[1, r] = face[at[r] // n_p]
+        out[2, r] = profile[at[r] % n_p]
+        if refined[r]:
+            chosen += 1
+    m = near_side.shape[0] if with_near else 0
+    take = np.empty(chosen, np.intp)
+    q = 0
+    for r in range(n):
+        if refined[r]:
+            take[q] = r
+            q += 1
+    width = min(candidates, size)
+    pick = np.empty((chosen, width), np.intp)
+    values = np.empty((chosen, width))
+    for q in range(chosen):  # as gearopt.contact.kernels.lowest_nodes
+        r = take[q]
+        for c in range(width):
+            least = math.inf
+            node = 0
+            for g in range(size):
+                v = field[r, g]
+                if v < least and keep[side[r], g]:
+                    taken = False
+                    for e in range(c):
+                        taken = taken or pick[q, e] == g
+                    if not taken:
+                        least = v
+                        node = g
+            pick[q, c] = node
+            values[q, c] = least
+    starts = 0
+    for q in range(chosen):
+        for c in range(width):
+            if math.isfinite(values[q, c]):
+                starts += 1
+    k = starts + m
+    origin = np.empty(starts, np.intp)
+    s, t, best = np.empty(k), np.empty(k), np.empty(k)
+    tol = np.empty(k)
+    group = np.zeros(k, np.intp)
+    p = 0
+    for q in range(chosen):
+        r = take[q]
+        for c in range(width):
+            if math.isfinite(values[q, c]):
+                origin[p] = r
+                s[p] = face[pick[q, c] // n_p]
+                t[p] = profile[pick[q, c] % n_p]
+                best[p] = values[q, c]
+                tol[p] = tolerances[0, side[r]]
+                p += 1
+    # the near rows: a second group (alone, ContactEngine.near: one group of 3 steps)
+    for j in range(m):
+        s[starts + j], t[starts + j] = near_sh[0, j], near_sh[1, j]
+        best[starts + j] = np.nan
+        tol[starts + j] = tolerances[0, near_side[j]]
+        group[starts + j] = 1 if chosen else 0
+    if not chosen:
+        caps = np.array([3], np.intp)
+    elif with_near:
+        caps = np.array([4, 3], np.intp)
+    else:
+        caps = np.array([4], np.intp)
+    # the starts' row constants: their rows' then the near rows'
+    kx, ky, turn, sense, offset, pinion_offset = rows
+    n_kx, n_ky, n_turn, n_sense, n_offset, n_pinion_offset = near_rows
+    out_kx, out_ky = np.empty((4, k)), np.empty((4, k))
+    out_turn, out_sense = np.empty(k), np.empty(k)
+    out_offset, out_pinion_offset = np.empty(k, np.intp), np.empty(k, np.intp)
+    for q in range(k):
+        if q < starts:
+            r = origin[q]
+            for i in range(4):
+                out_kx[i, q], out_ky[i, q] = kx[i, r], ky[i, r]
+            out_turn[q], out_sense[q] = turn[r], sense[r]
+            out_offset[q], out_pinion_offset[q] = offset[r], pinion_offset[r]
+        else:
+            r = q - starts
+            for i in range(4):
+                out_kx[i, q], out_ky[i, q] = n_kx[i, r], n_ky[i, r]
+            out_turn[q], out_sense[q] = n_turn[r], n_sense[r]
+            out_offset[q], out_pinion_offset[q] = n_offset[r], n_pinion_offset[r]
+    constants = (out_kx, out_ky, out_turn, out_sense, out_offset, out_pinion_offset)
+    return at, take, origin, constants, s, t, best, caps, group, tol
+
+
+@compiled
+def minima_pick(factor, side, at, take, origin, s, t, best, flags, tolerances, out, edge):
+    """Each refined row's least start (the first of equals; NaN after any number), then the
+    edge test against its node minimum: a node minimum lower than that by more than the edge
+    tolerance stands, flagged as edge contact (as the engine's refinement did).
+
+    Parameters
+    ----------
+    factor
+        ``(n, nodes)`` the rows' node normal factors.
+    side
+        ``(n,)`` each row's field.
+    at, take, origin
+        As :func:`minima_starts` returned them.
+    s, t, best, flags
+        The starts refined (:func:`gearopt.contact.kernels.refine`): points, values, edge
+        flags.
+    tolerances
+        As :func:`minima_starts`'s.
+    out
+        ``(3, n)`` in: the node minima and their points; out: the rows' minima and contact
+        points (face, profile).
+    edge
+        ``(n,)`` out: the rows' edge flags.
+    """
+    edge[:] = False
+    starts = origin.shape[0]
+    p = 0
+    for q in range(take.shape[0]):
+        r = take[q]
+        value, ss, tt, flag = math.inf, out[1, r], out[2, r], False
+        first = True
+        while p < starts and origin[p] == r:
+            v = best[p]
+            if first or v < value or (value != value and v == v):
+                value, ss, tt, flag = v, s[p], t[p], flags[p]
+                first = False
+            p += 1
+        f0 = out[0, r]
+        fac = factor[r, at[r]]
+        scale = fac if (fac > 1e-9 or fac != fac) else 1e-9
+        limit = tolerances[1, side[r]] * 1e-3 / scale
+        low = math.isfinite(f0) and not (value - f0 <= limit)
+        if not low:
+            out[0, r], out[1, r], out[2, r] = value, ss, tt
+        edge[r] = low or flag
