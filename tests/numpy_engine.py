@@ -191,7 +191,7 @@ def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
 
 
 def lowest_nodes(self, flat, side, pick, values) -> None:
-    """``ContactEngine.lowest_nodes``."""
+    """The refinement's candidate nodes (:func:`gearopt.contact.minima.minima_starts`)."""
     n = len(flat)
     inner = np.where(self.refine_nodes[side], flat, np.inf)
     rows = np.arange(n)

@@ -65,9 +65,6 @@ def warm() -> None:
         gear,
         np.zeros(1, np.bool_),
     )
-    kernels.lowest_nodes(
-        np.zeros((1, 1)), np.ones((1, 1), np.bool_), side, np.empty((1, 1), ip), np.empty((1, 1))
-    )
     maker = (np.zeros((8, 2)), 0.0, 1.0, 1.0, 0, 0)
     kernels.interval_end(maker, 0.0, 0.0, 0.0, 0.01, 1, 1e-3, cell, pinion, gear, limits)
     zone = (np.zeros(1), np.zeros((1, 2, 2)), 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0)

@@ -10,8 +10,8 @@ time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares t
   pinion points given in the member frame (the loaded contact's patches);
 - :func:`clearance_at`: the clearance at pinion grid coordinates by the pinion's local
   interpolant, and whether the point is on both flanks and in a refinable pinion cell;
-- :func:`lowest_nodes`, :func:`refine`: the refinement's candidate nodes and its constrained
-  Newton steps;
+- :func:`refine`: the refinement's constrained Newton steps (its candidate nodes:
+  :mod:`gearopt.contact.minima`);
 - :func:`tangency`, :func:`interval_end`: the tangency point (the least clearance over the
   smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends).
 
@@ -34,7 +34,6 @@ __all__ = [
     "ENABLED",
     "clearance_at",
     "interval_end",
-    "lowest_nodes",
     "node_fields",
     "point_fields",
     "refine",
@@ -545,31 +544,6 @@ def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generat
         else:
             b = m
     return True, a, b, s, t
-
-
-@compiled
-def lowest_nodes(field, keep, side, pick, values):
-    """The lowest nodes of each row of ``field`` (``(n, nodes)``) among its side's refinable
-    nodes (``keep[side[r]]``), as many as ``pick`` has columns, in ascending order (ties: the
-    first node): their indices into ``pick``, their values into ``values`` (+inf, node 0, where
-    there are no more)."""
-    n, size = field.shape
-    for r in range(n):
-        k = side[r]
-        for c in range(pick.shape[1]):
-            best = math.inf
-            at = 0
-            for g in range(size):
-                v = field[r, g]
-                if v < best and keep[k, g]:
-                    taken = False
-                    for q in range(c):
-                        taken = taken or pick[r, q] == g
-                    if not taken:
-                        best = v
-                        at = g
-            pick[r, c] = at
-            values[r, c] = best
 
 
 @compiled

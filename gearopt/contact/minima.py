@@ -92,7 +92,7 @@ def minima_starts(
     width = min(candidates, size)
     pick = np.empty((chosen, width), np.intp)
     values = np.empty((chosen, width))
-    for q in range(chosen):  # as gearopt.contact.kernels.lowest_nodes
+    for q in range(chosen):  # each row's ``width`` least refinable nodes, none twice
         r = take[q]
         for c in range(width):
             least = math.inf
