@@ -483,10 +483,16 @@ class ContactEngine:
         generated cells rather than the refinable ones (:func:`node_tables`)."""
         n = len(phi)
         rows = self.rows_of(np.asarray(side, np.intp), np.asarray(phi, float), 0.0)
+        return (rows.kernel_rows(n), *self.cell_tables(generated))
+
+    def cell_tables(self, generated=False):
+        """``(pinion, gear)``: the cell tables of the compiled point evaluations, the pinion's
+        valid on its refinable cells or, with ``generated``, on its generated cells
+        (:func:`node_tables`)."""
         gear, pinion, _ = self.kernel_tables
         if generated:
             pinion = (*pinion[:-1], self.pinion_generated)
-        return rows.kernel_rows(n), pinion, gear
+        return pinion, gear
 
     def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
         """:meth:`at` on known rows by :func:`gearopt.contact.kernels.clearance_at`: rows
@@ -507,10 +513,7 @@ class ContactEngine:
             ).kernel_rows(n)
         points = np.array(np.broadcast_to(sh, (2,) + shape)).reshape(2, n, m)
         delta, valid = np.empty((n, m)), np.empty((n, m), bool)
-        gear, pinion, _ = self.kernel_tables
-        if generated:
-            pinion = (*pinion[:-1], self.pinion_generated)
-        _kernels.clearance_at(constants, points, pinion, gear, delta, valid)
+        _kernels.clearance_at(constants, points, *self.cell_tables(generated), delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 
     def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
