@@ -279,6 +279,37 @@ class MeshCycle:
             )
             for k, (u, ids, inv, start, count) in enumerate(windows)
         ]
+        self.classify()
+
+    def classify(self) -> None:
+        """Tell the point contacts among the sides whose lag is flat over their interior
+        contacts (:attr:`SideCycle.interval_flat`) from the line contacts: a point contact's
+        marking-compound zone at the middle of its interior samples closes on the flanks along
+        its major axis (:meth:`gearopt.mesh.zone.Zones.closed`), a line contact's runs to their
+        edges. Sets :attr:`SideCycle.point_contact`, all sides in one evaluation."""
+        flat = [s for s in self.sides if s.interval_flat and s.centre_row is not None]
+        if not flat:
+            return
+        kind = "normal_factor_mm" if self.separation == "normal" else "radius_mm"
+        rows = [s.centre_row for s in flat]
+        samples = [s.interval_sample for s in flat]
+        zone_rows = ZoneRows(
+            side=np.array([s.index for s in flat], np.intp),
+            phi_rad=np.array([x.phi_rad[r] for x, r in zip(samples, rows, strict=True)]),
+            lag_rad=np.array([x.minimum_rad[r] for x, r in zip(samples, rows, strict=True)]),
+            factor_mm=np.stack([getattr(x, kind)[r] for x, r in zip(samples, rows, strict=True)]),
+        )
+        pinion = self.fields[0].pinion
+        zones = Zones(
+            self.joint, pinion.face_mm, pinion.profile_mm, zone_rows, self.compound_um * 1e-3
+        )
+        closed = zones.closed(
+            np.arange(len(flat)),
+            np.array([x.contact_face_mm[r] for x, r in zip(samples, rows, strict=True)]),
+            np.array([x.contact_profile_mm[r] for x, r in zip(samples, rows, strict=True)]),
+        )
+        for side, point in zip(flat, closed.tolist(), strict=True):
+            side.point_contact = point
 
     def beyond_requests(self) -> list[tuple[int, float]]:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the

@@ -86,6 +86,12 @@ class SideCycle:
         True once ``interval`` is final.
     interval_flat
         True where the pair's lag is flat over its interior samples (:data:`FLAT_ARCSEC`).
+    centre_row
+        The row of ``interval_sample`` in the middle of the interior run (None without one).
+    point_contact
+        True where a flat lag is a point contact's (no TE, as seed 003's case A), not a line
+        contact's: set by the driver before the first extra positions
+        (:meth:`gearopt.mesh.cycle.MeshCycle.classify`).
     end_inside, end_outside
         ``(2,)`` the ends' brackets (start, end): the last point in interior contact and the
         first beyond; None without interior contact.
@@ -150,6 +156,8 @@ class SideCycle:
         self.interval: tuple[float, float] | None = None
         self.interval_done = False
         self.interval_flat = False
+        self.centre_row: int | None = None
+        self.point_contact = False
         self.end_inside: NDArray | None = None
         self.end_outside: NDArray | None = None
         self.end_open: NDArray | None = None
@@ -201,6 +209,7 @@ class SideCycle:
         around = [r for r in runs if r[0] <= centre <= r[1]]
         lo_k, hi_k = around[0] if around else max(runs, key=lambda r: r[1] - r[0])
         self.interval_flat = bool(np.ptp(gs[lo_k : hi_k + 1]) < FLAT_ARCSEC / ARCSEC)
+        self.centre_row = int(order[(lo_k + hi_k) // 2])
         self.end_inside = np.array([v[lo_k], v[hi_k]])
         self.end_outside = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])
         self.end_open = np.array([lo_k > 0, hi_k < len(v) - 1])
@@ -247,11 +256,14 @@ class SideCycle:
         clearance beyond it falls by the edge tolerance (a path meeting the boundary at a
         grazing angle to the contact ellipse), and leads it where the tangency point lies in
         the pinion's lowest generated cells, which the engine's refinement does not enter. Kept
-        as it is where Newton's method fails, and where the pair's lag is flat over its
-        interior contacts (:data:`FLAT_ARCSEC`: a line contact, where the tangency point is not
-        unique, or nearly one).
+        as it is where Newton's method fails, and for a line contact (a flat lag,
+        :data:`FLAT_ARCSEC`, whose zone does not close on the flanks: ``point_contact``), where
+        the tangency point is not unique and its solve converges in the interpolants' error. A
+        flat lag alone does not make a line contact: a point contact without TE (seed 003's
+        case A) has a unique tangency point, which leaves the flanks where its path meets their
+        boundary, which the edge flag brackets only to the grid's cells.
         """
-        if self.interval_flat:
+        if self.interval_flat and not self.point_contact:
             return
         a, b = float(self.end_inside[e]), float(self.end_outside[e])
         start = (float(self.end_face[e]), float(self.end_profile[e]))
@@ -366,8 +378,9 @@ class SideCycle:
 
     def extras_due(self) -> bool:
         """Whether the extra positions can be evaluated: the hand-over is settled or guessed
-        from smooth lags, or (no hand-over) the contact interval is known."""
-        if self.ho is None:
+        from smooth lags, or (no hand-over, or a point contact's flat hand-over: M is then
+        centred on it) the contact interval is known."""
+        if self.ho is None or (self.ho.flat and self.point_contact and not self.interval_done):
             return self.interval_done
         return self.ho.done or self.ho.mode == "fit"
 
@@ -419,6 +432,10 @@ class SideCycle:
             self.g_hand = float(np.max(self.g.min(axis=1)))
         v_star, pitch = self.v_star, self.pitch
         v_mid = v_star - 0.5 * pitch
+        if self.ho is not None and self.ho.flat and self.point_contact:
+            # a point contact without TE: its hand-over lies in noise, M's position is the
+            # middle of the contact interval (whose ends are solved, not noise)
+            v_mid = 0.5 * (self.interval[0] + self.interval[1])
         dv = 0.25 * self.step
         return [v_star, v_star - pitch, self.peak_guess(), v_mid, v_mid - dv, v_mid + dv]
 

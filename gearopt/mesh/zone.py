@@ -51,6 +51,7 @@ __all__ = [
     "SCAN",
     "SPREAD",
     "STATIONS",
+    "VALLEY",
     "ZOOM",
     "ZoneRows",
     "Zones",
@@ -73,6 +74,8 @@ NEAR = np.concatenate([[0.0], np.geomspace(1e-3, 1.0, 31)])
 SPREAD = np.linspace(0.0, 1.0, 32)
 #: the most stations of :meth:`Zones.outline` along the path
 STATIONS = 12
+#: samples across a zone's major axis at each station of :meth:`Zones.closed` (over the grid)
+VALLEY = 49
 
 _ZOOM_FRACTIONS = np.linspace(0.0, 1.0, ZOOM)
 _RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
@@ -179,6 +182,58 @@ class Zones:
         # across it
         across = 0.5 * np.arctan2(2.0 * c[:, 3], c[:, 2] - c[:, 4])
         return np.stack([-np.sin(across), np.cos(across)], axis=1)
+
+    def closed(self, r, face_mm, profile_mm) -> NDArray:
+        """``(K,)`` True where the zone of row ``r`` around its contact point closes on the
+        flanks along its valley both ways: a point contact, not a line contact.
+
+        The separation's valley runs from the contact point along the major axis (:meth:`axes`,
+        the quadratic form's least curvature kappa): the least separation across it rises as
+        kappa t^2 / 2 at a distance t. A point contact's zone (seed 003 section 5's contact
+        ellipse) ends where that rise reaches the compound; a line contact's kappa is zero, its
+        valley the contact line, on which the separation is the interpolants' error (some
+        0.01 um, far below any compound) up to the flanks' edges, however the line curves.
+
+        Stations at :data:`SPREAD` fractions of the way to the grid's edge along the major axis
+        either way; at each, the least separation across the axis (:data:`VALLEY` samples over
+        the grid, the parabola through the least and its neighbours). A way closes where a
+        station's least exceeds the compound before the valley leaves the flanks (the least
+        across at the end of the samples on the flanks, or none on them). Measured on the
+        zone's scale, not the grid's.
+        """
+        r = np.asarray(r, np.intp)
+        k = len(r)
+        face_mm, profile_mm = np.asarray(face_mm, float), np.asarray(profile_mm, float)
+        major = self.axes(r, face_mm, profile_mm)
+        origins = np.tile(np.stack([face_mm, profile_mm], axis=1), (2, 1))
+        directions = np.concatenate([major, -major])
+        tau = self.to_edge(origins, directions)[:, None] * SPREAD[None, 1:]  # (2K, n)
+        stations = origins[:, None, :] + tau[..., None] * directions[:, None, :]
+        across = np.stack([-directions[:, 1], directions[:, 0]], axis=1)
+        n = tau.shape[1]
+        flat_st = stations.reshape(-1, 2)
+        flat_ac = np.repeat(across, n, axis=0)
+        low = -self.to_edge(flat_st, -flat_ac)
+        high = self.to_edge(flat_st, flat_ac)
+        offsets = low[:, None] + (high - low)[:, None] * np.linspace(0.0, 1.0, VALLEY)[None, :]
+        s = flat_st[:, :1] + offsets * flat_ac[:, :1]
+        h = flat_st[:, 1:] + offsets * flat_ac[:, 1:]
+        sep = self.separation(np.repeat(np.tile(r, 2), n), s, h)  # (2K n, VALLEY)
+        on = np.isfinite(sep)
+        j = np.argmin(np.where(on, sep, np.inf), axis=1)
+        rows = np.arange(len(j))
+        jm, jp = np.maximum(j - 1, 0), np.minimum(j + 1, VALLEY - 1)
+        inside = on[rows, j] & (j > 0) & (j < VALLEY - 1) & on[rows, jm] & on[rows, jp]
+        y0, ym, yp = sep[rows, j], sep[rows, jm], sep[rows, jp]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            curvature = ym - 2.0 * y0 + yp
+            least = np.where(curvature > 0.0, y0 - (yp - ym) ** 2 / (8.0 * curvature), y0)
+        inside, least = inside.reshape(-1, n), least.reshape(-1, n)
+        above = inside & (least > self.compound_mm)
+        first_out = np.where((~inside).any(axis=1), np.argmax(~inside, axis=1), n)
+        first_above = np.where(above.any(axis=1), np.argmax(above, axis=1), n)
+        closes = first_above < first_out
+        return closes[:k] & closes[k:]
 
     def exits(self, ray, r, origins, directions, reach) -> NDArray:
         """How far rays leave the union of zones.
