@@ -496,6 +496,7 @@ class MeshCycle:
                 x["pattern_position"],
                 major[k, 0] + 1.0,
                 x["interval"],
+                tangency=self.sides[k].point_contact,
             )
             for k, x in enumerate(lines)
         ]
@@ -520,9 +521,9 @@ class MeshCycle:
         return out
 
 
-def _outline(zones: Zones, corner, *args) -> NDArray:
+def _outline(zones: Zones, corner, *args, **kwargs) -> NDArray:
     """:meth:`gearopt.mesh.zone.Zones.outline` in pattern coordinates."""
-    return zones.outline(*args) - corner
+    return zones.outline(*args, **kwargs) - corner
 
 
 def tooth_contact(

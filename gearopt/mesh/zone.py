@@ -170,18 +170,47 @@ class Zones:
         sep = (delta - self.rows.lag_rad[r][:, None]) * self.factor(r, s, h)
         return np.where(valid, sep, np.inf)
 
+    def quadratic(self, r, face_mm, profile_mm) -> NDArray:
+        """``(K, 5)`` the clearance's local quadratic form about points ``(face_mm,
+        profile_mm)`` of rows ``r``: ``(g_s, g_h, H_ss, H_sh, H_hh)`` (rad per mm, per mm^2),
+        fitted on a ring of radius :data:`RING_MM` (least squares)."""
+        face_mm, profile_mm = np.asarray(face_mm, float), np.asarray(profile_mm, float)
+        s = np.concatenate([face_mm[:, None], face_mm[:, None] + _RING[:, 0]], 1)
+        h = np.concatenate([profile_mm[:, None], profile_mm[:, None] + _RING[:, 1]], 1)
+        delta, _ = self.clearance(np.asarray(r, np.intp), s, h)
+        return (delta[:, 1:] - delta[:, :1]) @ _RING_FIT.T
+
     def axes(self, r, face_mm, profile_mm) -> NDArray:
         """``(K, 2)`` unit vectors (face, profile) of the major axes of the zones of rows
         ``r`` at their contact points: the direction of least curvature of the clearance's
-        quadratic form fitted on a ring of radius :data:`RING_MM`."""
-        s = np.concatenate([np.asarray(face_mm)[:, None], face_mm[:, None] + _RING[:, 0]], 1)
-        h = np.concatenate([np.asarray(profile_mm)[:, None], profile_mm[:, None] + _RING[:, 1]], 1)
-        delta, _ = self.clearance(np.asarray(r), s, h)
-        c = (delta[:, 1:] - delta[:, :1]) @ _RING_FIT.T
+        quadratic form (:meth:`quadratic`)."""
+        c = self.quadratic(r, face_mm, profile_mm)
         # the largest curvature's direction, 0.5 atan2(2 H_sh, H_ss - H_hh); the major axis
         # across it
         across = 0.5 * np.arctan2(2.0 * c[:, 3], c[:, 2] - c[:, 4])
         return np.stack([-np.sin(across), np.cos(across)], axis=1)
+
+    def tangency_points(self, r, contact_mm, steps: int = 4) -> NDArray:
+        """``(K, 2)`` the tangency points of rows ``r`` (the clearance's minimum on the
+        flanks' smooth extension, Litvin's: :func:`gearopt.contact.kernels.tangency`) from the
+        contact points ``contact_mm`` ``(K, 2)``: Newton's steps on the quadratic form
+        (:meth:`quadratic`), where it is positive definite (a point contact's unique minimum),
+        up to two mm each. A point that ends off the flanks keeps its contact point. The
+        sampled minima stop at the engine's refinement margin above the generated boundary
+        (two cells: grid-dependent); the tangency point does not."""
+        r = np.asarray(r, np.intp)
+        x = np.array(contact_mm, float)
+        for _ in range(steps):
+            g_s, g_h, h_ss, h_sh, h_hh = self.quadratic(r, x[:, 0], x[:, 1]).T
+            det = h_ss * h_hh - h_sh * h_sh
+            ok = (h_ss > 0.0) & (det > 0.0)
+            det = np.where(ok, det, 1.0)
+            step = -np.stack([h_hh * g_s - h_sh * g_h, h_ss * g_h - h_sh * g_s], 1) / det[:, None]
+            length = np.hypot(step[:, 0], step[:, 1])
+            step *= np.minimum(1.0, 2.0 / np.maximum(length, 1e-300))[:, None]
+            x = np.where(ok[:, None], x + step, x)
+        _, valid = self.clearance(r, x[:, :1], x[:, 1:])
+        return np.where(valid, x, contact_mm)
 
     def closed(self, r, face_mm, profile_mm) -> NDArray:
         """``(K,)`` True where the zone of row ``r`` around its contact point closes on the
@@ -328,7 +357,9 @@ class Zones:
         )
         return out
 
-    def outline(self, rows, contact_mm, u_rad, pair, position, reach_mm, interval) -> NDArray:
+    def outline(
+        self, rows, contact_mm, u_rad, pair, position, reach_mm, interval, *, tangency=False
+    ) -> NDArray:
         """The outline of the pattern one side's zones sweep, on the refined field.
 
         Stations: the contact points of the rows inside their own zones within the contact
@@ -354,6 +385,10 @@ class Zones:
             How far along the path a row's zone may reach a station.
         interval
             ``(start, end)`` the contact interval (relative rotations).
+        tangency
+            True to put the stations on the rows' tangency points (:meth:`tangency_points`;
+            a point contact's): the sampled contact point of a position whose tangency point
+            lies in the lowest generated cells stops at the engine's refinement margin.
 
         Returns
         -------
@@ -376,6 +411,8 @@ class Zones:
         if station.size < 2:
             return np.zeros((0, 2))
         c = contact[station]
+        if tangency:
+            c = self.tangency_points(rows[station], c)
         tangent = np.gradient(c, axis=0)
         tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
         across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
