@@ -285,31 +285,32 @@ class MeshCycle:
         """Tell the point contacts among the sides whose lag is flat over their interior
         contacts (:attr:`SideCycle.interval_flat`) from the line contacts: a point contact's
         marking-compound zone at the middle of its interior samples closes on the flanks along
-        its major axis (:meth:`gearopt.mesh.zone.Zones.closed`), a line contact's runs to their
+        its valley (:meth:`gearopt.mesh.zone.Zones.closed`), a line contact's runs to their
         edges. Sets :attr:`SideCycle.point_contact`, all sides in one evaluation."""
         flat = [s for s in self.sides if s.interval_flat and s.centre_row is not None]
         if not flat:
             return
-        kind = "normal_factor_mm" if self.separation == "normal" else "radius_mm"
-        rows = [s.centre_row for s in flat]
-        samples = [s.interval_sample for s in flat]
-        zone_rows = ZoneRows(
-            side=np.array([s.index for s in flat], np.intp),
-            phi_rad=np.array([x.phi_rad[r] for x, r in zip(samples, rows, strict=True)]),
-            lag_rad=np.array([x.minimum_rad[r] for x, r in zip(samples, rows, strict=True)]),
-            factor_mm=np.stack([getattr(x, kind)[r] for x, r in zip(samples, rows, strict=True)]),
-        )
-        pinion = self.fields[0].pinion
-        zones = Zones(
-            self.joint, pinion.face_mm, pinion.profile_mm, zone_rows, self.compound_um * 1e-3
-        )
-        closed = zones.closed(
-            np.arange(len(flat)),
-            np.array([x.contact_face_mm[r] for x, r in zip(samples, rows, strict=True)]),
-            np.array([x.contact_profile_mm[r] for x, r in zip(samples, rows, strict=True)]),
-        )
+        zones, contact = self.centre_zones(flat)
+        closed = zones.closed(np.arange(len(flat)), contact[:, 0], contact[:, 1])
         for side, point in zip(flat, closed.tolist(), strict=True):
             side.point_contact = point
+
+    def centre_zones(self, sides) -> tuple[Zones, NDArray]:
+        """The zones (:class:`gearopt.mesh.zone.Zones`, row k the k-th side's) at the middle
+        of the sides' interior samples (:attr:`SideCycle.centre_row`) and their contact points
+        ``(K, 2)``."""
+        kind = "normal_factor_mm" if self.separation == "normal" else "radius_mm"
+        samples = [(s.interval_sample, s.centre_row) for s in sides]
+        rows = ZoneRows(
+            side=np.array([s.index for s in sides], np.intp),
+            phi_rad=np.array([x.phi_rad[r] for x, r in samples]),
+            lag_rad=np.array([x.minimum_rad[r] for x, r in samples]),
+            factor_mm=np.stack([getattr(x, kind)[r] for x, r in samples]),
+        )
+        pinion = self.fields[0].pinion
+        contact = np.array([[x.contact_face_mm[r], x.contact_profile_mm[r]] for x, r in samples])
+        zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
+        return zones, contact
 
     def beyond_requests(self) -> list[tuple[int, float]]:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the

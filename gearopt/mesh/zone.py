@@ -214,39 +214,56 @@ class Zones:
 
     def closed(self, r, face_mm, profile_mm) -> NDArray:
         """``(K,)`` True where the zone of row ``r`` around its contact point closes on the
-        flanks along its valley both ways: a point contact, not a line contact.
+        flanks along its valley both ways (:meth:`valley`): a point contact, not a line
+        contact.
 
         The separation's valley runs from the contact point along the major axis (:meth:`axes`,
         the quadratic form's least curvature kappa): the least separation across it rises as
         kappa t^2 / 2 at a distance t. A point contact's zone (seed 003 section 5's contact
         ellipse) ends where that rise reaches the compound; a line contact's kappa is zero, its
         valley the contact line, on which the separation is the interpolants' error (some
-        0.01 um, far below any compound) up to the flanks' edges, however the line curves.
-
-        Stations at :data:`SPREAD` fractions of the way to the grid's edge along the major axis
-        either way; at each, the least separation across the axis (:data:`VALLEY` samples over
-        the grid, the parabola through the least and its neighbours). A way closes where a
-        station's least exceeds the compound before the valley leaves the flanks (the least
-        across at the end of the samples on the flanks, or none on them). Measured on the
-        zone's scale, not the grid's.
+        0.01 um, far below any compound) up to the flanks' edges, however the line curves. A
+        way closes where a station's least separation exceeds the compound before the valley
+        leaves the flanks. Measured on the zone's scale, not the grid's.
         """
-        r = np.asarray(r, np.intp)
-        k = len(r)
-        face_mm, profile_mm = np.asarray(face_mm, float), np.asarray(profile_mm, float)
+        k = len(np.atleast_1d(r))
+        _, least, inside = self.valley(r, face_mm, profile_mm)
+        n = least.shape[1]
+        above = inside & (least > self.compound_mm)
+        first_out = np.where((~inside).any(axis=1), np.argmax(~inside, axis=1), n)
+        first_above = np.where(above.any(axis=1), np.argmax(above, axis=1), n)
+        closes = first_above < first_out
+        return closes[:k] & closes[k:]
+
+    def valley(self, r, face_mm, profile_mm) -> tuple[NDArray, NDArray, NDArray]:
+        """The valley of the separation of rows ``r`` from their contact points along the
+        major axes (:meth:`axes`) either way.
+
+        Stations at :data:`SPREAD` fractions of the way to the grid's edge along the axis; at
+        each, the least separation across it: :data:`VALLEY` samples over the grid, the
+        parabola through the least and its neighbours.
+
+        Returns
+        -------
+        tuple of NDArray
+            ``(distance_mm, least_mm, inside)``, each ``(2K, n)``: rows ``0..K-1`` along the
+            major axes, ``K..2K-1`` the other way; ``inside`` False where the least is not
+            between samples on the flanks (the valley is off them there).
+        """
+        r = np.atleast_1d(np.asarray(r, np.intp))
+        face_mm, profile_mm = np.atleast_1d(face_mm), np.atleast_1d(profile_mm)
         major = self.axes(r, face_mm, profile_mm)
-        origins = np.tile(np.stack([face_mm, profile_mm], axis=1), (2, 1))
+        origins = np.tile(np.stack([face_mm, profile_mm], axis=1).astype(float), (2, 1))
         directions = np.concatenate([major, -major])
         tau = self.to_edge(origins, directions)[:, None] * SPREAD[None, 1:]  # (2K, n)
-        stations = origins[:, None, :] + tau[..., None] * directions[:, None, :]
-        across = np.stack([-directions[:, 1], directions[:, 0]], axis=1)
         n = tau.shape[1]
-        flat_st = stations.reshape(-1, 2)
-        flat_ac = np.repeat(across, n, axis=0)
-        low = -self.to_edge(flat_st, -flat_ac)
-        high = self.to_edge(flat_st, flat_ac)
+        stations = (origins[:, None, :] + tau[..., None] * directions[:, None, :]).reshape(-1, 2)
+        across = np.repeat(np.stack([-directions[:, 1], directions[:, 0]], axis=1), n, axis=0)
+        low = -self.to_edge(stations, -across)
+        high = self.to_edge(stations, across)
         offsets = low[:, None] + (high - low)[:, None] * np.linspace(0.0, 1.0, VALLEY)[None, :]
-        s = flat_st[:, :1] + offsets * flat_ac[:, :1]
-        h = flat_st[:, 1:] + offsets * flat_ac[:, 1:]
+        s = stations[:, :1] + offsets * across[:, :1]
+        h = stations[:, 1:] + offsets * across[:, 1:]
         sep = self.separation(np.repeat(np.tile(r, 2), n), s, h)  # (2K n, VALLEY)
         on = np.isfinite(sep)
         j = np.argmin(np.where(on, sep, np.inf), axis=1)
@@ -257,12 +274,7 @@ class Zones:
         with np.errstate(invalid="ignore", divide="ignore"):
             curvature = ym - 2.0 * y0 + yp
             least = np.where(curvature > 0.0, y0 - (yp - ym) ** 2 / (8.0 * curvature), y0)
-        inside, least = inside.reshape(-1, n), least.reshape(-1, n)
-        above = inside & (least > self.compound_mm)
-        first_out = np.where((~inside).any(axis=1), np.argmax(~inside, axis=1), n)
-        first_above = np.where(above.any(axis=1), np.argmax(above, axis=1), n)
-        closes = first_above < first_out
-        return closes[:k] & closes[k:]
+        return tau, np.where(inside, least, np.nan).reshape(-1, n), inside.reshape(-1, n)
 
     def exits(self, ray, r, origins, directions, reach) -> NDArray:
         """How far rays leave the union of zones.
