@@ -51,14 +51,10 @@ FIGURES = (
 #: then carried the least clearance of line contacts (0.12 arcsec TE on the conjugate Table 3
 #: pair): the refinement keeps two cells above the lowest generated nodes
 #: (gearopt.contact.engine.node_tables), the zones and the interval's ends reach the boundary.
-#: Case A's lag is flat (no TE): its hand-over lies in noise (M's position midway between
-#: hand-overs moves: M's profile coordinate 7.39 / 6.85 mm) and the contact interval's ends
-#: stay as the edge flag brackets them (bias -1.49 / -0.25 mm, contact ratio 1.275 / 1.375),
-#: since a flat lag is taken for a line contact. Its tangency point is unique (the same at
-#: both grids to 1e-3 mm): solving the ends on it and centring M on the interval read M
-#: (26.387, 7.639) / (26.385, 7.639), bias -2.042 / -2.045, contact ratio 1.3209 / 1.3207, but
-#: moved the conjugate face-milled pair's contact ratio 1.975 -> 1.930 (a true line contact
-#: whose tangency solve converges in noise): kept until the two are told apart.
+#: Case A's lag is flat (no TE) but its contact is a point's (gearopt.mesh.zone.Zones.closed,
+#: tests/test_point_contact.py): its interval's ends are solved on the tangency point and M is
+#: centred on the interval, M (26.387, 7.639) / (26.385, 7.639), bias -2.042 / -2.045, contact
+#: ratio 1.3209 / 1.3207 (read as a line contact: 7.39 / 6.85, -1.49 / -0.25, 1.275 / 1.375).
 GAPS = {
     ("section 5.3", "drive", "contact_ratio"),
 }
@@ -112,10 +108,11 @@ def test_the_default_grid_is_the_analysis_default():
     assert list(options.grid.shape) == [25, 21]
 
 
-#: the outline's known gap (measured, Hausdorff distance default / 81 x 161): case A's stations
-#: run over its contact interval, whose ends move with the grid (GAPS), and its pattern ends
-#: along the path on the flank's top and root edges across a 20 mm band, where the single end
-#: vertex cuts a corner (1.77 mm; 0.35 mm with the interval's ends solved)
+#: the outline's known gaps (Hausdorff distance default / 81 x 161): none. Case A's read 1.77 mm,
+#: its interval's ends solved or not: its first station's sampled minimum is held at the
+#: engine's refinement margin at the default grid, which turned the path's direction there by
+#: some 40 degrees; 0.009 mm (areas 189.125 / 189.134 mm^2) with a point contact's stations on
+#: its tangency points (gearopt.mesh.zone.Zones.tangency_points)
 OUTLINE_GAPS: set = set()
 
 

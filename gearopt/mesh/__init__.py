@@ -41,6 +41,17 @@ Definitions used by the outputs:
   flanks, but for line contact; the carrying cycle's ends when the contact never leaves the
   flanks' interior); ``center_offset_mm`` = M minus the flank centre C (the mean cone
   distance, mid working depth: h = (a1 - a2) / 2 with a the mean addenda);
+- a flat TE (the lag within 0.1 arcsec over the interior contacts) is a line contact's or a
+  point contact's whose contact points stay on one conjugate line (seed 003 section 7.1, case
+  A), told apart by the marking compound's zone at the middle of the contact interval: a point
+  contact's closes on the flanks along its valley, where the least separation across the
+  major axis rises as half the least curvature times the distance squared; a line contact's
+  valley is its contact line, the separation on it the interpolants' error, far below any
+  compound (:meth:`gearopt.mesh.zone.Zones.closed`). A point contact's interval ends are the
+  tangency point's exits like any other's, M's position is the middle of the contact
+  interval (its hand-overs lie in noise) and the outline's stations are its tangency points
+  (:meth:`gearopt.mesh.zone.Zones.tangency_points`); a line contact, whose tangency point is
+  not unique, keeps the ends the edge flag brackets and M midway between hand-overs;
 - the zones and the tangency point's exit end at the pinion's generated boundary, continuous
   across the grid (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`: the envelope's fold
   solved per face column, 0.3 mm above it, or the blade tip's line), not at its nodes; the

@@ -24,6 +24,10 @@ that they converge with the grid instead of moving with its nodes.
 - The pattern's outline (:meth:`Zones.outline`): rays across the path from the contact points
   of the positions inside the contact interval (at most :data:`STATIONS`), and along it from
   the first and the last, run to the pattern's edge as the width's.
+- A point contact's outline stations are its tangency points (:meth:`Zones.tangency_points`):
+  the sampled minima stop at the engine's refinement margin above the generated boundary.
+- Point contact or line contact (:meth:`Zones.closed`): whether the zone closes on the flanks
+  along its valley (:meth:`Zones.valley`), for a flat lag, which either can have.
 - The zones end at the pinion's generated boundary, continuous across the grid (the
   evaluations' ``generated`` tables, :func:`gearopt.contact.engine.node_tables`: the
   envelope's fold solved per face column), not at the nodes or the refinement's margin.
