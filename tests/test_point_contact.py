@@ -24,15 +24,12 @@ def _cycle(name: str, conditions: dict, grid) -> MeshCycle:
     extra = {"grid": list(grid)} if grid else {}
     options = AnalysisOptions.from_conditions({**conditions, **extra}, design=design)
     pair = meshed_pair(design, options)
+    kinds = ("positions", "pairs", "cycles", "compound_um", "separation")
     cycle = MeshCycle(
         [pair.drive, pair.coast],
         ("drive", "coast"),
         frame=pair.frame,
-        positions=options.positions,
-        pairs=options.pairs,
-        cycles=options.cycles,
-        compound_um=options.compound_um,
-        separation=options.separation,
+        **{kind: getattr(options, kind) for kind in kinds},
     )
     cycle.main_sample(np.zeros(2))
     return cycle
