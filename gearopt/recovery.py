@@ -182,7 +182,10 @@ def recover(
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)
     now = dt.datetime.now(dt.UTC).replace(tzinfo=None)
-    own = me.rpartition(":")[2] if starting else None  # the caller's row (its id)
+    # the caller's row (its id) counts as alive while it runs, deliberately: a trial of no
+    # coordinator may be one its workers asked a moment ago and mark next (left to the grace
+    # period); at its start it holds none, so its own heartbeat stands for nobody's trial
+    own = me.rpartition(":")[2] if starting else None
     living = {
         c
         for c, (o_host, o_pid, beat) in results.coordinators().items()

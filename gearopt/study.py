@@ -402,7 +402,8 @@ class Coordinator:
         """Ask a trial, suggest its parameters and send it; False when the study's places
         are taken."""
         with _held_stops():  # asked and in hand at once
-            with warnings.catch_warnings():  # Optuna warns: heartbeats are for study.optimize
+            asking = self.role.asking() if self.role is not None else contextlib.nullcontext()
+            with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
                 warnings.simplefilter("ignore", UserWarning)
                 trial = self.study.ask()
             trial_id = trial.storage.get_trial_id_from_study_id_trial_number(
