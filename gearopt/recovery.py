@@ -47,6 +47,7 @@ __all__ = [
     "coordinator_tag",
     "fail_and_requeue",
     "recover",
+    "running_trials",
     "trial_markers",
     "trial_params",
 ]
@@ -132,6 +133,14 @@ class Requeue:
             study.enqueue_trial(params, user_attrs=attrs)
 
 
+def running_trials(study: optuna.Study, storage: optuna.storages.BaseStorage) -> list:
+    """The study's RUNNING trials, read from ``storage`` (the RDB storage itself): only they
+    are read, where the study's cached storage would first read every trial finished since
+    its last look (a supervisor's heartbeat every few seconds read the whole run that way)."""
+    study_id = storage.get_study_id_from_name(study.study_name)
+    return storage.get_all_trials(study_id, deepcopy=False, states=(TrialState.RUNNING,))
+
+
 def fail_and_requeue(
     study: optuna.Study,
     storage: optuna.storages.BaseStorage,
@@ -195,7 +204,7 @@ def recover(
     }
     requeue = Requeue(spec, results)
     done = []
-    for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+    for trial in running_trials(study, storage):
         owner = trial.user_attrs.get(COORDINATOR)
         if owner in skip:
             continue

@@ -47,6 +47,7 @@ from gearopt.recovery import (
     Requeue,
     fail_and_requeue,
     recover,
+    running_trials,
 )
 from gearopt.studyfile import StudySpec
 
@@ -330,7 +331,7 @@ class Supervisor:
         o = c.opened
         o.results.heartbeat(c.me, c.spec.name, c.host, c.pid)
         mine = self.mine()
-        for trial in c.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        for trial in running_trials(c.study, o.storage):
             if trial.user_attrs.get(COORDINATOR) in mine:
                 trial_id = o.storage.get_trial_id_from_study_id_trial_number(
                     o.study_id, trial.number
