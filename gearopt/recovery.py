@@ -47,6 +47,7 @@ __all__ = [
     "coordinator_tag",
     "fail_and_requeue",
     "recover",
+    "running_trials",
     "trial_markers",
     "trial_params",
 ]
@@ -132,6 +133,14 @@ class Requeue:
             study.enqueue_trial(params, user_attrs=attrs)
 
 
+def running_trials(study: optuna.Study, storage: optuna.storages.BaseStorage) -> list:
+    """The study's RUNNING trials, read from ``storage`` (the RDB storage itself): only they
+    are read, where the study's cached storage would first read every trial finished since
+    its last look (a supervisor's heartbeat every few seconds read the whole run that way)."""
+    study_id = storage.get_study_id_from_name(study.study_name)
+    return storage.get_all_trials(study_id, deepcopy=False, states=(TrialState.RUNNING,))
+
+
 def fail_and_requeue(
     study: optuna.Study,
     storage: optuna.storages.BaseStorage,
@@ -182,7 +191,10 @@ def recover(
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)
     now = dt.datetime.now(dt.UTC).replace(tzinfo=None)
-    own = me.rpartition(":")[2] if starting else None  # the caller's row (its id)
+    # the caller's row (its id) counts as alive while it runs, deliberately: a trial of no
+    # coordinator may be one its workers asked a moment ago and mark next (left to the grace
+    # period); at its start it holds none, so its own heartbeat stands for nobody's trial
+    own = me.rpartition(":")[2] if starting else None
     living = {
         c
         for c, (o_host, o_pid, beat) in results.coordinators().items()
@@ -192,7 +204,7 @@ def recover(
     }
     requeue = Requeue(spec, results)
     done = []
-    for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+    for trial in running_trials(study, storage):
         owner = trial.user_attrs.get(COORDINATOR)
         if owner in skip:
             continue

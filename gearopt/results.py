@@ -240,7 +240,15 @@ class ResultsStore:
             patterns_t: _rows(patterns_t, key, outcome.patterns),
         }
         with self.engine.begin() as con:
-            self._delete(con, study, [outcome.number])
+            # rows of this trial written before (a tell that failed after them) are replaced;
+            # the common case, none, costs one look rather than a delete per table
+            written = con.execute(
+                sa.select(trials_t.c.trial_number).where(
+                    trials_t.c.study == study, trials_t.c.trial_number == outcome.number
+                )
+            ).first()
+            if written is not None:
+                self._delete(con, study, [outcome.number])
             for table, values in rows.items():
                 if values:
                     con.execute(table.insert(), values)

@@ -137,7 +137,9 @@ def create_sqlite(url: str) -> bool:
     temporary = path.with_name(f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.new")
     temp_url = f"sqlite:///{temporary}"
     try:
-        storage = optuna.storages.RDBStorage(temp_url, engine_kwargs=_engine_kwargs(temp_url))
+        storage = optuna.storages.RDBStorage(
+            temp_url, engine_kwargs=_engine_kwargs(temp_url), skip_compatibility_check=True
+        )  # (its schema is this Optuna's, made now: no version check)
         ResultsStore(temp_url, engine=storage.engine)
         storage.engine.dispose()
         try:

@@ -136,12 +136,14 @@ def _open(
     checked and opened: no checks, no given designs enqueued again, ``previous`` its
     supervisor's count of the study's trials; otherwise counted here)."""
     url = storage or default_storage_url(spec)
+    made = False
     if not worker:
         check_storage_url(url)
-        create_sqlite(url)  # a new SQLite file made whole, schema and all
-        check_integrity(url)
-        if not spec.shared_storage:
-            check_own_tables(url)
+        made = create_sqlite(url)  # a new SQLite file made whole, schema and all
+        if not made:  # (one this call made is sound and holds only Optuna's and gearopt's)
+            check_integrity(url)
+            if not spec.shared_storage:
+                check_own_tables(url)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     requeue = Requeue(spec)
     try:
@@ -153,11 +155,13 @@ def _open(
                 grace_period=STALE_AFTER_S,
                 heartbeat_stale_trial_callback=requeue,
                 skip_table_creation=worker,
-                skip_compatibility_check=worker,
+                # (a schema made just now by this Optuna: its version check reads every
+                # migration script, about half a second)
+                skip_compatibility_check=worker or made,
             )
         study = optuna.create_study(
             storage=rdb,
-            sampler=sampler_for(spec, stream),
+            sampler=sampler_for(spec, stream, previous),
             study_name=spec.name,
             directions=spec.directions,
             load_if_exists=True,
@@ -193,8 +197,8 @@ def _open(
         waiting = optuna.trial.TrialState.WAITING
         states = tuple(t for t in optuna.trial.TrialState if t != waiting)
         previous = len(study.get_trials(deepcopy=False, states=states))
-    if previous:
-        study.sampler = sampler_for(spec, stream, previous)
+        if previous:  # (a worker is given its supervisor's count: its sampler is built once)
+            study.sampler = sampler_for(spec, stream, previous)
     study_id = rdb.get_study_id_from_name(spec.name)
     return OpenStudy(
         study=study,
@@ -398,7 +402,8 @@ class Coordinator:
         """Ask a trial, suggest its parameters and send it; False when the study's places
         are taken."""
         with _held_stops():  # asked and in hand at once
-            with warnings.catch_warnings():  # Optuna warns: heartbeats are for study.optimize
+            asking = self.role.asking() if self.role is not None else contextlib.nullcontext()
+            with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
                 warnings.simplefilter("ignore", UserWarning)
                 trial = self.study.ask()
             trial_id = trial.storage.get_trial_id_from_study_id_trial_number(

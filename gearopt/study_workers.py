@@ -26,6 +26,7 @@ keeps the heartbeats of the workers' trials and watches them:
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
 import multiprocessing.connection as mpc
 import os
@@ -46,6 +47,7 @@ from gearopt.recovery import (
     Requeue,
     fail_and_requeue,
     recover,
+    running_trials,
 )
 from gearopt.studyfile import StudySpec
 
@@ -53,6 +55,9 @@ __all__ = ["Supervisor", "WorkerRole", "supervise"]
 
 #: seconds a stopped worker has to put its trial back before it is killed
 STOP_WAIT_S = 30.0
+
+#: seconds a worker waits for another's ask (:meth:`WorkerRole.asking`) before it asks anyway
+ASK_WAIT_S = 10.0
 
 #: how workers start: forked on Linux (they inherit the imports and the warmed kernels: a
 #: worker starts in milliseconds, not seconds), spawned elsewhere (fork is unsafe on macOS)
@@ -70,6 +75,21 @@ class WorkerRole:
     conn: Any
     owner: str  # the supervisor's id: the ``coordinator`` of the workers' gearopt rows
     previous: int = 0  # the study's trials when the run opened it (the samplers' seeds)
+    lock: Any = None  # a multiprocessing Lock: one worker at a time asks Optuna for a trial
+
+    @contextlib.contextmanager
+    def asking(self):
+        """One of the run's workers at a time in Optuna's ``Study.ask``: it pops a given
+        design from the queue by reading it WAITING and setting it RUNNING in two
+        transactions, so on SQLite two workers asking at once (a run's start, with given
+        designs queued) could both pop the same trial. A worker killed while it holds the
+        lock does not stop the others for long: they wait at most :data:`ASK_WAIT_S`."""
+        held = self.lock is not None and self.lock.acquire(timeout=ASK_WAIT_S)
+        try:
+            yield
+        finally:
+            if held:
+                self.lock.release()
 
     def take(self) -> bool:
         """Take a place for a trial; False when every place is held."""
@@ -152,6 +172,7 @@ class Supervisor:
         self.c = coordinator
         self.context = mp.get_context(START_METHOD)
         self.places = self.context.Value("i", 0)
+        self.lock = self.context.Lock()
         self.children: list[_Child] = []
         self.streams = 0
         self.error: GearoptError | None = None
@@ -169,6 +190,7 @@ class Supervisor:
             conn=theirs,
             owner=c.me,
             previous=c.opened.previous,
+            lock=self.lock,
         )
         limit = c.limit
         process = self.context.Process(
@@ -309,7 +331,7 @@ class Supervisor:
         o = c.opened
         o.results.heartbeat(c.me, c.spec.name, c.host, c.pid)
         mine = self.mine()
-        for trial in c.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        for trial in running_trials(c.study, o.storage):
             if trial.user_attrs.get(COORDINATOR) in mine:
                 trial_id = o.storage.get_trial_id_from_study_id_trial_number(
                     o.study_id, trial.number
