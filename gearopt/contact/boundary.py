@@ -10,17 +10,20 @@ line contact's whole clearance budget and enough to move a tangency point along 
 ellipse by tenths of a millimetre.
 
 :func:`boundary_cells` replaces, in each face row of cells, the cells from the one through the
-generated boundary up to two cells above the lowest generated nodes by ``k`` cells each along
-the profile (``k`` = the cell's height over :data:`STEP_MM`, at least one), bicubic Hermite
-cells through the exact surface's points and normals at their corners
-(:meth:`gearopt.envelope.EnvelopeSurface.geometry_at`): the error of a cubic falls as the
-fourth power of the step, and the corners lie at least :data:`BELOW_MM` clear of the fold
-(a corner further below its column's boundary takes the quadratic extension of the exact
-points above it). The fine cells meet the flank's own cells above them on nodes whose data
-they share (C1 across that line). Below the lowest fine cell its polynomial goes on (the
-smooth extension the tangency point is solved on beyond the flank).
+generated boundary up to :data:`REACH_MM` above it (and at least two cells above the lowest
+generated nodes) by ``k`` cells each along the profile (``k`` = the cell's height over
+:data:`STEP_MM`, at least one), bicubic Hermite cells through the exact surface's points and
+normals at their corners (:meth:`gearopt.envelope.EnvelopeSurface.geometry_at`; the cross
+derivative by differences along the profile): the error of a cubic falls as the fourth power of
+the step, and the corners lie at least 0.05 mm clear of the fold (a corner more than
+:data:`BELOW_MM` below its column's boundary takes the quadratic extension of the exact points
+above it). The fine cells meet the flank's own cells above them on nodes whose data they share
+(C1 across that line). Below the lowest fine cell its polynomial goes on (the smooth extension
+the tangency point is solved on beyond the flank). On the conjugate face-milled pinion
+(``studies/face_milling_conjugate.toml``) they are within 0.001 um of the exact surface, its own
+cells 4 um off in the cell through the boundary and 0.03 um in the one above.
 
-The contact engine evaluates the pinion through this table (:func:`gearopt.contact.kernels`'s
+The contact engine evaluates the pinion through this table (:mod:`gearopt.contact.kernels`'s
 point evaluations), so its refined minimum, tangency points and zones reach the generated
 boundary on the same accurate interpolant (:func:`gearopt.contact.engine.node_tables`). A flank
 without an exact surface or a solved boundary has none: the engine then keeps its refinement two

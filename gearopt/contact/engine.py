@@ -48,8 +48,10 @@ def _keep_heap() -> None:
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
     made): its generated nodes (flat indices), their points and normals (components apart),
-    the refinable nodes and cells (two cells above the lowest generated nodes: the
-    interpolant is poor in the lowest cells, the envelope's fold), the generated cells, the
+    the refinable nodes and cells (the generated ones, evaluated on the fine cells at the
+    generated boundary, :func:`gearopt.contact.boundary.boundary_cells`: the flank's own
+    interpolant is poor near the envelope's fold; on a flank without them, two cells above the
+    lowest generated nodes), the generated cells, the fine cells' tables (``fine``), the
     grid's cell size.
 
     A cell's entry is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are in where
@@ -205,8 +207,8 @@ class ContactEngine:
             np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
             for a in range(3)
         )
-        # the interpolant is poor in the lowest generated cells (the envelope's fold):
-        # refinements stay two cells above them (node_tables)
+        # the refinable nodes and cells: the generated ones on the fine cells at the
+        # generated boundary, else two cells above the lowest generated nodes (node_tables)
         self.refine_nodes = np.stack([t["keep"] for t in tables])
         self.refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
         self.pinion_cells = len(tables[0]["cells"])
