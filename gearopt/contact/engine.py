@@ -481,10 +481,9 @@ class ContactEngine:
     def at(self, side, sh, phi, gear_angle_rad, generated=False):
         """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
         the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
-        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
-        the pinion's lowest generated cells, where the envelope's fold spoils any
-        interpolant; with ``generated``, up to the pinion's generated boundary
-        (:func:`node_tables`)."""
+        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and
+        outside the pinion's refinable cells; with ``generated``, up to the pinion's generated
+        boundary (:func:`node_tables`)."""
         shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
         if not shape:  # a single point: as a one-element array
             one = self.at(
