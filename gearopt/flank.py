@@ -46,6 +46,7 @@ __all__ = [
     "HermiteCells",
     "hermite_cells",
     "hermite_coefficients",
+    "polar_gradient",
     "MEMBERS",
     "FLANKS",
     "HANDS",
@@ -409,16 +410,9 @@ class FlankMap:
         Theta_sh)`` in grid coordinates: Theta_s and Theta_h from the normals (n . r_s =
         n . r_h = 0, exact where the node is generated), Theta_sh by central differences of
         those."""
-        g = math.radians(self.pitch_angle_deg)
-        sg, cg = math.sin(g), math.cos(g)
-        th = self.polar_angle_rad
-        n = self.normals
-        n_r = n[..., 0] * np.cos(th) + n[..., 1] * np.sin(th)
-        n_t = -n[..., 0] * np.sin(th) + n[..., 1] * np.cos(th)
-        n_t = np.where(np.abs(n_t) > 1e-12, n_t, 1e-12)
-        big_r = self.radius_mm
-        d_s = -(sg * n_r + cg * n[..., 2]) / (big_r * n_t)
-        d_h = -(cg * n_r - sg * n[..., 2]) / (big_r * n_t)
+        d_s, d_h = polar_gradient(
+            self.polar_angle_rad, self.normals, self.radius_mm, self.pitch_angle_deg
+        )
         if self.taper is not None:  # to grid coordinates (s, t): the chain rule
             d_s = d_s + d_h * self.taper.dheight_dface(self.profile_mm)[None, :]
             d_h = d_h * self.taper.dheight_dprofile(self.face_mm)[:, None]
@@ -586,6 +580,21 @@ class FlankMap:
 #: the cubic Hermite basis: the coefficients of x^a in the polynomial with value v0, v1 and
 #: derivatives d0, d1 at x = 0, 1 are ``HERMITE @ (v0, v1, d0, d1)``
 HERMITE = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [-3, 3, -2, -1], [2, -2, 1, 1]], float)
+
+
+def polar_gradient(theta, normals, radius_mm, pitch_angle_deg: float):
+    """``(Theta_s, Theta_h)`` of a flank at points with polar angles ``theta``, unit normals
+    ``normals`` (``(..., 3)``) and radii ``radius_mm``, in the axial plane's cone coordinates
+    (s, h): from n . r_s = n . r_h = 0 (:attr:`FlankMap.node_derivatives`)."""
+    g = math.radians(pitch_angle_deg)
+    sg, cg = math.sin(g), math.cos(g)
+    th, n = theta, normals
+    n_r = n[..., 0] * np.cos(th) + n[..., 1] * np.sin(th)
+    n_t = -n[..., 0] * np.sin(th) + n[..., 1] * np.cos(th)
+    n_t = np.where(np.abs(n_t) > 1e-12, n_t, 1e-12)
+    d_s = -(sg * n_r + cg * n[..., 2]) / (radius_mm * n_t)
+    d_h = -(cg * n_r - sg * n[..., 2]) / (radius_mm * n_t)
+    return d_s, d_h
 
 
 def hermite_coefficients(theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm) -> NDArray:

@@ -13,6 +13,7 @@ import threading
 import numpy as np
 from numpy.typing import NDArray
 
+from gearopt.contact.boundary import band_theta
 from gearopt.contact.engine import ContactEngine, EngineRows
 from gearopt.contact.samples import FieldSample
 from gearopt.flank import hermite_cells
@@ -172,7 +173,12 @@ def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
     origin, scale = self.pinion_unit
     xy = sh - origin.reshape((2,) + (1,) * (sh.ndim - 1))
     xy *= scale.reshape((2,) + (1,) * (sh.ndim - 1))
-    theta, cell, within = self.cells_at(self.pinion_coef, xy, self.pinion_table, rows.pinion_offset)
+    _, cell, within = self.cells_at(self.pinion_coef, xy, self.pinion_table, rows.pinion_offset)
+    limit = self.pinion_table[0].reshape((2,) + (1,) * (xy.ndim - 1))
+    corner = np.trunc(np.fmin(np.fmax(xy, 0.0), limit))
+    u, v = xy[0] - corner[0], xy[1] - corner[1]
+    # the pinion's fine cells at its generated boundary (gearopt.contact.boundary)
+    theta = band_theta(self.pinion_coef, self.pinion_band, self.pinion_fine, cell, u, v)
     flat = sh.reshape(2, -1)
     if self.pinion_taper is not None:  # (s, t) -> (s, h)
         flat = np.stack([flat[0], self.pinion_taper.height_mm(flat[0], flat[1])])
@@ -182,9 +188,6 @@ def clearance_on_rows(self, rows: EngineRows, sh, generated=False):
     big_r = lin[0]
     delta, valid, _, _ = self.clearance(rows, big_r * np.cos(theta), big_r * np.sin(theta), lin[1:])
     valid &= within
-    limit = self.pinion_table[0].reshape((2,) + (1,) * (xy.ndim - 1))
-    corner = np.trunc(np.fmin(np.fmax(xy, 0.0), limit))
-    u, v = xy[0] - corner[0], xy[1] - corner[1]
     table = self.pinion_generated if generated else self.refine_cells
     valid &= v >= table[cell, 0] + table[cell, 1] * u
     return delta, valid

@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from gearopt.contact import kernels as _kernels
+from gearopt.contact.boundary import boundary_cells
 from gearopt.contact.minima import minima_pick, minima_starts
 from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
@@ -47,8 +48,10 @@ def _keep_heap() -> None:
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
     made): its generated nodes (flat indices), their points and normals (components apart),
-    the refinable nodes and cells (two cells above the lowest generated nodes: the
-    interpolant is poor in the lowest cells, the envelope's fold), the generated cells, the
+    the refinable nodes and cells (the generated ones, evaluated on the fine cells at the
+    generated boundary, :func:`gearopt.contact.boundary.boundary_cells`: the flank's own
+    interpolant is poor near the envelope's fold; on a flank without them, two cells above the
+    lowest generated nodes), the generated cells, the fine cells' tables (``fine``), the
     grid's cell size.
 
     A cell's entry is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are in where
@@ -66,8 +69,9 @@ def node_tables(pinion) -> dict:
     pts = pinion.points_mm.reshape(-1, 3)[nodes]
     nrm = pinion.normals.reshape(-1, 3)[nodes]
     profile = np.asarray(pinion.profile_mm, float)
+    fine = boundary_cells(pinion)
     keep = mask.copy()
-    for _ in range(2):
+    for _ in range(0 if fine else 2):
         below = np.zeros_like(keep)
         below[:, 1:] = keep[:, :-1]
         keep &= below
@@ -89,9 +93,14 @@ def node_tables(pinion) -> dict:
         part = on & ~full
         generated[:, 0] = np.where(full, 0.0, np.where(part, b0, 2.0)).ravel()
         generated[:, 1] = np.where(part, b1 - b0, 0.0).ravel()
+    if fine:
+        limits = generated  # the fine cells are accurate up to the generated boundary
+    else:
+        fine = (np.full((cells.size, 4), -1.0), np.zeros((1, 16)))
     slot = np.full(mask.size, -1, np.intp)
     slot[nodes] = np.arange(nodes.size)
     return {
+        "fine": fine,
         "nodes": nodes,
         "slot": slot,
         "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
@@ -198,12 +207,21 @@ class ContactEngine:
             np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
             for a in range(3)
         )
-        # the interpolant is poor in the lowest generated cells (the envelope's fold):
-        # refinements stay two cells above them (node_tables)
+        # the refinable nodes and cells: the generated ones on the fine cells at the
+        # generated boundary, else two cells above the lowest generated nodes (node_tables)
         self.refine_nodes = np.stack([t["keep"] for t in tables])
         self.refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
         self.pinion_cells = len(tables[0]["cells"])
         self.pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
+        # the fine cells at each side's generated boundary (their indices offset per side)
+        offsets = np.cumsum([0] + [len(t["fine"][1]) for t in tables[:-1]])
+        self.pinion_band = np.concatenate(
+            [
+                np.where(t["fine"][0][:, :1] >= 0.0, t["fine"][0] + [k, 0, 0, 0], t["fine"][0])
+                for t, k in zip(tables, offsets, strict=True)
+            ]
+        )
+        self.pinion_fine = np.concatenate([t["fine"][1] for t in tables])
         self.gear_cells = first.gear.cells.generated.size
         self.gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
         self.gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
@@ -315,6 +333,8 @@ class ContactEngine:
             np.ascontiguousarray(self.pinion_const[:, 0]),
             self.pinion_coef,
             np.ascontiguousarray(self.refine_cells),
+            np.ascontiguousarray(self.pinion_band),
+            np.ascontiguousarray(self.pinion_fine),
         )
         counts = self.node_real.sum(axis=1).astype(np.intp)
         return gear, pinion, counts
@@ -461,10 +481,9 @@ class ContactEngine:
     def at(self, side, sh, phi, gear_angle_rad, generated=False):
         """Clearance at pinion grid coordinates ``sh = (s, h)`` (``(2, ...)``) off the nodes by
         the local Hermite interpolants: ``(delta, valid)``. ``delta`` is the smooth extension
-        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and in
-        the pinion's lowest generated cells, where the envelope's fold spoils any
-        interpolant; with ``generated``, up to the pinion's generated boundary
-        (:func:`node_tables`)."""
+        beyond the flanks (finite everywhere); ``valid`` is False outside either flank and
+        outside the pinion's refinable cells; with ``generated``, up to the pinion's generated
+        boundary (:func:`node_tables`)."""
         shape = np.broadcast_shapes(sh.shape[1:], np.shape(side), np.shape(phi))
         if not shape:  # a single point: as a one-element array
             one = self.at(
@@ -491,7 +510,7 @@ class ContactEngine:
         (:func:`node_tables`)."""
         gear, pinion, _ = self.kernel_tables
         if generated:
-            pinion = (*pinion[:-1], self.pinion_generated)
+            pinion = (*pinion[:14], self.pinion_generated, *pinion[15:])
         return pinion, gear
 
     def clearance_on_rows(self, rows: EngineRows, sh, generated=False):

@@ -206,8 +206,9 @@ class ClearanceField:
         """``(clearance_rad, valid)`` at pinion grid coordinates ``(s, h)`` off the nodes, by
         the flanks' local Hermite interpolants (broadcast with ``phi_rad``). The clearance is
         the interpolants' smooth extension beyond the flanks (finite everywhere); ``valid`` is
-        False outside either flank and in the pinion's lowest generated cells, where the
-        envelope's fold spoils any interpolant."""
+        False outside either flank and outside the pinion's refinable cells (up to its
+        generated boundary on the fine cells there, :mod:`gearopt.contact.boundary`; on a
+        flank without them two cells above its lowest generated nodes)."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
         side = np.zeros(np.broadcast(s, phi_rad).shape, np.intp)
         return self._engine.at(side, np.stack([s, h]), phi_rad, gear_angle_rad)

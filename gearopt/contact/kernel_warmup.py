@@ -24,7 +24,9 @@ def warm() -> None:
     gear = (0.0, 0.0, 0.0, 0.0, 1, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, coef, ok)
     lin, const = np.zeros((5, 2)), np.zeros(5)
     limits = np.zeros((1, 2))
+    band = np.full((1, 4), -1.0)
     pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, limits)
+    pinion += (band, coef)
     rows = (
         np.zeros((4, 1)),
         np.zeros((4, 1)),

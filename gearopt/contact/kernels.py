@@ -206,6 +206,19 @@ def point_fields(rows, points, normals, lin_z, const, gear, out, valid):
             valid[r, p] = on
 
 
+@compiled(inline=True)
+def _pinion_theta(coef, band, fine, cell, u, v):
+    """The pinion's Theta at unit coordinates ``(u, v)`` of cell ``cell``: its own polynomial,
+    or where ``band`` says so its fine cells at the generated boundary
+    (:func:`gearopt.contact.boundary.boundary_cells`, whose ``band_theta`` is this in numpy)."""
+    b = band[cell, 0]
+    if b < 0.0:
+        return _hermite(coef, cell, u, v)
+    y = (band[cell, 1] + v) * band[cell, 2]
+    m = min(max(math.floor(y), 0.0), band[cell, 3] - 1.0)
+    return _hermite(fine, int(b + m), u, y - m)
+
+
 @compiled
 def _evaluate(rows, r, s, t, pinion, gear, cells):
     """:func:`_point_in` compiled once, called: the evaluations outside the stencil (a copy
@@ -220,7 +233,9 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     ``cells`` (``(c0, c1)`` per cell of the pinion tables, ``pinion[14]``: the point is in
     where ``v >= c0 + c1 u``, :func:`gearopt.contact.engine.node_tables`)."""
     kx, ky, turn, sense, offset, pinion_offset = rows
-    (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef, _) = pinion
+    (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef) = pinion[
+        :14
+    ]
     x = (s - s0) * ia
     y = (t - h0) * ib
     a = _corner(x, lim0)
@@ -228,7 +243,7 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     cell = int(a * n_cols + b) + pinion_offset[r]
     u = x - a
     v = y - b
-    theta = _hermite(coef, cell, u, v)
+    theta = _pinion_theta(coef, pinion[15], pinion[16], cell, u, v)
     h = t + (s - pivot) * (alpha + beta * t) if tapered else t
     big_r = lin[0, 0] * s + lin[0, 1] * h + const[0]
     px = big_r * math.cos(theta)
@@ -251,7 +266,8 @@ def clearance_at(rows, sh, pinion, gear, delta, valid):
     ``rows``: ``kx``, ``ky`` (``(4, n)``), ``turn``, ``sense``, the gear's and the pinion's
     cell offsets (``(n,)``). ``pinion``: unit-coordinate origin and scale, limits, columns,
     taper (flag, pivot, alpha, beta), the map to R1 and the z terms (``(5, 2)``) with its
-    constants, coefficients, refinable cells."""
+    constants, coefficients, refinable cells, the fine cells at the generated boundary (their
+    table per cell and coefficients, :func:`gearopt.contact.boundary.boundary_cells`)."""
     n, m = delta.shape
     for r in range(n):
         for p in range(m):
