@@ -42,16 +42,17 @@ FIGURES = (
     "bias_mm",
     "contact_ratio",
 )
-#: known gaps: none left. How they were closed (default / 81 x 161): section 5.3's drive contact interval starts at the
-#: toe-root corner, where the tangency point crosses the gear's toe edge: the point lies along
-#: a 13 mm ellipse's major axis, where a 0.04 um error of the pinion's interpolant in the cell
-#: through the generated boundary (the envelope's fold 0.3 mm below: Theta is not cubic there)
-#: moved it by tenths of a mm (contact ratio 2.752 / 2.705 on the flank's own cells); on the
-#: fine cells of the exact surface there (gearopt.contact.boundary) it reads 2.7045 / 2.7049.
-#: Case A's lag is flat (no TE) but its contact is a point's (gearopt.mesh.zone.Zones.closed,
-#: tests/test_point_contact.py): its interval's ends are solved on the tangency point and M is
-#: centred on the interval, M (26.387, 7.639) / (26.385, 7.639), bias -2.042 / -2.045, contact
-#: ratio 1.3209 / 1.3207 (read as a line contact: 7.39 / 6.85, -1.49 / -0.25, 1.275 / 1.375).
+#: known gaps: none left. How they closed (default / 81 x 161): section 5.3's drive contact
+#: interval starts at the toe-root corner, where the tangency point crosses the gear's toe edge:
+#: the point lies along a 13 mm ellipse's major axis, where a 0.04 um error of the pinion's
+#: interpolant in the cell through the generated boundary (the envelope's fold 0.3 mm below: Theta
+#: is not cubic there) moved it by tenths of a mm (contact ratio 2.752 / 2.705 on the flank's own
+#: cells); on the fine cells of the exact surface there (gearopt.contact.boundary) it reads 2.7045
+#: / 2.7049. Case A's lag is flat (no TE) but its contact is a point's
+#: (gearopt.mesh.zone.Zones.closed, tests/test_point_contact.py): its interval's ends are solved on
+#: the tangency point and M is centred on the interval, M (26.387, 7.639) / (26.385, 7.639), bias
+#: -2.042 / -2.045, contact ratio 1.3209 / 1.3207 (read as a line contact: 7.39 / 6.85, -1.49 /
+#: -0.25, 1.275 / 1.375).
 GAPS: set = set()
 
 _RESULTS: dict = {}
