@@ -149,6 +149,7 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
     (0 off the mask) into ``out`` (``(3, n, nodes)``)."""
     kx, ky, turn, sense, offset, _ = rows
+    _, _, lim0, lim1, n_cols, _, _, _, _, _, _, _, coef, ok = gear
     n = turn.shape[0]
     for r in range(n):
         k = side[r]
@@ -161,15 +162,24 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
             o1 = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
             o2 = kx[2, r] * x + ky[2, r] * y + z[2, k, j]
             o3 = kx[3, r] * x + ky[3, r] * y + z[3, k, j]
-            gap, valid, radius = _gear_gap(
-                o0, o1, o2, o3, _atan2(o1, o0), turn[r], sense[r], offset[r], gear
-            )
+            radius = math.sqrt(o0 * o0 + o1 * o1)
+            # the gear cell first: the polar angles only where the point faces the gear
+            # flank (as _gear_gap, whose clearance is kept only there)
+            gx, gy = _gear_unit(o2, o3, radius, gear)
+            a = _corner(gx, lim0)
+            b = _corner(gy, lim1)
+            cell = int(a * n_cols + b) + offset[r]
+            u = gx - a
+            v = gy - b
+            g = index[k, j]
+            if ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0:
+                gap = _hermite(coef, cell, u, v) - _atan2(o1, o0)
+                gap += turn[r]
+                gap -= np.rint(gap * _TO_TURNS) * _TURN
+                out[0, r, g] = gap * sense[r]
             nx, ny = nxy[0, k, j], nxy[1, k, j]
             m0 = kx[0, r] * nx + ky[0, r] * ny + nz[0, k, j]
             m1 = kx[1, r] * nx + ky[1, r] * ny + nz[1, k, j]
-            g = index[k, j]
-            if valid:
-                out[0, r, g] = gap
             out[1, r, g] = abs(m1 * o0 - m0 * o1)
             out[2, r, g] = radius
 
