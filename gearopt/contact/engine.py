@@ -352,10 +352,11 @@ class ContactEngine:
         """The constants of rows (side, pinion angle, gear angle; 1-D, broadcast to one length)
         as the kernels take them (:meth:`EngineRows.kernel_rows`), in one compiled pass
         (:func:`gearopt.contact.kernels.row_constants`): the same values as :meth:`rows_of`."""
-        phi = np.ascontiguousarray(np.atleast_1d(np.asarray(phi, float)))
+        # (writable contiguous copies: numba compiles one version per array type)
+        phi = np.array(np.atleast_1d(np.asarray(phi, float)).reshape(-1))
         n = phi.shape[0]
-        side = np.ascontiguousarray(np.broadcast_to(np.asarray(side, np.intp), (n,)))
-        angle = np.ascontiguousarray(np.broadcast_to(np.asarray(angle, float), (n,)))
+        side = np.array(np.broadcast_to(np.asarray(side, np.intp), (n,)))
+        angle = np.array(np.broadcast_to(np.asarray(angle, float), (n,)))
         maker = (
             self.rotation,
             self.turn0,
