@@ -415,18 +415,21 @@ def refine(
             # (the Newton part is the whole step unless a valley or a cap is in it: then the
             # full step's point tells whether its end is on the flanks)
             newton = st0 == c0 and st1 == c1
-            if not newton:
-                ns, nt = s[r] + c0 * cell[0], t[r] + c1 * cell[1]
-                _, on = _evaluate(rows, r, ns, nt, pinion, gear, pinion[14])
-                edge[r] = (not on) and fall > tol[r]
             # the step cut back by halvings to the first valid point not above the best
+            # (i = -1: the Newton part's end, where it is not the whole step); one
+            # evaluation site, inlined
             limit = best[r] + 1e-13 * abs(best[r])
-            for i in range(fractions.size):
-                ns = s[r] + fractions[i] * (st0 * cell[0])
-                nt = t[r] + fractions[i] * (st1 * cell[1])
-                value, on = _evaluate(rows, r, ns, nt, pinion, gear, pinion[14])
-                if i == 0 and newton:
+            for i in range(0 if newton else -1, fractions.size):
+                if i < 0:
+                    ns, nt = s[r] + c0 * cell[0], t[r] + c1 * cell[1]
+                else:
+                    ns = s[r] + fractions[i] * (st0 * cell[0])
+                    nt = t[r] + fractions[i] * (st1 * cell[1])
+                value, on = _point_in(rows, r, ns, nt, pinion, gear, pinion[14])
+                if i < 0 or (i == 0 and newton):
                     edge[r] = (not on) and fall > tol[r]
+                    if i < 0:
+                        continue
                 if on and value <= limit:
                     moving[r] = abs(ns - s[r]) + abs(nt - t[r]) > small
                     taken[r] = True
