@@ -623,7 +623,7 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
-@compiled
+@compiled(inline=True)
 def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
     """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
     ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``)."""
