@@ -18,6 +18,7 @@ import numpy as np
 
 from gearopt.contact import kernels as _kernels
 from gearopt.contact.minima import minima_pick, minima_starts
+from gearopt.contact.rows import row_constants
 from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells
@@ -351,7 +352,7 @@ class ContactEngine:
     def row_tables(self, side, phi, angle=0.0) -> tuple:
         """The constants of rows (side, pinion angle, gear angle; 1-D, broadcast to one length)
         as the kernels take them (:meth:`EngineRows.kernel_rows`), in one compiled pass
-        (:func:`gearopt.contact.kernels.row_constants`): the same values as :meth:`rows_of`."""
+        (:func:`gearopt.contact.rows.row_constants`): the same values as :meth:`rows_of`."""
         # (writable contiguous copies: numba compiles one version per array type)
         phi = np.array(np.atleast_1d(np.asarray(phi, float)).reshape(-1))
         n = phi.shape[0]
@@ -365,7 +366,7 @@ class ContactEngine:
             int(self.gear_cells),
             int(self.pinion_cells),
         )
-        return _kernels.row_constants(maker, side, phi, angle)
+        return row_constants(maker, side, phi, angle)
 
     def rows_of(self, side, phi, angle) -> EngineRows:
         """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one

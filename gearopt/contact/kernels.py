@@ -4,8 +4,6 @@ Written point by point in compiled loops, so that a small batch costs its points
 numpy's fixed overhead per call (the engine's refinement evaluates a few hundred points at a
 time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares their tables:
 
-- :func:`row_constants`: the per-row constants of rows (side, pinion angle, gear angle), as
-  the other kernels take them;
 - :func:`node_fields`: the clearance, the normal factor and R2 at every generated node of the
   pinion flank for each row (side, pinion angle, gear angle), off-mask nodes +inf / 0 / 0;
 - :func:`point_fields`: the clearance, the normal factor, R2 and the gear's grid coordinates of
@@ -39,7 +37,6 @@ __all__ = [
     "node_fields",
     "point_fields",
     "refine",
-    "row_constants",
     "swept_exits",
     "tangency",
     "union_exits",
@@ -141,32 +138,6 @@ def _atan2(y, x):
     if x > 0.0:
         return t
     return t + math.pi if y >= 0.0 else t - math.pi
-
-
-@compiled
-def row_constants(maker, side, phi, angle):
-    """The constants of rows (side ``side[r]``, pinion angle ``phi[r]``, gear angle
-    ``angle[r]``) as the kernels take them (:func:`clearance_at`): ``kx``, ``ky`` ``(4, n)``,
-    the gear's turn, its sense, the gear's and the pinion's cell offsets ``(n,)``. ``maker``:
-    the rotation table ``(8, 2)`` (:meth:`gearopt.contact.engine.ContactEngine._linear_maps`),
-    each side's gear turn at phi = 0 and gear sense ``(sides,)``, the ratio, the cells per side
-    of the gear's and the pinion's tables. The same operations as the engine's numpy rows."""
-    rotation, turn0, gear_sense, ratio, gear_cells, pinion_cells = maker
-    n = phi.shape[0]
-    kx, ky = np.empty((4, n)), np.empty((4, n))
-    turn, sense = np.empty(n), np.empty(n)
-    offset, pinion_offset = np.empty(n, np.intp), np.empty(n, np.intp)
-    for r in range(n):
-        c, s = np.cos(phi[r]), np.sin(phi[r])
-        for i in range(4):
-            kx[i, r] = rotation[i, 0] * c + rotation[i, 1] * s
-            ky[i, r] = rotation[i + 4, 0] * c + rotation[i + 4, 1] * s
-        k = side[r]
-        turn[r] = (angle[r] + turn0[k]) - ratio * phi[r]
-        sense[r] = gear_sense[k]
-        offset[r] = k * gear_cells
-        pinion_offset[r] = k * pinion_cells
-    return kx, ky, turn, sense, offset, pinion_offset
 
 
 @compiled
