@@ -19,6 +19,7 @@ import numpy as np
 from gearopt.contact import kernels as _kernels
 from gearopt.contact.boundary import boundary_cells
 from gearopt.contact.minima import minima_pick, minima_starts
+from gearopt.contact.rows import row_constants
 from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells
@@ -236,7 +237,7 @@ class ContactEngine:
         """Take the fields' phases (the gears' polar-angle offsets) and node factors anew: the
         constants a field settles while it places its gear, once the engine is built (its other
         tables do not change)."""
-        self.turn0 = np.array([f.gear_offset_rad for f in fields])
+        self.turn0 = np.array([f.gear_offset_rad for f in fields], float)
         # mm of normal separation per rad of gear rotation, typical of each side (a fixed
         # tolerance in rad for the refinement's edge test)
         scale = np.array([f.node_factor_mm or 50.0 for f in fields])
@@ -367,6 +368,25 @@ class ContactEngine:
         inside = uv >= 0.0
         inside &= uv <= 1.0
         return hermite_cells(coef, cell, uv[0], uv[1]), cell, inside[0] & inside[1]
+
+    def row_tables(self, side, phi, angle=0.0) -> tuple:
+        """The constants of rows (side, pinion angle, gear angle; 1-D, broadcast to one length)
+        as the kernels take them (:meth:`EngineRows.kernel_rows`), in one compiled pass
+        (:func:`gearopt.contact.rows.row_constants`): the same values as :meth:`rows_of`."""
+        # (writable contiguous copies: numba compiles one version per array type)
+        phi = np.array(np.atleast_1d(np.asarray(phi, float)).reshape(-1))
+        n = phi.shape[0]
+        side = np.array(np.broadcast_to(np.asarray(side, np.intp), (n,)))
+        angle = np.array(np.broadcast_to(np.asarray(angle, float), (n,)))
+        maker = (
+            self.rotation,
+            self.turn0,
+            self.gear_sense,
+            float(self.ratio),
+            int(self.gear_cells),
+            int(self.pinion_cells),
+        )
+        return row_constants(maker, side, phi, angle)
 
     def rows_of(self, side, phi, angle) -> EngineRows:
         """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one
@@ -500,9 +520,7 @@ class ContactEngine:
         (:func:`gearopt.contact.kernels.clearance_at`) on rows (side, pinion angle; gear angle
         0), each ``(n,)``: ``(rows, pinion, gear)``; with ``generated``, valid on the
         generated cells rather than the refinable ones (:func:`node_tables`)."""
-        n = len(phi)
-        rows = self.rows_of(np.asarray(side, np.intp), np.asarray(phi, float), 0.0)
-        return (rows.kernel_rows(n), *self.cell_tables(generated))
+        return (self.row_tables(side, phi), *self.cell_tables(generated))
 
     def cell_tables(self, generated=False):
         """``(pinion, gear)``: the cell tables of the compiled point evaluations, the pinion's
@@ -554,9 +572,8 @@ class ContactEngine:
             angle_all = np.concatenate([angle, np.zeros(m)])
         else:
             side_all, phi_all, angle_all = side, phi, angle
-        constants = self.rows_of(side_all, phi_all, angle_all).kernel_rows(n + m)
-        rows = tuple(np.ascontiguousarray(a[..., :n]) for a in constants)
-        near_rows = tuple(np.ascontiguousarray(a[..., n:]) for a in constants)
+        rows = self.row_tables(side, phi, angle)
+        near_rows = self.row_tables(side_all[n:], phi_all[n:], angle_all[n:])
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
         gear, pinion, counts = self.kernel_tables
         _kernels.node_fields(
@@ -665,7 +682,6 @@ class ContactEngine:
         the point off the flanks to a clearance lower by more than the edge tolerance.
         """
         n = len(s)
-        rows = self.rows_of(side, phi, angle)
         s, h = np.array(s, float), np.array(h, float)
         best = np.full(n, np.nan) if f0 is None else np.array(f0, float)
         caps = np.atleast_1d(np.asarray(iterations, np.intp))
@@ -673,7 +689,7 @@ class ContactEngine:
         edge = np.zeros(n, bool)
         gear, pinion, _ = self.kernel_tables
         _kernels.refine(
-            rows.kernel_rows(n),
+            self.row_tables(side, phi, angle),
             s,
             h,
             best,

@@ -8,6 +8,7 @@ import numpy as np
 
 from gearopt.contact import kernels
 from gearopt.contact.minima import minima_pick, minima_starts
+from gearopt.contact.rows import row_constants
 
 __all__ = ["warm"]
 
@@ -36,6 +37,9 @@ def warm() -> None:
         np.zeros(1, ip),
     )
     side, count, index = np.zeros(1, ip), np.ones(1, ip), np.zeros((1, 1), ip)
+    one_side = np.zeros(1)
+    maker = (np.zeros((8, 2)), one_side, one_side, 1.0, 1, 1)
+    row_constants(maker, side, np.zeros(1), np.zeros(1))
     xy, z = np.zeros((2, 1, 1)), np.zeros((4, 1, 1))
     kernels.node_fields(
         rows, side, count, index, xy, z, xy.copy(), xy.copy(), gear, np.empty((3, 1, 1))

@@ -149,6 +149,7 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
     (0 off the mask) into ``out`` (``(3, n, nodes)``)."""
     kx, ky, turn, sense, offset, _ = rows
+    _, _, lim0, lim1, n_cols, _, _, _, _, _, _, _, coef, ok = gear
     n = turn.shape[0]
     for r in range(n):
         k = side[r]
@@ -161,15 +162,24 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
             o1 = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
             o2 = kx[2, r] * x + ky[2, r] * y + z[2, k, j]
             o3 = kx[3, r] * x + ky[3, r] * y + z[3, k, j]
-            gap, valid, radius = _gear_gap(
-                o0, o1, o2, o3, _atan2(o1, o0), turn[r], sense[r], offset[r], gear
-            )
+            radius = math.sqrt(o0 * o0 + o1 * o1)
+            # the gear cell first: the polar angles only where the point faces the gear
+            # flank (as _gear_gap, whose clearance is kept only there)
+            gx, gy = _gear_unit(o2, o3, radius, gear)
+            a = _corner(gx, lim0)
+            b = _corner(gy, lim1)
+            cell = int(a * n_cols + b) + offset[r]
+            u = gx - a
+            v = gy - b
+            g = index[k, j]
+            if ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0:
+                gap = _hermite(coef, cell, u, v) - _atan2(o1, o0)
+                gap += turn[r]
+                gap -= np.rint(gap * _TO_TURNS) * _TURN
+                out[0, r, g] = gap * sense[r]
             nx, ny = nxy[0, k, j], nxy[1, k, j]
             m0 = kx[0, r] * nx + ky[0, r] * ny + nz[0, k, j]
             m1 = kx[1, r] * nx + ky[1, r] * ny + nz[1, k, j]
-            g = index[k, j]
-            if valid:
-                out[0, r, g] = gap
             out[1, r, g] = abs(m1 * o0 - m0 * o1)
             out[2, r, g] = radius
 
@@ -392,18 +402,21 @@ def refine(
             # (the Newton part is the whole step unless a valley or a cap is in it: then the
             # full step's point tells whether its end is on the flanks)
             newton = st0 == c0 and st1 == c1
-            if not newton:
-                ns, nt = s[r] + c0 * cell[0], t[r] + c1 * cell[1]
-                _, on = _evaluate(rows, r, ns, nt, pinion, gear, pinion[14])
-                edge[r] = (not on) and fall > tol[r]
             # the step cut back by halvings to the first valid point not above the best
+            # (i = -1: the Newton part's end, where it is not the whole step); one
+            # evaluation site, inlined
             limit = best[r] + 1e-13 * abs(best[r])
-            for i in range(fractions.size):
-                ns = s[r] + fractions[i] * (st0 * cell[0])
-                nt = t[r] + fractions[i] * (st1 * cell[1])
-                value, on = _evaluate(rows, r, ns, nt, pinion, gear, pinion[14])
-                if i == 0 and newton:
+            for i in range(0 if newton else -1, fractions.size):
+                if i < 0:
+                    ns, nt = s[r] + c0 * cell[0], t[r] + c1 * cell[1]
+                else:
+                    ns = s[r] + fractions[i] * (st0 * cell[0])
+                    nt = t[r] + fractions[i] * (st1 * cell[1])
+                value, on = _point_in(rows, r, ns, nt, pinion, gear, pinion[14])
+                if i < 0 or (i == 0 and newton):
                     edge[r] = (not on) and fall > tol[r]
+                    if i < 0:
+                        continue
                 if on and value <= limit:
                     moving[r] = abs(ns - s[r]) + abs(nt - t[r]) > small
                     taken[r] = True
@@ -597,7 +610,7 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
-@compiled
+@compiled(inline=True)
 def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
     """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
     ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``)."""

@@ -93,21 +93,23 @@ def minima_starts(
     pick = np.empty((chosen, width), np.intp)
     values = np.empty((chosen, width))
     for q in range(chosen):  # each row's ``width`` least refinable nodes, none twice
+        # (one pass, an insertion into the sorted list: the first of equal values first, as
+        # ``width`` passes each taking the first least of the nodes not yet picked)
         r = take[q]
         for c in range(width):
-            least = math.inf
-            node = 0
-            for g in range(size):
-                v = field[r, g]
-                if v < least and keep[side[r], g]:
-                    taken = False
-                    for e in range(c):
-                        taken = taken or pick[q, e] == g
-                    if not taken:
-                        least = v
-                        node = g
-            pick[q, c] = node
-            values[q, c] = least
+            pick[q, c] = 0
+            values[q, c] = math.inf
+        for g in range(size):
+            v = field[r, g]
+            if not (v < values[q, width - 1] and keep[side[r], g]):
+                continue
+            c = width - 1
+            while c > 0 and v < values[q, c - 1]:
+                pick[q, c] = pick[q, c - 1]
+                values[q, c] = values[q, c - 1]
+                c -= 1
+            pick[q, c] = g
+            values[q, c] = v
     starts = 0
     for q in range(chosen):
         for c in range(width):
