@@ -219,13 +219,21 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     :func:`clearance_at`): ``(delta, valid)``, valid on the gear flank and in the pinion's
     ``cells`` (``(c0, c1)`` per cell of the pinion tables, ``pinion[14]``: the point is in
     where ``v >= c0 + c1 u``, :func:`gearopt.contact.engine.node_tables`)."""
-    kx, ky, turn, sense, offset, pinion_offset = rows
+    return _gap_of(rows, r, _pinion_at(s, t, pinion, rows[5][r]), gear, cells)
+
+
+@compiled(inline=True)
+def _pinion_at(s, t, pinion, offset):
+    """The row-independent part of :func:`_point_in` at grid coordinates ``(s, t)`` of the
+    pinion tables ``offset`` cells in: ``(cell, u, v, px, py, l1, l2, l3, l4)``, the cell and
+    the unit coordinates in it, the point's x and y in the pinion frame and the z terms of the
+    four linear outputs."""
     (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef, _) = pinion
     x = (s - s0) * ia
     y = (t - h0) * ib
     a = _corner(x, lim0)
     b = _corner(y, lim1)
-    cell = int(a * n_cols + b) + pinion_offset[r]
+    cell = int(a * n_cols + b) + offset
     u = x - a
     v = y - b
     theta = _hermite(coef, cell, u, v)
@@ -233,10 +241,28 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     big_r = lin[0, 0] * s + lin[0, 1] * h + const[0]
     px = big_r * math.cos(theta)
     py = big_r * math.sin(theta)
-    o0 = kx[0, r] * px + ky[0, r] * py + (lin[1, 0] * s + lin[1, 1] * h + const[1])
-    o1 = kx[1, r] * px + ky[1, r] * py + (lin[2, 0] * s + lin[2, 1] * h + const[2])
-    o2 = kx[2, r] * px + ky[2, r] * py + (lin[3, 0] * s + lin[3, 1] * h + const[3])
-    o3 = kx[3, r] * px + ky[3, r] * py + (lin[4, 0] * s + lin[4, 1] * h + const[4])
+    return (
+        cell,
+        u,
+        v,
+        px,
+        py,
+        lin[1, 0] * s + lin[1, 1] * h + const[1],
+        lin[2, 0] * s + lin[2, 1] * h + const[2],
+        lin[3, 0] * s + lin[3, 1] * h + const[3],
+        lin[4, 0] * s + lin[4, 1] * h + const[4],
+    )
+
+
+@compiled(inline=True)
+def _gap_of(rows, r, point, gear, cells):
+    """:func:`_point_in` on row ``r`` of the pinion point ``point`` (:func:`_pinion_at`)."""
+    kx, ky, turn, sense, offset, _ = rows
+    cell, u, v, px, py, l1, l2, l3, l4 = point
+    o0 = kx[0, r] * px + ky[0, r] * py + l1
+    o1 = kx[1, r] * px + ky[1, r] * py + l2
+    o2 = kx[2, r] * px + ky[2, r] * py + l3
+    o3 = kx[3, r] * px + ky[3, r] * py + l4
     theta = math.atan2(o1, o0)
     gap, on, _ = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
     inside = v >= cells[cell, 0] + cells[cell, 1] * u  # the generated boundary (node_tables)
@@ -550,15 +576,30 @@ def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generat
 def _separation(rows, r, s, t, pinion, gear, zone):
     """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
     rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
-    lag, factor, s0, ds, t0, dt, last0, last1, _ = zone
-    delta, valid = _point_in(rows, r, s, t, pinion, gear, pinion[14])
-    if not valid:
-        return math.inf
+    point = _pinion_at(s, t, pinion, rows[5][r])
+    return _separation_of(rows, r, point, _zone_at(s, t, zone), pinion, gear, zone)
+
+
+@compiled(inline=True)
+def _zone_at(s, t, zone):
+    """The node factors' bilinear cell ``(i, j)`` and weights ``(u, v)`` at ``(s, t)``."""
+    _, _, s0, ds, t0, dt, last0, last1, _ = zone
     x = min(max((s - s0) / ds, 0.0), last0 + 1.0)
     y = min(max((t - t0) / dt, 0.0), last1 + 1.0)
     i = min(int(x), int(last0))
     j = min(int(y), int(last1))
-    u, v = x - i, y - j
+    return i, j, x - i, y - j
+
+
+@compiled(inline=True)
+def _separation_of(rows, r, point, at, pinion, gear, zone):
+    """:func:`_separation` of row ``r`` at the pinion point ``point`` (:func:`_pinion_at`)
+    in the factors' cell ``at`` (:func:`_zone_at`)."""
+    lag, factor = zone[0], zone[1]
+    delta, valid = _gap_of(rows, r, point, gear, pinion[14])
+    if not valid:
+        return math.inf
+    i, j, u, v = at
     f = (1.0 - u) * ((1.0 - v) * factor[r, i, j] + v * factor[r, i, j + 1]) + u * (
         (1.0 - v) * factor[r, i + 1, j] + v * factor[r, i + 1, j + 1]
     )
@@ -581,15 +622,23 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
-@compiled
-def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
+@compiled(inline=True)
+def _swept(p, table):
     """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
-    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``)."""
+    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``; the
+    pinion point there ``point``, :func:`_pinion_at`, for the rows of the pinion cell offset
+    ``offset``, and the factors' cell ``at``). ``table``: ``(rows, pinion, gear, zone,
+    pair_row, prev, nxt, ray, tau, f, have, point, offset, at)``."""
+    rows, pinion, gear, zone, pair_row, prev, nxt, ray, tau, f, have, point, offset, at = table
     for q in (prev[p], p, nxt[p]):
         if q >= 0 and not have[q]:
-            s = ray[0] + tau * ray[2]
-            t = ray[1] + tau * ray[3]
-            f[q] = _separation(rows, pair_row[q], s, t, pinion, gear, zone)
+            r = pair_row[q]
+            if rows[5][r] == offset:
+                f[q] = _separation_of(rows, r, point, at, pinion, gear, zone)
+            else:
+                s = ray[0] + tau * ray[2]
+                t = ray[1] + tau * ray[3]
+                f[q] = _separation(rows, r, s, t, pinion, gear, zone)
             have[q] = True
     g = f[p]
     if prev[p] >= 0 and nxt[p] >= 0:
@@ -602,25 +651,32 @@ def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
 
 
 @compiled
-def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint):
+def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint, kept):
     """With ``hint[0]`` < 0 the pattern at ``tau`` along a ray of pairs ``a:b``, the least swept
     separation (:func:`_swept`) minus the compound; else -1.0 inside, +1.0 out, trying pair
-    ``hint[0]`` (the last found inside) first and the others until one is inside."""
+    ``hint[0]`` (the last found inside) first and the others until one is inside. ``kept``:
+    ``f`` and ``have`` hold the separations at this ``tau`` already (the last call's, there)."""
     c = zone[8]
-    have[a:b] = False
+    if not kept:
+        have[a:b] = False
+    s = ray[0] + tau * ray[2]
+    t = ray[1] + tau * ray[3]
+    first = hint[0] if hint[0] >= 0 else a
+    offset = rows[5][pair_row[first]]
+    point = _pinion_at(s, t, pinion, offset)
+    at = _zone_at(s, t, zone)
+    table = (rows, pinion, gear, zone, pair_row, prev, nxt, ray, tau, f, have, point, offset, at)
     if hint[0] >= 0:
-        if _swept(rows, pinion, gear, zone, hint[0], pair_row, prev, nxt, ray, tau, f, have) < c:
+        if _swept(hint[0], table) < c:
             return -1.0
         for p in range(a, b):
-            if _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have) < c:
+            if _swept(p, table) < c:
                 hint[0] = p
                 return -1.0
         return 1.0
     least = math.inf
     for p in range(a, b):
-        least = min(
-            least, _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have)
-        )
+        least = min(least, _swept(p, table))
     return least - c
 
 
@@ -629,8 +685,9 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
     """:meth:`gearopt.mesh.zone.Zones.pattern_exits` into ``out``: ray k (``rays[k]``: origin,
     direction) of pairs ``start[k]:start[k + 1]`` (rows ``pair_row``, neighbours over the
     motion ``prev``, ``nxt``, -1 without) scanned at ``tau[k]`` up to its first exit, a sample
-    inside once a pair is; the field whole only where it brackets the exit (the same result);
-    an exit through a flank's boundary on the finer scan ``zoom``."""
+    inside once a pair is; the field whole only where it brackets the exit (the same result;
+    at a sample found out, every pair's separation is known already); an exit through a
+    flank's boundary on the finer scan ``zoom``."""
     f = np.empty(pair_row.shape[0])
     have = np.zeros(pair_row.shape[0], np.bool_)
     m = tau.shape[1]
@@ -639,70 +696,38 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
         a, b, ray = start[k], start[k + 1], rays[k]
         hint = np.full(1, a, np.intp)
         out[k] = 0.0
-        if (
-            not b > a
-            or _swept_min(
-                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau[k, 0], f, have, hint
-            )
-            > 0.0
-        ):
+        zoned = (rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray)
+        if not b > a or _swept_min(*zoned, tau[k, 0], f, have, hint, False) > 0.0:
             continue
         j = 1
         while j < m:
-            if (
-                _swept_min(
-                    rows,
-                    pinion,
-                    gear,
-                    zone,
-                    a,
-                    b,
-                    pair_row,
-                    prev,
-                    nxt,
-                    ray,
-                    tau[k, j],
-                    f,
-                    have,
-                    hint,
-                )
-                > 0.0
-            ):
+            if _swept_min(*zoned, tau[k, j], f, have, hint, False) > 0.0:
                 break
             j += 1
         if j == m:
             out[k] = tau[k, m - 1]
             continue
         t1, t2 = tau[k, j - 1], tau[k, j]
-        g = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t2, f, have, full)
+        g = _swept_min(*zoned, t2, f, have, full, True)  # (every pair known: out at t2)
         if math.isfinite(g):
-            gm1 = _swept_min(
-                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t1, f, have, full
-            )
+            gm1 = _swept_min(*zoned, t1, f, have, full, False)
             gm2 = math.nan
             if j >= 2:
-                t0 = tau[k, j - 2]
-                gm2 = _swept_min(
-                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t0, f, have, full
-                )
+                gm2 = _swept_min(*zoned, tau[k, j - 2], f, have, full, False)
             out[k] = _crossing(tau[k, max(j - 2, 0)], gm2, t1, gm1, t2, g)
             continue
         za = zb = 0.0
+        inside = False
         out_first = False  # (the bracket: the first sample out, but never before the second)
         for i in range(zoom.shape[0]):
             zb = t1 + (t2 - t1) * zoom[i]
-            inside = (
-                _swept_min(
-                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, hint
-                )
-                < 0.0
-            )
+            inside = _swept_min(*zoned, zb, f, have, hint, False) < 0.0
             if i >= 1 and (out_first or not inside or i == zoom.shape[0] - 1):
                 break
             out_first = not inside
             za = zb
-        fa = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, za, f, have, full)
-        fb = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, full)
+        fb = _swept_min(*zoned, zb, f, have, full, not inside)
+        fa = _swept_min(*zoned, za, f, have, full, False)
         out[k] = _crossing(za, math.nan, za, fa, zb, fb) if math.isfinite(fb) else 0.5 * (za + zb)
 
 
