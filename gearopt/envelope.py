@@ -319,7 +319,8 @@ def solve_envelope(
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
     j0 = int(np.argmin(np.abs(h)))
-    good = converged & (np.sign(np.linalg.det(jac)) == sign0[..., None])
+    det = np.linalg.det(jac)
+    good = converged & (np.sign(det) == sign0[..., None])
     toward = np.where(np.arange(n_p) > j0, -1, np.where(np.arange(n_p) < j0, 1, 0))
     neighbour = np.broadcast_to(np.arange(n_p) + toward, shape)
     retry = ~converged & np.take_along_axis(good, neighbour, axis=2)
@@ -339,7 +340,8 @@ def solve_envelope(
         iterations = max(iterations, it)
         sel = (fk[ok], fi[ok], pj[ok])
         q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
-    unfolded = np.sign(np.linalg.det(jac)) == sign0[..., None]
+        det[sel] = np.linalg.det(jr[ok])
+    unfolded = np.sign(det) == sign0[..., None]
     good = converged & unfolded
     # on the sheet: connected to the pitch row through good nodes of the column
     up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
