@@ -746,21 +746,18 @@ def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
         a, b = start[k], start[k + 1]
         ox, oy, dx, dy = rays[k, 0], rays[k, 1], rays[k, 2], rays[k, 3]
         j = 0
+        offset = rows[5][pair_row[a]] if b > a else 0
         while j < m:
             held = False
+            s, t = ox + tau[k, j] * dx, oy + tau[k, j] * dy
+            point = _pinion_at(s, t, pinion, offset)  # (the rows of one pinion cell offset)
+            at = _zone_at(s, t, zone)
             for p in range(a, b):
-                f[p, j] = (
-                    _separation(
-                        rows,
-                        pair_row[p],
-                        ox + tau[k, j] * dx,
-                        oy + tau[k, j] * dy,
-                        pinion,
-                        gear,
-                        zone,
-                    )
-                    - c
-                )
+                r = pair_row[p]
+                if rows[5][r] == offset:
+                    f[p, j] = _separation_of(rows, r, point, at, pinion, gear, zone) - c
+                else:
+                    f[p, j] = _separation(rows, r, s, t, pinion, gear, zone) - c
                 held = held or f[p, j] < 0.0
             if not held:
                 break
