@@ -82,6 +82,13 @@ class GeneratingFamily(Protocol):
     # solver's Newton iteration (``_newton``: same arguments, same result ``(q, f, jac,
     # converged, iterations)``, ``q`` ``(n, 3)``) done by the family, compiled, or None where it
     # cannot (then the solver iterates itself)
+    #
+    # optional: ``bisect(q_up, flank, face_mm, lower, upper, *, cos_sin, tol, bisections,
+    # sheet)`` the solver's bisection of a column's generated end on uniform depth
+    # (``_bisected``: each middle solved by ``_newton`` with ``max_iter=8`` from the last
+    # accepted point, accepted where it converged with the meshing Jacobian's determinant of
+    # the sign ``sheet`` (``(m,)``), or with ``sheet`` None where ``within_tool``) done by the
+    # family, compiled: the last accepted profile coordinates ``(m,)``, or None where it cannot
 
     def pitch_row(self, cone_distance_mm: NDArray) -> NDArray:
         """``(n_flanks, n, 3)`` parameters of the flank points on the pitch line (h = 0),
@@ -312,7 +319,8 @@ def solve_envelope(
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
     j0 = int(np.argmin(np.abs(h)))
-    good = converged & (np.sign(np.linalg.det(jac)) == sign0[..., None])
+    det = np.linalg.det(jac)
+    good = converged & (np.sign(det) == sign0[..., None])
     toward = np.where(np.arange(n_p) > j0, -1, np.where(np.arange(n_p) < j0, 1, 0))
     neighbour = np.broadcast_to(np.arange(n_p) + toward, shape)
     retry = ~converged & np.take_along_axis(good, neighbour, axis=2)
@@ -332,7 +340,8 @@ def solve_envelope(
         iterations = max(iterations, it)
         sel = (fk[ok], fi[ok], pj[ok])
         q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
-    unfolded = np.sign(np.linalg.det(jac)) == sign0[..., None]
+        det[sel] = np.linalg.det(jr[ok])
+    unfolded = np.sign(det) == sign0[..., None]
     good = converged & unfolded
     # on the sheet: connected to the pitch row through good nodes of the column
     up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
@@ -374,11 +383,30 @@ def solve_envelope(
     )
 
 
-def _bisected(family, q_up, fk, fi, lo, up, accept, s, cos_sin, taper, tol) -> NDArray:
+def _bisected(
+    family, q_up, fk, fi, lo, up, accept, s, cos_sin, taper, tol, *, sheet=None
+) -> NDArray:
     """The profile coordinates ``(m,)`` where ``accept(q, jac, flank)`` ends between ``lo``
     (not accepted) and ``up`` (accepted, parameters ``q_up``) on face columns ``fi`` of flanks
     ``fk``: :data:`FOLD_BISECTIONS` bisections, each Newton solve started from the last
-    accepted point; the last accepted coordinate."""
+    accepted point; the last accepted coordinate. ``accept`` is the Jacobian's sign ``sheet``
+    when given, else :meth:`GeneratingFamily.within_tool` (a family's compiled ``bisect``
+    does the same)."""
+    own = getattr(family, "bisect", None)
+    if own is not None and taper is None:
+        done = own(
+            q_up,
+            fk,
+            s[fi],
+            lo,
+            up,
+            cos_sin=cos_sin,
+            tol=tol,
+            bisections=FOLD_BISECTIONS,
+            sheet=sheet,
+        )
+        if done is not None:
+            return done
     q_up = np.array(q_up, float)
     cg, sg = cos_sin
     for _ in range(FOLD_BISECTIONS):
@@ -410,7 +438,18 @@ def _fold_profiles(family, q, connected, sign0, s, h, cos_sin, j0, taper, tol) -
         return np.sign(np.linalg.det(jac)) == sheet
 
     fold[fk, fi] = _bisected(
-        family, q[fk, fi, jb + 1], fk, fi, h[jb], h[jb + 1], on_sheet, s, cos_sin, taper, tol
+        family,
+        q[fk, fi, jb + 1],
+        fk,
+        fi,
+        h[jb],
+        h[jb + 1],
+        on_sheet,
+        s,
+        cos_sin,
+        taper,
+        tol,
+        sheet=sheet,
     )
     return fold
 

@@ -1,6 +1,7 @@
 """The zones' scans in whole-array numpy (:meth:`gearopt.mesh.zone.Zones.exits` and
 :meth:`~gearopt.mesh.zone.Zones.pattern_exits` before their compiled kernels,
-:func:`gearopt.contact.kernels.union_exits` and :func:`~gearopt.contact.kernels.swept_exits`):
+:func:`gearopt.contact.zone_kernels.union_exits` and
+:func:`~gearopt.contact.zone_kernels.swept_exits`):
 every sample of every ray evaluated through :meth:`gearopt.mesh.zone.Zones.along` (the
 engine's point clearance, itself the numpy reference under :func:`tests.numpy_engine.install`).
 Kept for the kernels' parity test; production code never imports this module.

@@ -129,6 +129,38 @@ def test_compiled_newton_solves_as_the_solver(case):
     assert np.all(np.abs(got.residual[got.converged]) <= 1e-14)
 
 
+class _SolverBisection:
+    """The family without its compiled bisection: the solver bisects (with the compiled
+    Newton iteration)."""
+
+    def __init__(self, family):
+        self._family = family
+
+    def __getattr__(self, name):
+        if name == "bisect":
+            raise AttributeError(name)
+        return getattr(self._family, name)
+
+
+def test_compiled_bisection_ends_the_columns_as_the_solver(case):
+    # the fold and the blade tip bisected node by node in one kernel: the same Newton solves in
+    # the same order as the solver's vectorised bisection, so the same coordinates to the bit
+    design, family = case
+    blank = design.blank
+    args = {
+        "cone_distances_mm": (blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
+        "heights_mm": (-blank.mean_dedendum_mm[0], blank.mean_addendum_mm[0]),
+        "pitch_angle_rad": math.radians(blank.pitch_angle_deg[0]),
+        "grid": FlankGrid(n_face=15, n_profile=17),
+    }
+    got = solve_envelope(family, **args).lowest_profile_mm
+    ref = solve_envelope(_SolverBisection(family), **args).lowest_profile_mm
+    h = np.linspace(*args["heights_mm"], 17)
+    between = np.isfinite(ref) & (np.min(np.abs(ref[..., None] - h), axis=-1) > 1e-9)
+    assert between.sum() >= 5  # columns ended between nodes: bisected
+    np.testing.assert_array_equal(got, ref)
+
+
 def test_the_warm_up_compiles_the_models_kernels(monkeypatch):
     # gearopt.warmup.warm_kernels asks every installed machine model to warm its own kernels
     import gearopt.warmup as warmup
@@ -143,5 +175,10 @@ def test_the_warm_up_compiles_the_models_kernels(monkeypatch):
         )
     warmup.warm_kernels(announce=False)
     assert sorted(calls) == ["cyclo-palloid", "epicycloid"]
-    for kernel in (kernels.meshing_jacobians, kernels.newton, kernels.geometries):
+    for kernel in (
+        kernels.meshing_jacobians,
+        kernels.newton,
+        kernels.bisected,
+        kernels.geometries,
+    ):
         assert kernel.signatures  # compiled or loaded from the cache

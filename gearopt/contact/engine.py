@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import operator
 
 import numpy as np
 
@@ -24,9 +25,25 @@ from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells
 
-__all__ = ["ContactEngine", "EngineRows", "node_tables"]
+__all__ = ["ContactEngine", "EngineRows", "node_tables", "remembered_tables"]
 
 _HEAP = {"kept": False}
+#: the flank-only tables of the last few fields and engines (:func:`remembered_tables`)
+_REMEMBERED: list[tuple[str, tuple, object]] = []
+
+
+def remembered_tables(kind: str, flanks: tuple, make):
+    """``make()``, or what it gave for the same ``kind`` and the same flanks (FlankMaps, by
+    identity: a FlankMap is never changed in place) among the last few: tables of the flanks
+    alone, which a study's evaluations of one design (aligned, misaligned: only the placement
+    differs) would otherwise build again for every placement."""
+    for known, key, value in _REMEMBERED:
+        if known == kind and len(key) == len(flanks) and all(map(operator.is_, key, flanks)):
+            return value
+    value = make()
+    _REMEMBERED.insert(0, (kind, tuple(flanks), value))
+    del _REMEMBERED[16:]
+    return value
 
 
 def _keep_heap() -> None:
@@ -116,6 +133,75 @@ def node_tables(pinion) -> dict:
     }
 
 
+def _stacked_tables(fields) -> dict:
+    """The tables of :class:`ContactEngine` that depend on its fields' flanks alone (not on the
+    placement): the sides' pinion node tables, padded and stacked, the cell tables of both
+    flanks concatenated, the refinable and generated cells, the grid's cell size."""
+    first = fields[0]
+    tables = [f.node_tables for f in fields]
+    ds, dh = tables[0]["cell_mm"]
+    cell = np.array([ds, dh])
+    # node tables (all grid nodes; off-mask nodes are +inf in the fields)
+    # the generated pinion nodes of each side, padded to one count with at least one more
+    # (padding: the first generated node again, its result dropped); components stored
+    # apart, contiguous
+    sizes = [t["nodes"].size for t in tables]
+    count = max(sizes) + 1
+    pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
+    node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
+    node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
+    # each grid node's column in its side's node tables (off-mask: the padding after them)
+    node_slot = np.stack(
+        [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
+    )
+    points = tuple(
+        np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)]) for a in range(3)
+    )
+    normals = tuple(
+        np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)]) for a in range(3)
+    )
+    # the refinable nodes and cells: the generated ones on the fine cells at the
+    # generated boundary, else two cells above the lowest generated nodes (node_tables)
+    refine_nodes = np.stack([t["keep"] for t in tables])
+    refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
+    pinion_cells = len(tables[0]["cells"])
+    pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
+    # the fine cells at each side's generated boundary (their indices offset per side)
+    offsets = np.cumsum([0] + [len(t["fine"][1]) for t in tables[:-1]])
+    pinion_band = np.concatenate(
+        [
+            np.where(t["fine"][0][:, :1] >= 0.0, t["fine"][0] + [k, 0, 0, 0], t["fine"][0])
+            for t, k in zip(tables, offsets, strict=True)
+        ]
+    )
+    pinion_fine = np.concatenate([t["fine"][1] for t in tables])
+    gear_cells = first.gear.cells.generated.size
+    gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
+    gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+    # where the tangency point is inside the pinion flank
+    pinion_generated = np.ascontiguousarray(np.concatenate([t["generated"] for t in tables]))
+    return {
+        "ds": ds,
+        "dh": dh,
+        "cell": cell,
+        "node_index": node_index,
+        "node_real": node_real,
+        "node_slot": node_slot,
+        "points": points,
+        "normals": normals,
+        "refine_nodes": refine_nodes,
+        "refine_cells": refine_cells,
+        "pinion_cells": pinion_cells,
+        "pinion_coef": pinion_coef,
+        "pinion_band": pinion_band,
+        "pinion_fine": pinion_fine,
+        "gear_cells": gear_cells,
+        "gear_coef": gear_coef,
+        "gear_ok": gear_ok,
+        "pinion_generated": pinion_generated,
+    }
+
+
 class EngineRows:
     """Per-row constants of the clearance (:meth:`ContactEngine._rows`): the coefficients of x and y
     in the four linear outputs (``kx``, ``ky``, each ``(4, ...)``), the gear's ideal turn, the
@@ -184,52 +270,10 @@ class ContactEngine:
         self.place(fields)
         g = math.radians(first.pinion.pitch_angle_deg)
         self.cos_sin_pitch = (math.cos(g), math.sin(g))
-        tables = [f.node_tables for f in fields]
-        self.ds, self.dh = tables[0]["cell_mm"]
-        self.cell = np.array([self.ds, self.dh])
-        # node tables (all grid nodes; off-mask nodes are +inf in the fields)
-        # the generated pinion nodes of each side, padded to one count with at least one more
-        # (padding: the first generated node again, its result dropped); components stored
-        # apart, contiguous
-        sizes = [t["nodes"].size for t in tables]
-        count = max(sizes) + 1
-        pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
-        self.node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
-        self.node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
-        # each grid node's column in its side's node tables (off-mask: the padding after them)
-        self.node_slot = np.stack(
-            [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
-        )
-        self.points = tuple(
-            np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)])
-            for a in range(3)
-        )
-        self.normals = tuple(
-            np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)])
-            for a in range(3)
-        )
-        # the refinable nodes and cells: the generated ones on the fine cells at the
-        # generated boundary, else two cells above the lowest generated nodes (node_tables)
-        self.refine_nodes = np.stack([t["keep"] for t in tables])
-        self.refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
-        self.pinion_cells = len(tables[0]["cells"])
-        self.pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
-        # the fine cells at each side's generated boundary (their indices offset per side)
-        offsets = np.cumsum([0] + [len(t["fine"][1]) for t in tables[:-1]])
-        self.pinion_band = np.concatenate(
-            [
-                np.where(t["fine"][0][:, :1] >= 0.0, t["fine"][0] + [k, 0, 0, 0], t["fine"][0])
-                for t, k in zip(tables, offsets, strict=True)
-            ]
-        )
-        self.pinion_fine = np.concatenate([t["fine"][1] for t in tables])
-        self.gear_cells = first.gear.cells.generated.size
-        self.gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
-        self.gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
-        # where the tangency point is inside the pinion flank
-        self.pinion_generated = np.ascontiguousarray(
-            np.concatenate([t["generated"] for t in tables])
-        )
+        flanks = tuple(m for f in fields for m in (f.pinion, f.gear))
+        stacked = remembered_tables("engine", flanks, lambda: _stacked_tables(fields))
+        for name, value in stacked.items():
+            setattr(self, name, value)
         self._linear_maps(fields)
         self.kernel_tables = self._kernel_tables()
 

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.assembly import Placement
-from gearopt.contact.engine import ContactEngine, node_tables
+from gearopt.contact.engine import ContactEngine, node_tables, remembered_tables
 from gearopt.contact.samples import FieldSample, PointClearance
 from gearopt.errors import GearoptError
 from gearopt.flank import FlankMap
@@ -112,7 +112,7 @@ class ClearanceField:
             raise ContactError(
                 "pinion flank", int(pinion.mask.sum()), "needs at least 4 generated nodes"
             )
-        self.node_tables = node_tables(pinion)
+        self.node_tables = remembered_tables("nodes", (pinion,), lambda: node_tables(pinion))
         #: the joint fields made with this one first (:meth:`JointField.of`), by the other
         #: fields' identities
         self.joints: dict[tuple[int, ...], JointField] = {}

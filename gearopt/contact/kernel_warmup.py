@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gearopt.contact import kernels
+from gearopt.contact import kernels, zone_kernels
 from gearopt.contact.minima import minima_pick, minima_starts
 from gearopt.contact.rows import row_constants
 
@@ -76,9 +76,11 @@ def warm() -> None:
     zone = (np.zeros(1), np.zeros((1, 2, 2)), 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0)
     start, pair_row, tau = np.array([0, 1], ip), np.zeros(1, ip), np.zeros((1, 2))
     rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)
-    kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
+    zone_kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     none = np.full(1, -1, ip)
-    kernels.swept_exits(rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out)
+    zone_kernels.swept_exits(
+        rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out
+    )
     one, flag = np.zeros((1, 1)), np.ones(1, np.bool_)
     tolerances, grid = np.ones((2, 1)), (np.zeros(1), np.zeros(1))
     near = (rows, side, np.zeros((2, 1)))

@@ -13,7 +13,10 @@ time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares t
 - :func:`refine`: the refinement's constrained Newton steps (its candidate nodes:
   :mod:`gearopt.contact.minima`);
 - :func:`tangency`, :func:`interval_end`: the tangency point (the least clearance over the
-  smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends).
+  smooth extension of the flanks) and where it leaves the flanks (the contact interval's ends);
+- :func:`pinion_at`, :func:`gap_of`: a pinion point's row-independent part and its clearance
+  on a row, inlined into the kernels here and into the marking-compound zone's
+  (:mod:`gearopt.contact.zone_kernels`).
 
 A numpy reference of the node fields, the point clearance and the refinement (the engine's
 whole-array paths before these kernels) lives with the tests (``tests/numpy_engine.py``); the
@@ -37,9 +40,9 @@ __all__ = [
     "node_fields",
     "point_fields",
     "refine",
-    "swept_exits",
+    "gap_of",
+    "pinion_at",
     "tangency",
-    "union_exits",
 ]
 
 
@@ -242,7 +245,15 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     :func:`clearance_at`): ``(delta, valid)``, valid on the gear flank and in the pinion's
     ``cells`` (``(c0, c1)`` per cell of the pinion tables, ``pinion[14]``: the point is in
     where ``v >= c0 + c1 u``, :func:`gearopt.contact.engine.node_tables`)."""
-    kx, ky, turn, sense, offset, pinion_offset = rows
+    return gap_of(rows, r, pinion_at(s, t, pinion, rows[5][r]), gear, cells)
+
+
+@compiled(inline=True)
+def pinion_at(s, t, pinion, offset):
+    """The row-independent part of :func:`_point_in` at grid coordinates ``(s, t)`` of the
+    pinion tables ``offset`` cells in: ``(cell, u, v, px, py, l1, l2, l3, l4)``, the cell and
+    the unit coordinates in it, the point's x and y in the pinion frame and the z terms of the
+    four linear outputs."""
     (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef) = pinion[
         :14
     ]
@@ -250,7 +261,7 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     y = (t - h0) * ib
     a = _corner(x, lim0)
     b = _corner(y, lim1)
-    cell = int(a * n_cols + b) + pinion_offset[r]
+    cell = int(a * n_cols + b) + offset
     u = x - a
     v = y - b
     theta = _pinion_theta(coef, pinion[15], pinion[16], cell, u, v)
@@ -258,10 +269,28 @@ def _point_in(rows, r, s, t, pinion, gear, cells):
     big_r = lin[0, 0] * s + lin[0, 1] * h + const[0]
     px = big_r * math.cos(theta)
     py = big_r * math.sin(theta)
-    o0 = kx[0, r] * px + ky[0, r] * py + (lin[1, 0] * s + lin[1, 1] * h + const[1])
-    o1 = kx[1, r] * px + ky[1, r] * py + (lin[2, 0] * s + lin[2, 1] * h + const[2])
-    o2 = kx[2, r] * px + ky[2, r] * py + (lin[3, 0] * s + lin[3, 1] * h + const[3])
-    o3 = kx[3, r] * px + ky[3, r] * py + (lin[4, 0] * s + lin[4, 1] * h + const[4])
+    return (
+        cell,
+        u,
+        v,
+        px,
+        py,
+        lin[1, 0] * s + lin[1, 1] * h + const[1],
+        lin[2, 0] * s + lin[2, 1] * h + const[2],
+        lin[3, 0] * s + lin[3, 1] * h + const[3],
+        lin[4, 0] * s + lin[4, 1] * h + const[4],
+    )
+
+
+@compiled(inline=True)
+def gap_of(rows, r, point, gear, cells):
+    """:func:`_point_in` on row ``r`` of the pinion point ``point`` (:func:`pinion_at`)."""
+    kx, ky, turn, sense, offset, _ = rows
+    cell, u, v, px, py, l1, l2, l3, l4 = point
+    o0 = kx[0, r] * px + ky[0, r] * py + l1
+    o1 = kx[1, r] * px + ky[1, r] * py + l2
+    o2 = kx[2, r] * px + ky[2, r] * py + l3
+    o3 = kx[3, r] * px + ky[3, r] * py + l4
     theta = math.atan2(o1, o0)
     gap, on, _ = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
     inside = v >= cells[cell, 0] + cells[cell, 1] * u  # the generated boundary (node_tables)
@@ -573,231 +602,3 @@ def interval_end(maker, phi, s, t, step, steps, tol, cell, pinion, gear, generat
         else:
             b = m
     return True, a, b, s, t
-
-
-@compiled
-def _separation(rows, r, s, t, pinion, gear, zone):
-    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
-    rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
-    lag, factor, s0, ds, t0, dt, last0, last1, _ = zone
-    delta, valid = _point_in(rows, r, s, t, pinion, gear, pinion[14])
-    if not valid:
-        return math.inf
-    x = min(max((s - s0) / ds, 0.0), last0 + 1.0)
-    y = min(max((t - t0) / dt, 0.0), last1 + 1.0)
-    i = min(int(x), int(last0))
-    j = min(int(y), int(last1))
-    u, v = x - i, y - j
-    f = (1.0 - u) * ((1.0 - v) * factor[r, i, j] + v * factor[r, i, j + 1]) + u * (
-        (1.0 - v) * factor[r, i + 1, j] + v * factor[r, i + 1, j + 1]
-    )
-    return (delta - lag[r]) * f
-
-
-@compiled(inline=True)
-def _crossing(t0, f0, t1, f1, t2, f2):
-    """:func:`gearopt.mesh.zone._crossing` of one bracket."""
-    if not math.isfinite(f2):
-        return t2
-    linear = t1 + (t2 - t1) * f1 / (f1 - f2)
-    quad = (
-        t0 * f1 * f2 / ((f0 - f1) * (f0 - f2))
-        + t1 * f0 * f2 / ((f1 - f0) * (f1 - f2))
-        + t2 * f0 * f1 / ((f2 - f0) * (f2 - f1))
-    )
-    if math.isfinite(quad) and f0 < f1 and quad >= t1 and quad <= t2:
-        return quad
-    return linear
-
-
-@compiled(inline=True)
-def _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have):
-    """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
-    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``)."""
-    for q in (prev[p], p, nxt[p]):
-        if q >= 0 and not have[q]:
-            s = ray[0] + tau * ray[2]
-            t = ray[1] + tau * ray[3]
-            f[q] = _separation(rows, pair_row[q], s, t, pinion, gear, zone)
-            have[q] = True
-    g = f[p]
-    if prev[p] >= 0 and nxt[p] >= 0:
-        fa, fd = f[prev[p]], f[nxt[p]]
-        curv = fa - 2.0 * g + fd
-        finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
-        if finite and g <= fa and g <= fd and curv > 0.0:
-            g = g - 0.125 * (fd - fa) ** 2 / curv
-    return g
-
-
-@compiled
-def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint):
-    """With ``hint[0]`` < 0 the pattern at ``tau`` along a ray of pairs ``a:b``, the least swept
-    separation (:func:`_swept`) minus the compound; else -1.0 inside, +1.0 out, trying pair
-    ``hint[0]`` (the last found inside) first and the others until one is inside."""
-    c = zone[8]
-    have[a:b] = False
-    if hint[0] >= 0:
-        if _swept(rows, pinion, gear, zone, hint[0], pair_row, prev, nxt, ray, tau, f, have) < c:
-            return -1.0
-        for p in range(a, b):
-            if _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have) < c:
-                hint[0] = p
-                return -1.0
-        return 1.0
-    least = math.inf
-    for p in range(a, b):
-        least = min(
-            least, _swept(rows, pinion, gear, zone, p, pair_row, prev, nxt, ray, tau, f, have)
-        )
-    return least - c
-
-
-@compiled
-def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau, zoom, out):
-    """:meth:`gearopt.mesh.zone.Zones.pattern_exits` into ``out``: ray k (``rays[k]``: origin,
-    direction) of pairs ``start[k]:start[k + 1]`` (rows ``pair_row``, neighbours over the
-    motion ``prev``, ``nxt``, -1 without) scanned at ``tau[k]`` up to its first exit, a sample
-    inside once a pair is; the field whole only where it brackets the exit (the same result);
-    an exit through a flank's boundary on the finer scan ``zoom``."""
-    f = np.empty(pair_row.shape[0])
-    have = np.zeros(pair_row.shape[0], np.bool_)
-    m = tau.shape[1]
-    full = np.full(1, -1, np.intp)
-    for k in range(rays.shape[0]):
-        a, b, ray = start[k], start[k + 1], rays[k]
-        hint = np.full(1, a, np.intp)
-        out[k] = 0.0
-        if (
-            not b > a
-            or _swept_min(
-                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau[k, 0], f, have, hint
-            )
-            > 0.0
-        ):
-            continue
-        j = 1
-        while j < m:
-            if (
-                _swept_min(
-                    rows,
-                    pinion,
-                    gear,
-                    zone,
-                    a,
-                    b,
-                    pair_row,
-                    prev,
-                    nxt,
-                    ray,
-                    tau[k, j],
-                    f,
-                    have,
-                    hint,
-                )
-                > 0.0
-            ):
-                break
-            j += 1
-        if j == m:
-            out[k] = tau[k, m - 1]
-            continue
-        t1, t2 = tau[k, j - 1], tau[k, j]
-        g = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t2, f, have, full)
-        if math.isfinite(g):
-            gm1 = _swept_min(
-                rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t1, f, have, full
-            )
-            gm2 = math.nan
-            if j >= 2:
-                t0 = tau[k, j - 2]
-                gm2 = _swept_min(
-                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, t0, f, have, full
-                )
-            out[k] = _crossing(tau[k, max(j - 2, 0)], gm2, t1, gm1, t2, g)
-            continue
-        za = zb = 0.0
-        out_first = False  # (the bracket: the first sample out, but never before the second)
-        for i in range(zoom.shape[0]):
-            zb = t1 + (t2 - t1) * zoom[i]
-            inside = (
-                _swept_min(
-                    rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, hint
-                )
-                < 0.0
-            )
-            if i >= 1 and (out_first or not inside or i == zoom.shape[0] - 1):
-                break
-            out_first = not inside
-            za = zb
-        fa = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, za, f, have, full)
-        fb = _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, zb, f, have, full)
-        out[k] = _crossing(za, math.nan, za, fa, zb, fb) if math.isfinite(fb) else 0.5 * (za + zb)
-
-
-@compiled
-def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out):
-    """:meth:`gearopt.mesh.zone.Zones.exits` ray by ray, each scanned only up to its first
-    sample out of every zone: ray k (``rays[k]`` = origin, unit direction) holds the zones of
-    pairs ``start[k]:start[k + 1]`` (rows ``pair_row``) and is scanned at ``tau[k]``; each
-    zone that held the ray up to that sample gives a crossing of its separation through the
-    compound (``zone[8]``; through a flank's boundary, on the finer scan ``zoom``); the
-    farthest is the exit. Writes ``out`` ``(K,)``."""
-    c = zone[8]
-    m = tau.shape[1]
-    f = np.empty((pair_row.shape[0], m))
-    for k in range(rays.shape[0]):
-        a, b = start[k], start[k + 1]
-        ox, oy, dx, dy = rays[k, 0], rays[k, 1], rays[k, 2], rays[k, 3]
-        j = 0
-        while j < m:
-            held = False
-            for p in range(a, b):
-                f[p, j] = (
-                    _separation(
-                        rows,
-                        pair_row[p],
-                        ox + tau[k, j] * dx,
-                        oy + tau[k, j] * dy,
-                        pinion,
-                        gear,
-                        zone,
-                    )
-                    - c
-                )
-                held = held or f[p, j] < 0.0
-            if not held:
-                break
-            j += 1
-        if j == m:
-            out[k] = tau[k, m - 1]
-            continue
-        result = 0.0
-        for p in range(a, b):
-            if j == 0 or not f[p, j - 1] < 0.0:
-                continue
-            t1, t2, f1, f2 = tau[k, j - 1], tau[k, j], f[p, j - 1], f[p, j]
-            if math.isfinite(f2):
-                t0 = tau[k, max(j - 2, 0)]
-                x = _crossing(t0, f[p, j - 2] if j >= 2 else math.nan, t1, f1, t2, f2)
-            else:
-                za = fa = zb = fb = 0.0
-                out_first = False
-                for i in range(zoom.shape[0]):
-                    zb = t1 + (t2 - t1) * zoom[i]
-                    fb = (
-                        _separation(
-                            rows, pair_row[p], ox + zb * dx, oy + zb * dy, pinion, gear, zone
-                        )
-                        - c
-                    )
-                    if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
-                        break
-                    out_first = not fb < 0.0
-                    za, fa = zb, fb
-                if math.isfinite(fb):
-                    x = _crossing(za, math.nan, za, fa, zb, fb)
-                else:
-                    x = 0.5 * (za + zb)
-            result = math.nan if (x != x or result != result) else max(result, x)
-        out[k] = result

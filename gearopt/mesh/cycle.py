@@ -485,22 +485,23 @@ class MeshCycle:
             np.tile([False, False, True, True], n_sides),
         ).reshape(n_sides, 4)
         corner = np.array([frame.toe_mm, frame.root_mm])
-        outlines = [
-            partial(
-                _outline,
-                zones,
-                corner,
-                first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
-                x["pattern_contact_mm"],
-                self.sense[k] * x["pattern_phi_rad"],
-                x["pattern_pair"],
-                x["pattern_position"],
-                major[k, 0] + 1.0,
-                x["interval"],
-                tangency=self.sides[k].point_contact,
-            )
-            for k, x in enumerate(lines)
-        ]
+        outlines = _Outlines(
+            zones,
+            corner,
+            [
+                (
+                    first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
+                    x["pattern_contact_mm"],
+                    self.sense[k] * x["pattern_phi_rad"],
+                    x["pattern_pair"],
+                    x["pattern_position"],
+                    major[k, 0] + 1.0,
+                    x["interval"],
+                    self.sides[k].point_contact,
+                )
+                for k, x in enumerate(lines)
+            ],
+        )
         out = []
         for k, (_, kw) in enumerate(parts):
             mean = (
@@ -515,16 +516,26 @@ class MeshCycle:
                     ellipse_major_axis_mm=float(major[k, 0]),
                     ellipse_minor_axis_mm=float(ends[k, 0] + ends[k, 1]),
                     mean_point_mm=mean,
-                    outline_source=outlines[k],
+                    outline_source=partial(outlines, k),
                     center_offset_mm=(mean[0] - centre[0], mean[1] - centre[1]),
                 )
             )
         return out
 
 
-def _outline(zones: Zones, corner, *args, **kwargs) -> NDArray:
-    """:meth:`gearopt.mesh.zone.Zones.outline` in pattern coordinates."""
-    return zones.outline(*args, **kwargs) - corner
+class _Outlines:
+    """The sides' outlines (:meth:`gearopt.mesh.zone.Zones.outlines`) in pattern coordinates,
+    measured together when the first is asked for (``sides``: each side's arguments of
+    :meth:`~gearopt.mesh.zone.Zones.outline`, ``tangency`` last)."""
+
+    def __init__(self, zones: Zones, corner, sides) -> None:
+        self.zones, self.corner, self.sides = zones, corner, sides
+        self.found: list[NDArray] | None = None
+
+    def __call__(self, k: int) -> NDArray:
+        if self.found is None:
+            self.found = [o - self.corner for o in self.zones.outlines(self.sides)]
+        return self.found[k]
 
 
 def tooth_contact(

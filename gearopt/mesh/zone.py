@@ -47,7 +47,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt.contact import JointField, kernels
+from gearopt.contact import JointField, zone_kernels
 
 __all__ = [
     "NEAR",
@@ -304,7 +304,7 @@ class Zones:
         of every zone; each zone that held it up to there gives its separation's crossing
         through the compound (inverse quadratic interpolation through the last samples, or
         through a flank's boundary on a finer scan of the bracket, :data:`ZOOM` samples); the
-        farthest is the exit (:func:`gearopt.contact.kernels.union_exits`).
+        farthest is the exit (:func:`gearopt.contact.zone_kernels.union_exits`).
         """
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
@@ -312,7 +312,7 @@ class Zones:
         start = np.searchsorted(ray[order], np.arange(len(origins) + 1))
         tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
         out = np.empty(len(origins))
-        kernels.union_exits(
+        zone_kernels.union_exits(
             *self.tables(),
             start,
             r[order],
@@ -333,7 +333,7 @@ class Zones:
         the pairs. Each ray is scanned at :data:`SPREAD` (``spread``) or :data:`NEAR` fractions
         of the way to the grid's edge up to its first exit, located by inverse quadratic
         interpolation of that field, or through a flank's boundary by a finer scan
-        (:data:`ZOOM`; :func:`gearopt.contact.kernels.swept_exits`).
+        (:data:`ZOOM`; :func:`gearopt.contact.zone_kernels.swept_exits`).
 
         Parameters
         ----------
@@ -360,7 +360,7 @@ class Zones:
         fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
         tau = self.to_edge(origins, directions)[:, None] * fractions
         out = np.empty(k_rays)
-        kernels.swept_exits(
+        zone_kernels.swept_exits(
             *self.tables(),
             np.r_[starts, len(ray)],
             r,
@@ -412,9 +412,54 @@ class Zones:
             ``(k, 2)`` a closed polygon (grid coordinates): the first end, one side of the path,
             the last end, the other side back; ``(0, 2)`` with fewer than two stations.
         """
-        rows = np.asarray(rows, np.intp)
-        contact = np.asarray(contact_mm, float)
-        sep = self.separation(rows, contact[:, :1], contact[:, 1:])[:, 0]
+        side = (rows, contact_mm, u_rad, pair, position, reach_mm, interval, tangency)
+        return self.outlines([side])[0]
+
+    def outlines(self, sides) -> list[NDArray]:
+        """:meth:`outline` of several sides (each the tuple of its arguments, ``tangency``
+        last) at once: the separations at every side's contact points in one evaluation, every
+        side's rays in one scan (the same results as one call per side, at the cost of one)."""
+        rows = [np.asarray(side[0], np.intp) for side in sides]
+        contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
+        every = np.concatenate(contact)
+        sep = self.separation(np.concatenate(rows), every[:, :1], every[:, 1:])[:, 0]
+        sep = np.split(sep, np.cumsum([len(r) for r in rows])[:-1])
+        found = [
+            self._outline_rays(r, c, g, *side[2:])
+            for r, c, g, side in zip(rows, contact, sep, sides, strict=True)
+        ]
+        rays = [f for f in found if f is not None]
+        if rays:
+            first = np.cumsum([0] + [len(f[0]) for f in rays])
+            ends = self.pattern_exits(
+                np.concatenate([f[2] + k for f, k in zip(rays, first, strict=False)]),
+                *(np.concatenate([f[i] for f in rays]) for i in (3, 4, 5)),
+                np.concatenate([f[0] for f in rays]),
+                np.concatenate([f[1] for f in rays]),
+                np.ones(first[-1], bool),
+            )
+        out = []
+        for f in found:
+            if f is None:
+                out.append(np.zeros((0, 2)))
+                continue
+            origins, directions = f[0], f[1]
+            n = (len(origins) - 2) // 2
+            points = origins + ends[: len(origins), None] * directions
+            ends = ends[len(origins) :]
+            out.append(
+                np.concatenate(
+                    [points[2 * n : 2 * n + 1], points[:n], points[-1:], points[n : 2 * n][::-1]]
+                )
+            )
+        return out
+
+    def _outline_rays(
+        self, rows, contact, sep, u_rad, pair, position, reach_mm, interval, tangency
+    ):
+        """One side's rays of :meth:`outline` (``sep`` the separations at its contact points):
+        ``(origins, directions, ray, rows, pairs, positions)`` as :meth:`pattern_exits` takes
+        them, or None with fewer than two stations."""
         u = np.asarray(u_rad, float)
         on = (u >= interval[0] - 1e-9) & (u <= interval[1] + 1e-9)
         inside = np.flatnonzero((sep <= self.compound_mm) & on)
@@ -425,7 +470,7 @@ class Zones:
                 np.unique(np.linspace(0, station.size - 1, STATIONS).round().astype(int))
             ]
         if station.size < 2:
-            return np.zeros((0, 2))
+            return None
         c = contact[station]
         if tangency:
             c = self.tangency_points(rows[station], c)
@@ -438,19 +483,13 @@ class Zones:
         from_station = np.concatenate([np.arange(len(c))] * 2 + [[0, len(c) - 1]])
         offset = np.abs(np.einsum("knd,kd->kn", contact[None, :, :] - c[:, None, :], tangent))
         ray, near = np.nonzero(offset[from_station] <= reach_mm)
-        ends = self.pattern_exits(
+        return (
+            origins,
+            directions,
             ray,
             rows[near],
             np.asarray(pair)[near],
             np.asarray(position)[near],
-            origins,
-            directions,
-            np.ones(len(origins), bool),
-        )
-        points = origins + ends[:, None] * directions
-        n = len(c)
-        return np.concatenate(
-            [points[2 * n : 2 * n + 1], points[:n], points[-1:], points[n : 2 * n][::-1]]
         )
 
     def tables(self) -> tuple:

@@ -199,6 +199,34 @@ class FaceHobbingFamily:
         )
         return q, f, jac, converged, int(iterations)
 
+    def bisect(self, q_up, flank, face_mm, lower, upper, *, cos_sin, tol, bisections, sheet):
+        """gearopt.envelope's bisection of a column's generated end on uniform depth compiled
+        (:func:`kernels.bisected`): on the envelope's sheet of the signs ``sheet``, or with
+        ``sheet`` None within the tool; None without the kernels."""
+        if not self._compiled(q_up):
+            return None
+        q, flank, _ = _flat(q_up, flank)
+        n = len(q)
+        out = np.empty(n)
+        kernels.bisected(
+            self._table,
+            flank,
+            q,
+            np.ascontiguousarray(face_mm, dtype=float),
+            np.ascontiguousarray(lower, dtype=float),
+            np.ascontiguousarray(upper, dtype=float),
+            np.asarray(cos_sin, dtype=float),
+            float(self.scale_mm),
+            np.asarray(self.max_step, dtype=float),
+            float(tol),
+            int(bisections),
+            sheet is not None,
+            np.ones(n) if sheet is None else np.ascontiguousarray(sheet, dtype=float),
+            -self.tip_depth_mm - 1e-9,
+            out,
+        )
+        return out
+
     def pitch_row(self, cone_distance_mm):
         return np.stack(
             [np.stack(pitch_line_start(b, cone_distance_mm), axis=-1) for b in self.blades]

@@ -23,6 +23,7 @@ from gearopt.jit import ENABLED, compiled
 __all__ = [
     "ENABLED",
     "FIELDS",
+    "bisected",
     "blade_heights",
     "geometries",
     "meshing",
@@ -351,6 +352,36 @@ def _clipped(step, limit):
     return (s0 * scale, s1 * scale, s2 * scale)
 
 
+@compiled(inline=True)
+def _newton_node(t, q0, q1, q2, l0, r0, scale_mm, limit, tol, max_iter, give_up, chords):
+    """:func:`newton` at one node of system row ``t`` from ``(q0, q1, q2)`` toward the axial
+    plane target ``(l0, r0)``: ``(q, f, jac, iterations)`` (``give_up``: iterations,
+    residual)."""
+    f, jac = _scaled(t, q0, q1, q2, l0, r0, scale_mm)
+    it = 0
+    while it < max_iter:
+        norm = _max_abs(f)
+        if not (math.isfinite(norm) and norm > tol):
+            break
+        if it >= give_up[0] and not norm < give_up[1]:
+            break
+        it += 1
+        step, det = _solve3(jac, (-f[0], -f[1], -f[2]))
+        if not abs(det) > 1e-300:
+            break
+        step = _clipped(step, limit)
+        q0, q1, q2 = q0 + step[0], q1 + step[1], q2 + step[2]
+        # chord step: same Jacobian, residual from a real evaluation
+        if chords:
+            big, rad, g = _point_meshing(t, q0, q1, q2, scale_mm)
+            fr = ((big - l0) / scale_mm, (rad - r0) / scale_mm, g)
+            if _max_abs(fr) > tol:
+                chord = _clipped(_solve3(jac, (-fr[0], -fr[1], -fr[2]))[0], limit)
+                q0, q1, q2 = q0 + chord[0], q1 + chord[1], q2 + chord[2]
+        f, jac = _scaled(t, q0, q1, q2, l0, r0, scale_mm)
+    return (q0, q1, q2), f, jac, it
+
+
 @compiled
 def newton(
     table,
@@ -379,34 +410,24 @@ def newton(
     finite, its Jacobian is singular, or after ``give_up_iterations`` it is still above
     ``give_up_residual``."""
     most = 0
+    give_up = (give_up_iterations, give_up_residual)
     for i in range(q.shape[0]):
-        t = table[flank[i]]
-        q0, q1, q2 = q[i, 0], q[i, 1], q[i, 2]
-        l0, r0 = big_l[i], big_r[i]
-        f, jac = _scaled(t, q0, q1, q2, l0, r0, scale_mm)
-        it = 0
-        while it < max_iter:
-            norm = _max_abs(f)
-            if not (math.isfinite(norm) and norm > tol):
-                break
-            if it >= give_up_iterations and not norm < give_up_residual:
-                break
-            it += 1
-            step, det = _solve3(jac, (-f[0], -f[1], -f[2]))
-            if not abs(det) > 1e-300:
-                break
-            step = _clipped(step, limit)
-            q0, q1, q2 = q0 + step[0], q1 + step[1], q2 + step[2]
-            # chord step: same Jacobian, residual from a real evaluation
-            if chords:
-                big, rad, g = _point_meshing(t, q0, q1, q2, scale_mm)
-                fr = ((big - l0) / scale_mm, (rad - r0) / scale_mm, g)
-                if _max_abs(fr) > tol:
-                    chord = _clipped(_solve3(jac, (-fr[0], -fr[1], -fr[2]))[0], limit)
-                    q0, q1, q2 = q0 + chord[0], q1 + chord[1], q2 + chord[2]
-            f, jac = _scaled(t, q0, q1, q2, l0, r0, scale_mm)
+        qi, f, jac, it = _newton_node(
+            table[flank[i]],
+            q[i, 0],
+            q[i, 1],
+            q[i, 2],
+            big_l[i],
+            big_r[i],
+            scale_mm,
+            limit,
+            tol,
+            max_iter,
+            give_up,
+            chords,
+        )
         most = max(most, it)
-        q[i, 0], q[i, 1], q[i, 2] = q0, q1, q2
+        q[i, 0], q[i, 1], q[i, 2] = qi
         for r in range(3):
             f_out[i, r] = f[r]
             for c in range(3):
@@ -414,6 +435,61 @@ def newton(
         norm = _max_abs(f)
         converged[i] = math.isfinite(norm) and norm <= tol
     return most
+
+
+@compiled
+def bisected(
+    table,
+    flank,
+    q_up,
+    face_mm,
+    lower,
+    upper,
+    cos_sin,
+    scale_mm,
+    limit,
+    tol,
+    bisections,
+    by_sheet,
+    sheet,
+    least_height_mm,
+    out,
+):
+    """gearopt.envelope's bisection of where a column's accepted points end
+    (``gearopt.envelope._bisected`` on uniform depth), node by node: between ``lower[i]`` (not
+    accepted) and ``upper[i]`` (accepted, parameters ``q_up[i]``) on the face position
+    ``face_mm[i]``, ``bisections`` times the middle solved by :func:`newton` (8 iterations,
+    given up after 3 above 1e-6, chords) from the last accepted point; ``out[i]`` the last
+    accepted profile coordinate. Accepted: converged and, ``by_sheet``, the Jacobian's
+    determinant of the sign ``sheet[i]`` (on the envelope's sheet, LAPACK's LU as numpy's
+    det), else the edge point's height at least ``least_height_mm`` (the tool reaches it)."""
+    cg, sg = cos_sin[0], cos_sin[1]
+    give_up = (3, 1e-6)
+    zero = (0.0, 0.0, 0.0)
+    for i in range(q_up.shape[0]):
+        t = table[flank[i]]
+        s = face_mm[i]
+        lo, up = lower[i], upper[i]
+        q0, q1, q2 = q_up[i, 0], q_up[i, 1], q_up[i, 2]
+        for _ in range(bisections):
+            mid = 0.5 * (lo + up)
+            big_l, big_r = s * cg - mid * sg, s * sg + mid * cg
+            qm, f, jac, _ = _newton_node(
+                t, q0, q1, q2, big_l, big_r, scale_mm, limit, tol, 8, give_up, True
+            )
+            norm = _max_abs(f)
+            ok = math.isfinite(norm) and norm <= tol
+            if ok and by_sheet:
+                det = _solve3(jac, zero)[1]
+                ok = (1.0 if det > 0.0 else (-1.0 if det < 0.0 else 0.0)) == sheet[i]
+            elif ok:
+                ok = _edge(t, qm[0])[1] >= least_height_mm
+            if ok:
+                up = mid
+                q0, q1, q2 = qm
+            else:
+                lo = mid
+        out[i] = up
 
 
 @compiled
@@ -468,6 +544,25 @@ def warm() -> None:
     meshing_jacobians(table, flank, q, 100.0, out, jac)
     geometries(table, flank, q, np.empty((2, 3)), np.empty((2, 3)))
     blade_heights(table, flank, u, np.empty(2))
+    limit = np.ones(3)
+    for by_sheet in (True, False):
+        bisected(
+            table,
+            flank,
+            q,
+            u,
+            u,
+            u + 1.0,
+            np.array([1.0, 0.0]),
+            100.0,
+            limit,
+            1e-14,
+            1,
+            by_sheet,
+            np.ones(2),
+            -1.0,
+            np.empty(2),
+        )
     newton(
         table,
         flank,
