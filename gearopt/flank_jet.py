@@ -19,10 +19,13 @@ class FlankJet:
     at single points. The cell is found by the arithmetic of
     :meth:`gearopt.flank.HermiteCells.locate` on Python floats (the same cell and unit
     coordinates, without numpy's per-call overhead); beyond the grid the edge cell's polynomial
-    is extended, as in :meth:`gearopt.flank.FlankMap.polar_angle_local`."""
+    is extended, as in :meth:`gearopt.flank.FlankMap.polar_angle_local`. With ``fine`` (the
+    ``(band, coefficients)`` of :func:`gearopt.contact.boundary.boundary_cells`) a cell that
+    has fine cells is evaluated on them, as the contact engine evaluates the pinion."""
 
-    def __init__(self, fm: FlankMap) -> None:
+    def __init__(self, fm: FlankMap, fine: tuple[NDArray, NDArray] | None = None) -> None:
         self.cells = fm.cells
+        self.fine = fine
         fs, fp = fm.face_mm, fm.profile_mm
         self.s0, self.h0 = float(fs[0]), float(fp[0])
         self.n_f, self.n_p = len(fs), len(fp)
@@ -42,6 +45,12 @@ class FlankJet:
         cell = i * self.cells.columns + j
         c = self.cells.polynomial(cell)
         ds, dh = self.ds, self.dh
+        if self.fine is not None and self.fine[0][cell, 0] >= 0.0:
+            b, o, k, m = self.fine[0][cell]
+            y = (o + v) * k
+            n = min(max(math.floor(y), 0.0), m - 1.0)
+            c = self.fine[1][int(b + n)].reshape(4, 4)
+            v, dh = y - n, dh / k
         uu = np.array([1.0, u, u * u, u * u * u])
         du = np.array([0.0, 1.0, 2.0 * u, 3.0 * u * u]) / ds
         d2u = np.array([0.0, 0.0, 2.0, 6.0 * u]) / (ds * ds)

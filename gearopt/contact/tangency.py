@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from gearopt.contact.boundary import boundary_cells
 from gearopt.contact.field import ClearanceField
 from gearopt.flank_jet import FlankJet, cosine, cross
 
@@ -37,7 +38,9 @@ class TangencySystem:
 
     def __init__(self, field: ClearanceField) -> None:
         self.field = field
-        self.pinion, self.gear = FlankJet(field.pinion), FlankJet(field.gear)
+        # the pinion on the engine's fine cells at its generated boundary, as the engine has it
+        self.pinion = FlankJet(field.pinion, boundary_cells(field.pinion))
+        self.gear = FlankJet(field.gear)
         self.b, self.c = field.b, field.c
         self.gs = float(field.gear_sense)
 
