@@ -159,7 +159,8 @@ class MeshCycle:
     window sample (the pairs nearest each side's mesh centre at every position, and beyond
     both ends); the contact intervals' bisection points, the hand-overs' first evaluations and
     the extra positions that are due, with the pairs beyond the windows; again, for a side
-    whose window is re-centred; then further rounds until no side asks for more.
+    whose window is re-centred, or widened where a pair beyond it carries (:meth:`widen`);
+    then further rounds until no side asks for more.
 
     Parameters
     ----------
