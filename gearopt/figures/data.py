@@ -45,6 +45,9 @@ REACH_PITCHES = 3
 ORDERS = 8
 #: envelope samples over the pitch of the spectrum
 SPECTRUM_SAMPLES = 256
+#: two pairs' lags at a solved hand-over differ by at most this where the curves meet (a
+#: bracket closing on a step of a pair's lag leaves more: arcsec)
+MEET_ARCSEC = 1e-6
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -250,7 +253,12 @@ def te_curves(field: ClearanceField, report: dict, *, separation: str = "normal"
     reported = np.radians(np.asarray(report["handover_phi1_deg"], float))
     if len(u_hand) > 1 and reported.size:
         # several crossings a pitch: a flat TE (line contact), where the curves cross in
-        # their noise; the one nearest the TCA's hand-over
+        # their noise (and a bracket may close on a step of a pair's lag, where they do not
+        # meet); the one nearest the TCA's hand-over among those where they meet
+        gap = np.abs(motion.curve(u_hand) - motion.curve(u_hand + p)) * ARCSEC
+        meet = gap <= MEET_ARCSEC
+        if meet.any():
+            u_hand, g_hand = u_hand[meet], g_hand[meet]
         off = (u_hand - reported[0] + 0.5 * p) % p - 0.5 * p
         pick = int(np.argmin(np.abs(off)))
         u_hand, g_hand = u_hand[pick : pick + 1], g_hand[pick : pick + 1]

@@ -23,6 +23,8 @@ from gearopt.mesh.zone import ZoneRows, Zones
 __all__ = ["EXTEND", "MeshCycle", "ToothContact", "tooth_contact", "tooth_contacts"]
 
 EXTEND = np.array([1, 2, 3, 5, 10, 15])  # sample steps beyond the range (contact interval)
+#: the most pairs a side's window is widened to (:meth:`MeshCycle.widen`)
+WIDEST = 9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,7 +159,8 @@ class MeshCycle:
     window sample (the pairs nearest each side's mesh centre at every position, and beyond
     both ends); the contact intervals' bisection points, the hand-overs' first evaluations and
     the extra positions that are due, with the pairs beyond the windows; again, for a side
-    whose window is re-centred; then further rounds until no side asks for more.
+    whose window is re-centred, or widened where a pair beyond it carries (:meth:`widen`);
+    then further rounds until no side asks for more.
 
     Parameters
     ----------
@@ -211,6 +214,9 @@ class MeshCycle:
         self.t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
         self.step = self.t[1] - self.t[0]
         self.offsets = np.arange(pairs) - (pairs - 1) // 2
+        #: each side's window (pair offsets), :attr:`offsets` unless widened (:meth:`widen`)
+        self.windows = [self.offsets] * len(self.fields)
+        self.widened = False
         self.sides: list[SideCycle] = []
 
     def run(self) -> list[ToothContact]:
@@ -224,9 +230,15 @@ class MeshCycle:
         beyond = self.beyond_requests()
         more = self.evaluate([s for s in self.sides if s.extras_due()], beyond)
         centres = self.mesh_centres(beyond, more)
-        if np.any(centres != 0.0):
+        resample = bool(np.any(centres != 0.0)) | self.widen(beyond, more, centres)
+        # a window that stays (a flat lag) but misses a carrying pair beyond it (more pairs in
+        # contact than the window holds) is widened by a pair either side until none beyond
+        # carries
+        while resample:
             self.main_sample(centres)
-            self.evaluate([s for s in self.sides if s.extras_due()])
+            beyond = self.beyond_requests() if self.widened else []
+            more = self.evaluate([s for s in self.sides if s.extras_due()], beyond)
+            resample = self.widen(beyond, more, centres)
         # the contact intervals' ends, the hand-overs' further steps (edge contact, or a poor
         # first guess) and the extra positions still missing (a flat TE is centred on its
         # contact interval)
@@ -253,7 +265,7 @@ class MeshCycle:
         t, p1, step = self.t, self.pitch, self.step
         windows, rows_side, rows_u = [], [], []
         for k in range(len(self.fields)):
-            ids = np.round((centres[k] - t) / p1)[:, None] + self.offsets[None, :]
+            ids = np.round((centres[k] - t) / p1)[:, None] + self.windows[k][None, :]
             u = t[:, None] + ids * p1  # (n, pairs): each pair's base-pair relative rotation
             key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
             _, first, inv = np.unique(key, return_index=True, return_inverse=True)
@@ -314,19 +326,55 @@ class MeshCycle:
 
     def beyond_requests(self) -> list[tuple[int, float]]:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the
-        window centred on the mesh?), as ``(side, relative rotation)``."""
-        p1, pairs = self.pitch, self.pairs
+        window centred on the mesh? does it hold every pair in contact?), as ``(side,
+        relative rotation)``."""
+        p1 = self.pitch
         req = []
         for side in self.sides:
             v = side.interval_sample.phi_rad * side.field.sense
             known = set(np.round(v / p1 * 1e9).tolist())
-            for slot, sign in ((0, -1.0), (pairs - 1, 1.0)):
-                beyond = side.u[side.carrying == slot, slot] + sign * p1
+            for slot, sign in ((0, -1.0), (side.u.shape[1] - 1, 1.0)):
+                at = np.flatnonzero(side.carrying == slot)
+                beyond = side.u[at, slot] + sign * p1
                 keys = np.round(beyond / p1 * 1e9).tolist()
                 req += [
                     (side.index, x) for x, key in zip(beyond, keys, strict=True) if key not in known
                 ]
         return req
+
+    def widen(self, beyond, more: FieldSample | None, centres: NDArray) -> bool:
+        """Widen by a pair either side (up to :data:`WIDEST` pairs) the window of every side
+        whose window stays (``centres`` 0) and whose pair beyond it at a position where its end
+        pair carries has a lower lag than that end pair (sampled with the window, or among the
+        ``beyond`` rows in ``more``): the TE is the least lag over every pair (a flat lag with
+        more pairs in contact than the window holds: its least is any of them). True where a
+        window was widened (sample again)."""
+        p1 = self.pitch
+        ext_side = np.array([r[0] for r in beyond], np.intp)
+        grown = False
+        for side in self.sides:
+            k = side.index
+            if centres[k] != 0.0 or len(self.windows[k]) + 2 > WIDEST:
+                continue
+            v = side.interval_sample.phi_rad * side.field.sense
+            g = side.interval_sample.minimum_rad
+            if more is not None:
+                rows = ext_side == k
+                v = np.concatenate([v, more.phi_rad[rows] * side.field.sense])
+                g = np.concatenate([g, more.minimum_rad[rows]])
+            known = dict(zip(np.round(v / p1 * 1e9).tolist(), g.tolist(), strict=True))
+            lower = False
+            for slot, sign in ((0, -1.0), (side.u.shape[1] - 1, 1.0)):
+                at = np.flatnonzero(side.carrying == slot)
+                keys = np.round((side.u[at, slot] + sign * p1) / p1 * 1e9).tolist()
+                lag = np.array([known.get(key, np.inf) for key in keys])
+                lower |= bool(np.any(lag < side.lag[at]))
+            if lower:
+                window = self.windows[k]
+                self.windows[k] = np.arange(window[0] - 1, window[-1] + 2)
+                grown = True
+        self.widened |= grown
+        return grown
 
     def mesh_centres(self, beyond, more: FieldSample | None) -> NDArray:
         """Each side's mesh centre: the relative rotation of least lag over everything sampled
