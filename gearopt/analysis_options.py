@@ -24,7 +24,8 @@ SEPARATIONS = ("normal", "circumferential")
 
 #: The FlankMap grid of the contact analyses (n_face, n_profile): the profile is sampled more
 #: finely than the flank default because the pinion's fold spoils interpolation in its lowest
-#: cells and the contact refinement must stay above them.
+#: cells (the engine replaces them by fine cells of the exact surface,
+#: :mod:`gearopt.contact.boundary`, or, without one, keeps its refinement above them).
 TCA_GRID = FlankGrid(n_face=25, n_profile=21)
 
 

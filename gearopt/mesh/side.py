@@ -254,8 +254,9 @@ class SideCycle:
 
         The edge flag lags that point where the minimum slides along a boundary before the
         clearance beyond it falls by the edge tolerance (a path meeting the boundary at a
-        grazing angle to the contact ellipse), and leads it where the tangency point lies in
-        the pinion's lowest generated cells, which the engine's refinement does not enter. Kept
+        grazing angle to the contact ellipse), and leads it where the tangency point lies below
+        the engine's refinable cells (a pinion without fine cells at its generated boundary,
+        :mod:`gearopt.contact.boundary`, whose refinement stays two cells above it). Kept
         as it is where Newton's method fails, and for a line contact (a flat lag,
         :data:`FLAT_ARCSEC`, whose zone does not close on the flanks: ``point_contact``), where
         the tangency point is not unique and its solve converges in the interpolants' error. A
