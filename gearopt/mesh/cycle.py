@@ -332,13 +332,12 @@ class MeshCycle:
         req = []
         for side in self.sides:
             v = side.interval_sample.phi_rad * side.field.sense
-            known = set(np.round(v / p1 * 1e9).tolist())
-            for slot, sign in ((0, -1.0), (side.u.shape[1] - 1, 1.0)):
-                at = np.flatnonzero(side.carrying == slot)
-                beyond = side.u[at, slot] + sign * p1
-                keys = np.round(beyond / p1 * 1e9).tolist()
+            known = set(_keys(v, p1))
+            for _, beyond in _beyond_ends(side, p1):
                 req += [
-                    (side.index, x) for x, key in zip(beyond, keys, strict=True) if key not in known
+                    (side.index, x)
+                    for x, key in zip(beyond, _keys(beyond, p1), strict=True)
+                    if key not in known
                 ]
         return req
 
@@ -362,12 +361,10 @@ class MeshCycle:
                 rows = ext_side == k
                 v = np.concatenate([v, more.phi_rad[rows] * side.field.sense])
                 g = np.concatenate([g, more.minimum_rad[rows]])
-            known = dict(zip(np.round(v / p1 * 1e9).tolist(), g.tolist(), strict=True))
+            known = dict(zip(_keys(v, p1), g.tolist(), strict=True))
             lower = False
-            for slot, sign in ((0, -1.0), (side.u.shape[1] - 1, 1.0)):
-                at = np.flatnonzero(side.carrying == slot)
-                keys = np.round((side.u[at, slot] + sign * p1) / p1 * 1e9).tolist()
-                lag = np.array([known.get(key, np.inf) for key in keys])
+            for at, beyond in _beyond_ends(side, p1):
+                lag = np.array([known.get(key, np.inf) for key in _keys(beyond, p1)])
                 lower |= bool(np.any(lag < side.lag[at]))
             if lower:
                 window = self.windows[k]
@@ -569,6 +566,19 @@ class MeshCycle:
                 )
             )
         return out
+
+
+def _keys(u: NDArray, pitch: float) -> list:
+    """Relative rotations ``u`` as keys that match to a billionth of a pitch."""
+    return np.round(u / pitch * 1e9).tolist()
+
+
+def _beyond_ends(side, pitch: float):
+    """At each end of a side's window: the positions where its end pair carries and the
+    relative rotations of the pair beyond it there, ``(at, beyond)``."""
+    for slot, sign in ((0, -1.0), (side.u.shape[1] - 1, 1.0)):
+        at = np.flatnonzero(side.carrying == slot)
+        yield at, side.u[at, slot] + sign * pitch
 
 
 class _Outlines:
