@@ -16,12 +16,8 @@ from __future__ import annotations
 
 import pytest
 
-import gearopt
-from gearopt.analysis import AnalysisOptions, contact_sides, meshed_pair
+from .grid_convergence import FINE, analysed_sides, figure_params
 
-from .conftest import STUDIES
-
-FINE = [81, 161]
 CASES = {
     "face_milling_14x39": "iso23509/face_milling_14x39.toml",
     "section 5.2": "seed001_section5_2.toml",
@@ -57,30 +53,12 @@ GAPS = {
     ("table 3", "drive", "contact_ratio"),
 }
 
-_RESULTS: dict = {}
-
 
 def _sides(case: str, grid):
-    key = (case, tuple(grid) if grid else None)
-    if key not in _RESULTS:
-        design = gearopt.load_design(STUDIES / CASES[case])
-        options = AnalysisOptions.from_conditions(
-            {"grid": list(grid)} if grid else {}, design=design
-        )
-        _RESULTS[key] = contact_sides(meshed_pair(design, options), options)
-    return _RESULTS[key]
+    return analysed_sides(CASES[case], grid)
 
 
-def _params():
-    for case, side in SIDES:
-        for figure in FIGURES:
-            marks = ()
-            if (case, side, figure) in GAPS:
-                marks = pytest.mark.xfail(strict=True, reason="known gap: see GAPS")
-            yield pytest.param(case, side, figure, marks=marks, id=f"{case}-{side}-{figure}")
-
-
-@pytest.mark.parametrize(("case", "side", "figure"), list(_params()))
+@pytest.mark.parametrize(("case", "side", "figure"), list(figure_params(SIDES, FIGURES, GAPS)))
 def test_te_figure_at_the_default_grid_is_the_fine_grids(case, side, figure):
     coarse = getattr(_sides(case, None)[side], figure)
     fine = getattr(_sides(case, FINE)[side], figure)
