@@ -97,30 +97,36 @@ def test_kernels_match_the_numpy_family(case):
     assert_allclose(one, geo["point"][0], rtol=0, atol=0)
 
 
-class _NumpyIteration:
-    """The family without its compiled Newton iteration: the solver iterates in numpy."""
+class _Without:
+    """The family without one of its optional compiled hooks (``newton``: the solver iterates
+    in numpy; ``bisect``: the solver bisects, with the compiled Newton iteration)."""
 
-    def __init__(self, family):
-        self._family = family
+    def __init__(self, family, hook: str):
+        self._family, self._hook = family, hook
 
     def __getattr__(self, name):
-        if name == "newton":
+        if name == self._hook:
             raise AttributeError(name)
         return getattr(self._family, name)
 
 
-def test_compiled_newton_solves_as_the_solver(case):
-    # the same nodes generated, the same sheet, the same parameters to rounding
-    design, family = case
+def _envelope_args(design) -> dict:
+    """The pinion's :func:`solve_envelope` arguments on a 15 x 17 grid."""
     blank = design.blank
-    args = {
+    return {
         "cone_distances_mm": (blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
         "heights_mm": (-blank.mean_dedendum_mm[0], blank.mean_addendum_mm[0]),
         "pitch_angle_rad": math.radians(blank.pitch_angle_deg[0]),
         "grid": FlankGrid(n_face=15, n_profile=17),
     }
+
+
+def test_compiled_newton_solves_as_the_solver(case):
+    # the same nodes generated, the same sheet, the same parameters to rounding
+    design, family = case
+    args = _envelope_args(design)
     got = solve_envelope(family, **args)
-    ref = solve_envelope(_NumpyIteration(family), **args)
+    ref = solve_envelope(_Without(family, "newton"), **args)
     assert got.mask.sum() > 100
     for name in ("converged", "unfolded", "sheet", "mask", "within_tool"):
         assert np.array_equal(getattr(got, name), getattr(ref, name)), name
@@ -129,32 +135,13 @@ def test_compiled_newton_solves_as_the_solver(case):
     assert np.all(np.abs(got.residual[got.converged]) <= 1e-14)
 
 
-class _SolverBisection:
-    """The family without its compiled bisection: the solver bisects (with the compiled
-    Newton iteration)."""
-
-    def __init__(self, family):
-        self._family = family
-
-    def __getattr__(self, name):
-        if name == "bisect":
-            raise AttributeError(name)
-        return getattr(self._family, name)
-
-
 def test_compiled_bisection_ends_the_columns_as_the_solver(case):
     # the fold and the blade tip bisected node by node in one kernel: the same Newton solves in
     # the same order as the solver's vectorised bisection, so the same coordinates to the bit
     design, family = case
-    blank = design.blank
-    args = {
-        "cone_distances_mm": (blank.inner_cone_distance_mm, blank.outer_cone_distance_mm),
-        "heights_mm": (-blank.mean_dedendum_mm[0], blank.mean_addendum_mm[0]),
-        "pitch_angle_rad": math.radians(blank.pitch_angle_deg[0]),
-        "grid": FlankGrid(n_face=15, n_profile=17),
-    }
+    args = _envelope_args(design)
     got = solve_envelope(family, **args).lowest_profile_mm
-    ref = solve_envelope(_SolverBisection(family), **args).lowest_profile_mm
+    ref = solve_envelope(_Without(family, "bisect"), **args).lowest_profile_mm
     h = np.linspace(*args["heights_mm"], 17)
     between = np.isfinite(ref) & (np.min(np.abs(ref[..., None] - h), axis=-1) > 1e-9)
     assert between.sum() >= 5  # columns ended between nodes: bisected
