@@ -331,14 +331,10 @@ class MeshCycle:
         p1 = self.pitch
         req = []
         for side in self.sides:
-            v = side.interval_sample.phi_rad * side.field.sense
-            known = set(_keys(v, p1))
+            known = _keys(side.interval_sample.phi_rad * side.field.sense, p1)
             for _, beyond in _beyond_ends(side, p1):
-                req += [
-                    (side.index, x)
-                    for x, key in zip(beyond, _keys(beyond, p1), strict=True)
-                    if key not in known
-                ]
+                fresh = beyond[~np.isin(_keys(beyond, p1), known)]
+                req += [(side.index, x) for x in fresh.tolist()]
         return req
 
     def widen(self, beyond, more: FieldSample | None, centres: NDArray) -> bool:
@@ -361,10 +357,13 @@ class MeshCycle:
                 rows = ext_side == k
                 v = np.concatenate([v, more.phi_rad[rows] * side.field.sense])
                 g = np.concatenate([g, more.minimum_rad[rows]])
-            known = dict(zip(_keys(v, p1), g.tolist(), strict=True))
+            known = _keys(v, p1)
             lower = False
             for at, beyond in _beyond_ends(side, p1):
-                lag = np.array([known.get(key, np.inf) for key in _keys(beyond, p1)])
+                # each row's lag where its key is known (the last row of that key), else inf
+                match = _keys(beyond, p1)[:, None] == known[None, ::-1]
+                last = len(known) - 1 - np.argmax(match, axis=1)
+                lag = np.where(match.any(axis=1), g[last], np.inf)
                 lower |= bool(np.any(lag < side.lag[at]))
             if lower:
                 window = self.windows[k]
@@ -568,9 +567,9 @@ class MeshCycle:
         return out
 
 
-def _keys(u: NDArray, pitch: float) -> list:
+def _keys(u: NDArray, pitch: float) -> NDArray:
     """Relative rotations ``u`` as keys that match to a billionth of a pitch."""
-    return np.round(u / pitch * 1e9).tolist()
+    return np.round(u / pitch * 1e9)
 
 
 def _beyond_ends(side, pitch: float):

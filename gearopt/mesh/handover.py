@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import FieldSample
+from gearopt.mesh import kernels
 
 __all__ = [
     "FIT_TAGS",
@@ -312,15 +313,11 @@ def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:
         g = minimum[near]
         if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or edge[near].any():
             return None
-        fits.append(newton_form(z.tolist(), g.tolist()))
-    (za, ca), (zb, cb) = fits
-
-    def difference(x: float) -> float:
-        return newton_value(za, ca, x) - newton_value(zb, cb, x)
-
-    half = 0.5 * (hi - lo) / step
-    root = illinois(difference, -half, half)
-    return None if root is None else mid + step * root
+        fits += [z, g]
+    # the cubics' divided differences and the Illinois method (newton_form, newton_value,
+    # illinois) compiled
+    root = kernels.crossing_root(*fits, 0.5 * (hi - lo) / step)
+    return None if math.isnan(root) else mid + step * root
 
 
 def newton_form(z: list, g: list) -> tuple[list, list]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "pattern_fields", "warm"]
+__all__ = ["ENABLED", "crossing_root", "interior_run", "pattern_fields", "warm"]
 
 
 @compiled
@@ -81,6 +81,101 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
             out[size + n + i] = profile[at % n_p]
 
 
+@compiled
+def interior_run(v, inner, lag):
+    """The contact interval's run of samples (:meth:`gearopt.mesh.side.SideCycle.start_interval`).
+
+    Parameters
+    ----------
+    v
+        ``(m,)`` the samples' relative rotations (distinct).
+    inner
+        ``(m,)`` True where a sample is an interior contact (finite, not at an edge).
+    lag
+        ``(m,)`` their lags (+inf off the flanks).
+
+    Returns
+    -------
+    tuple
+        ``(order, lo, hi, spread)``: the samples' order by ``v``; the first and last places (in
+        that order) of the unbroken run of interior samples holding the least lag, else of the
+        first longest run (-1, -1 without one); the lags' spread (max - min) over that run.
+    """
+    order = np.argsort(v)
+    m = order.shape[0]
+    centre = 0
+    least = math.inf
+    for k in range(m):
+        x = lag[order[k]]
+        if x < least:
+            least, centre = x, k
+    lo = hi = -1
+    best = -1
+    k = 0
+    while k < m:
+        end = k
+        while end + 1 < m and inner[order[end + 1]] == inner[order[k]]:
+            end += 1
+        if inner[order[k]]:
+            if k <= centre <= end:
+                lo, hi = k, end
+                break
+            if end - k > best:
+                best, lo, hi = end - k, k, end
+        k = end + 1
+    spread = 0.0
+    if lo >= 0:
+        top = bottom = lag[order[lo]]
+        for k in range(lo + 1, hi + 1):
+            x = lag[order[k]]
+            top = max(top, x)
+            bottom = min(bottom, x)
+        spread = top - bottom
+    return order, lo, hi, spread
+
+
+@compiled
+def _newton_value(z, c, x):
+    value = c[3]
+    for i in range(2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
+
+
+@compiled
+def crossing_root(za, ga, zb, gb, half):
+    """The root in [-half, half] of the difference of the cubics through ``(za, ga)`` and
+    ``(zb, gb)`` (four points each, by divided differences), by the Illinois method to 1e-12:
+    :func:`gearopt.mesh.handover.lag_crossing`'s arithmetic, step for step
+    (:func:`~gearopt.mesh.handover.newton_form`, :func:`~gearopt.mesh.handover.illinois`);
+    NaN without a sign change."""
+    ca, cb = ga.copy(), gb.copy()
+    for j in range(1, 4):
+        for i in range(3, j - 1, -1):
+            ca[i] = (ca[i] - ca[i - 1]) / (za[i] - za[i - j])
+            cb[i] = (cb[i] - cb[i - 1]) / (zb[i] - zb[i - j])
+    a, b = -half, half
+    fa = _newton_value(za, ca, a) - _newton_value(zb, cb, a)
+    fb = _newton_value(za, ca, b) - _newton_value(zb, cb, b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if fa * fb > 0.0:
+        return math.nan
+    for _ in range(100):
+        c = b - fb * (b - a) / (fb - fa)
+        fc = _newton_value(za, ca, c) - _newton_value(zb, cb, c)
+        if fc == 0.0 or abs(c - b) <= 1e-12:
+            return c
+        if fc * fb < 0.0:
+            a, fa = b, fb
+        else:
+            fa *= 0.5
+        b, fb = c, fc
+    return b
+
+
 def warm() -> None:
     """Compile the kernels, or load them from the disk cache (as
     :func:`gearopt.contact.kernel_warmup.warm`); nothing without them."""
@@ -90,3 +185,6 @@ def warm() -> None:
     pattern_fields(
         one, one, index, np.zeros(1), index, 1.0, np.zeros(1), np.zeros(1), one.copy(), np.empty(3)
     )
+    interior_run(np.zeros(2), np.ones(2, np.bool_), np.zeros(2))
+    four = np.arange(4.0)
+    crossing_root(four, four, four, -four, 1.0)

@@ -188,27 +188,17 @@ class SideCycle:
         sample = self.interval_sample
         v = sample.phi_rad * self.field.sense
         inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
-        order = np.argsort(v)
-        v, inner = v[order], inner[order]
         self.interval_done = False
-        if not inner.any():  # edge contact only: no interval, centred on the least lag
+        # the unbroken run of interior samples around the least lag (the mesh centre), or the
+        # first longest run when the least lag is itself at an edge
+        order, lo_k, hi_k, spread = kernels.interior_run(v, inner, sample.minimum_rad)
+        v = v[order]
+        if lo_k < 0:  # edge contact only: no interval, centred on the least lag
             gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
             best = float(v[np.argmin(gs)])
             self.interval, self.interval_done = (best, best), True
             return
-        # the unbroken run of interior samples around the least lag (the mesh centre), or the
-        # longest run when the least lag is itself at an edge
-        gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
-        # the runs [first, last] of equal flags; of the interior ones, the one holding the
-        # least lag, else the first longest
-        first = np.flatnonzero(np.diff(inner.astype(int))) + 1
-        last = np.append(first - 1, len(v) - 1).tolist()
-        first = [0] + first.tolist()
-        centre = int(np.argmin(gs))
-        runs = [(a, b) for a, b in zip(first, last, strict=True) if inner[a]]
-        around = [r for r in runs if r[0] <= centre <= r[1]]
-        lo_k, hi_k = around[0] if around else max(runs, key=lambda r: r[1] - r[0])
-        self.interval_flat = bool(np.ptp(gs[lo_k : hi_k + 1]) < FLAT_ARCSEC / ARCSEC)
+        self.interval_flat = bool(spread < FLAT_ARCSEC / ARCSEC)
         self.centre_row = int(order[(lo_k + hi_k) // 2])
         self.end_inside = np.array([v[lo_k], v[hi_k]])
         self.end_outside = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])
@@ -288,11 +278,13 @@ class SideCycle:
         contact interval."""
         g, ids, pair_id, t, pitch = self.g, self.ids, self.pair_id, self.t, self.pitch
         n = len(t)
-        for k in np.flatnonzero(np.diff(pair_id) == -1):
+        pid = pair_id.tolist()
+        for k in [k for k in range(n - 1) if pid[k + 1] - pid[k] == -1]:
             leave = pair_id[k]
-            col_l = [np.flatnonzero(ids[k + d] == leave) for d in (0, 1)]
-            col_i = [np.flatnonzero(ids[k + d] == leave - 1) for d in (0, 1)]
-            if any(c.size == 0 for c in col_l + col_i) or k + 1 >= n:
+            rows = ids[k : k + 2].tolist()
+            col_l = [[c for c, x in enumerate(row) if x == leave] for row in rows]
+            col_i = [[c for c, x in enumerate(row) if x == leave - 1] for row in rows]
+            if any(not c for c in col_l + col_i):
                 continue
             with np.errstate(invalid="ignore"):  # inf - inf where a pair is off the flanks
                 d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
