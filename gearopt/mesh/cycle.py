@@ -331,10 +331,14 @@ class MeshCycle:
         p1 = self.pitch
         req = []
         for side in self.sides:
-            known = _keys(side.interval_sample.phi_rad * side.field.sense, p1)
+            v = side.interval_sample.phi_rad * side.field.sense
+            known = set(_keys(v, p1))
             for _, beyond in _beyond_ends(side, p1):
-                fresh = beyond[~np.isin(_keys(beyond, p1), known)]
-                req += [(side.index, x) for x in fresh.tolist()]
+                req += [
+                    (side.index, x)
+                    for x, key in zip(beyond, _keys(beyond, p1), strict=True)
+                    if key not in known
+                ]
         return req
 
     def widen(self, beyond, more: FieldSample | None, centres: NDArray) -> bool:
@@ -357,13 +361,10 @@ class MeshCycle:
                 rows = ext_side == k
                 v = np.concatenate([v, more.phi_rad[rows] * side.field.sense])
                 g = np.concatenate([g, more.minimum_rad[rows]])
-            known = _keys(v, p1)
+            known = dict(zip(_keys(v, p1), g.tolist(), strict=True))
             lower = False
             for at, beyond in _beyond_ends(side, p1):
-                # each row's lag where its key is known (the last row of that key), else inf
-                match = _keys(beyond, p1)[:, None] == known[None, ::-1]
-                last = len(known) - 1 - np.argmax(match, axis=1)
-                lag = np.where(match.any(axis=1), g[last], np.inf)
+                lag = np.array([known.get(key, np.inf) for key in _keys(beyond, p1)])
                 lower |= bool(np.any(lag < side.lag[at]))
             if lower:
                 window = self.windows[k]
@@ -567,9 +568,9 @@ class MeshCycle:
         return out
 
 
-def _keys(u: NDArray, pitch: float) -> NDArray:
+def _keys(u: NDArray, pitch: float) -> list:
     """Relative rotations ``u`` as keys that match to a billionth of a pitch."""
-    return np.round(u / pitch * 1e9)
+    return np.round(u / pitch * 1e9).tolist()
 
 
 def _beyond_ends(side, pitch: float):
