@@ -218,6 +218,8 @@ class MeshCycle:
         self.windows = [self.offsets] * len(self.fields)
         self.widened = False
         self.sides: list[SideCycle] = []
+        #: each side's keys and window ends (:meth:`side_ends`), by index, for the last sample
+        self.ends: dict[int, tuple] = {}
 
     def run(self) -> list[ToothContact]:
         """Every side's TCA."""
@@ -275,6 +277,7 @@ class MeshCycle:
             rows_side += [k] * (len(first) + len(ext))
             rows_u += list(uu) + list(ext)
         side_rows = np.array(rows_side, np.intp)
+        self.ends = {}
         main = self.joint.sample(side_rows, self.sense[side_rows] * np.array(rows_u))
         self.sides = [
             SideCycle(
@@ -328,18 +331,28 @@ class MeshCycle:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the
         window centred on the mesh? does it hold every pair in contact?), as ``(side,
         relative rotation)``."""
-        p1 = self.pitch
         req = []
         for side in self.sides:
-            v = side.interval_sample.phi_rad * side.field.sense
-            known = set(_keys(v, p1))
-            for _, beyond in _beyond_ends(side, p1):
+            known, ends = self.side_ends(side)
+            known = set(known)
+            for _, beyond, keys in ends:
                 req += [
                     (side.index, x)
-                    for x, key in zip(beyond, _keys(beyond, p1), strict=True)
+                    for x, key in zip(beyond.tolist(), keys, strict=True)
                     if key not in known
                 ]
         return req
+
+    def side_ends(self, side) -> tuple[list, list]:
+        """A side's sampled relative rotations as keys (:func:`_keys`) and, at each end of its
+        window, the positions where its end pair carries, the relative rotations of the pair
+        beyond it there and their keys, ``(at, beyond, keys)``; made once per sample."""
+        if side.index not in self.ends:
+            p1 = self.pitch
+            known = _keys(side.interval_sample.phi_rad * side.field.sense, p1)
+            ends = [(at, beyond, _keys(beyond, p1)) for at, beyond in _beyond_ends(side, p1)]
+            self.ends[side.index] = (known, ends)
+        return self.ends[side.index]
 
     def widen(self, beyond, more: FieldSample | None, centres: NDArray) -> bool:
         """Widen by a pair either side (up to :data:`WIDEST` pairs) the window of every side
@@ -355,16 +368,16 @@ class MeshCycle:
             k = side.index
             if centres[k] != 0.0 or len(self.windows[k]) + 2 > WIDEST:
                 continue
-            v = side.interval_sample.phi_rad * side.field.sense
-            g = side.interval_sample.minimum_rad
+            keys, ends = self.side_ends(side)
+            g = side.interval_sample.minimum_rad.tolist()
             if more is not None:
                 rows = ext_side == k
-                v = np.concatenate([v, more.phi_rad[rows] * side.field.sense])
-                g = np.concatenate([g, more.minimum_rad[rows]])
-            known = dict(zip(_keys(v, p1), g.tolist(), strict=True))
+                keys = keys + _keys(more.phi_rad[rows] * side.field.sense, p1)
+                g += more.minimum_rad[rows].tolist()
+            known = dict(zip(keys, g, strict=True))
             lower = False
-            for at, beyond in _beyond_ends(side, p1):
-                lag = np.array([known.get(key, np.inf) for key in _keys(beyond, p1)])
+            for at, _, beyond in ends:
+                lag = np.array([known.get(key, np.inf) for key in beyond])
                 lower |= bool(np.any(lag < side.lag[at]))
             if lower:
                 window = self.windows[k]
@@ -433,7 +446,7 @@ class MeshCycle:
                 sample, answers = self.joint.sample(f_side, f_phi, refine=f_refine, near=near)
             else:
                 answers = self.joint.minimum_near(*near)
-            for (side, tag), *answer in zip(owners, *answers, strict=True):
+            for (side, tag), *answer in zip(owners, *(a.tolist() for a in answers), strict=True):
                 side.answers[tag] = tuple(answer)
         elif f_side.size:
             sample = self.joint.sample(f_side, f_phi)
@@ -501,33 +514,36 @@ class MeshCycle:
         # across the path at M: how far the pattern the positions' zones sweep runs either
         # side of M along the line across the path (the pairs whose contact points lie within
         # a major axis of M along the path)
-        ray, ray_rows, keys, positions, origins, directions = [], [], [], [], [], []
+        ray, ray_rows, keys, positions = [], [], [], []
         for k, x in enumerate(lines):
-            m = middle[k, 0]
-            offset = np.abs((x["pattern_contact_mm"] - m) @ path[k])
+            offset = np.abs((x["pattern_contact_mm"] - middle[k, 0]) @ path[k])
             near = np.flatnonzero(offset <= major[k, 0] + 1.0)
             if not near.size and offset.size:  # no pair near M along the path: the nearest
                 near = np.array([int(np.argmin(offset))])
-            for slot in range(4):
-                if slot < 2 or not near.size:
-                    rows_here, key, pos = [first[k]], [-(10**6)], [0]
-                else:
-                    rows_here = first[k] + 3 + near
-                    key, pos = x["pattern_pair"][near], x["pattern_position"][near]
-                ray.append(np.full(len(rows_here), 4 * k + slot))
-                ray_rows.append(np.asarray(rows_here, np.intp))
-                keys.append(np.asarray(key))
-                positions.append(np.asarray(pos))
-            origins += [m, m, m, m]
-            directions += [minor_dir[k], -minor_dir[k], across[k], -across[k]]
+            at_m = ([int(first[k])], [-(10**6)], [0])  # zone M alone
+            if near.size:
+                across_m = (
+                    (first[k] + 3 + near).tolist(),
+                    x["pattern_pair"][near].tolist(),
+                    x["pattern_position"][near].tolist(),
+                )
+            else:
+                across_m = at_m
+            for slot, (rows_here, key, pos) in enumerate((at_m, at_m, across_m, across_m)):
+                ray += [4 * k + slot] * len(rows_here)
+                ray_rows += rows_here
+                keys += key
+                positions += pos
+        origins = np.repeat(middle[:, 0], 4, axis=0)
+        directions = np.stack([minor_dir, -minor_dir, across, -across], 1).reshape(-1, 2)
         ends = zones.pattern_exits(
-            np.concatenate(ray),
-            np.concatenate(ray_rows),
-            np.concatenate(keys),
-            np.concatenate(positions),
-            np.array(origins),
-            np.array(directions),
-            np.tile([False, False, True, True], n_sides),
+            np.array(ray),
+            np.array(ray_rows, np.intp),
+            np.array(keys),
+            np.array(positions),
+            origins,
+            directions,
+            np.array([False, False, True, True] * n_sides),
         ).reshape(n_sides, 4)
         corner = np.array([frame.toe_mm, frame.root_mm])
         outlines = _Outlines(

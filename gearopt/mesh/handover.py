@@ -306,17 +306,11 @@ def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:
         lags are smooth only there).
     """
     mid = 0.5 * (lo + hi)
-    fits = []
-    for centre in (mid, mid - pitch):
-        near = np.argsort(np.abs(v - centre))[:4]
-        z = (v[near] - centre) / step
-        g = minimum[near]
-        if np.abs(z).max() > 2.0 or not np.all(np.isfinite(g)) or edge[near].any():
-            return None
-        fits += [z, g]
+    centres = np.array([mid, mid - pitch])
+    near = np.ascontiguousarray(np.argsort(np.abs(v[None, :] - centres[:, None]), axis=1)[:, :4])
     # the cubics' divided differences and the Illinois method (newton_form, newton_value,
     # illinois) compiled
-    root = kernels.crossing_root(*fits, 0.5 * (hi - lo) / step)
+    root = kernels.crossing_root(v, minimum, edge, near, centres, step, 0.5 * (hi - lo) / step)
     return None if math.isnan(root) else mid + step * root
 
 

@@ -36,11 +36,11 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
     face, profile
         ``(n_f,)``, ``(n_p,)`` the nodes' pattern coordinates.
     sep
-        ``(n * pairs, N)`` out: separations (mm) at the carrying lag, +inf off the flanks
-        (:func:`gearopt.mesh.pattern.separation_mm`).
+        ``(n * pairs, N)`` out: separations (um) at the carrying lag, +inf off the flanks
+        (:func:`gearopt.mesh.pattern.separation_mm` times 1e3).
     out
         ``(N + 2 n,)`` out: the pattern field (the least separation over the positions and
-        pairs, mm), then the carrying zones' centroids, face then profile
+        pairs, um), then the carrying zones' centroids (mm), face then profile
         (:func:`gearopt.mesh.pattern.centroids`).
     """
     n = lag.shape[0]
@@ -79,6 +79,11 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
         else:  # no zone: its least-separated node
             out[size + i] = face[at // n_p]
             out[size + n + i] = profile[at % n_p]
+    for k in range(inv.shape[0]):  # mm to um (after the centroids, which take mm)
+        for g in range(size):
+            sep[k, g] *= 1e3
+    for g in range(size):
+        out[g] *= 1e3
 
 
 @compiled
@@ -143,13 +148,45 @@ def _newton_value(z, c, x):
 
 
 @compiled
-def crossing_root(za, ga, zb, gb, half):
-    """The root in [-half, half] of the difference of the cubics through ``(za, ga)`` and
-    ``(zb, gb)`` (four points each, by divided differences), by the Illinois method to 1e-12:
+def crossing_root(v, lag, edge, near, centres, step, half):
+    """The crossing of two pairs' lags interpolated (cubic, divided differences) through their
+    four nearest samples, by the Illinois method to 1e-12:
     :func:`gearopt.mesh.handover.lag_crossing`'s arithmetic, step for step
-    (:func:`~gearopt.mesh.handover.newton_form`, :func:`~gearopt.mesh.handover.illinois`);
-    NaN without a sign change."""
-    ca, cb = ga.copy(), gb.copy()
+    (:func:`~gearopt.mesh.handover.newton_form`, :func:`~gearopt.mesh.handover.illinois`).
+
+    Parameters
+    ----------
+    v, lag, edge
+        ``(m,)`` the samples: relative rotations, lags and edge flags.
+    near
+        ``(2, 4)`` the rows of the four samples nearest each pair's centre.
+    centres
+        ``(2,)`` the centres (the leaving pair's, the incoming pair's).
+    step
+        The position step (the unit of the cubics' abscissae).
+    half
+        The half-width of the bracket around the centres, in steps.
+
+    Returns
+    -------
+    float
+        The crossing in steps from the centres; NaN where a sample is missing, at an edge or
+        more than two steps off, or without a sign change.
+    """
+    za, zb = np.empty(4), np.empty(4)
+    ga, gb = np.empty(4), np.empty(4)
+    for i in range(4):
+        za[i] = (v[near[0, i]] - centres[0]) / step
+        zb[i] = (v[near[1, i]] - centres[1]) / step
+        ga[i] = lag[near[0, i]]
+        gb[i] = lag[near[1, i]]
+    for i in range(4):
+        for k in range(2):
+            row = near[k, i]
+            z = za[i] if k == 0 else zb[i]
+            if abs(z) > 2.0 or not math.isfinite(lag[row]) or edge[row]:
+                return math.nan
+    ca, cb = ga, gb
     for j in range(1, 4):
         for i in range(3, j - 1, -1):
             ca[i] = (ca[i] - ca[i - 1]) / (za[i] - za[i - j])
@@ -187,4 +224,4 @@ def warm() -> None:
     )
     interior_run(np.zeros(2), np.ones(2, np.bool_), np.zeros(2))
     four = np.arange(4.0)
-    crossing_root(four, four, four, -four, 1.0)
+    crossing_root(four, four, four > 9.0, np.zeros((2, 4), np.intp), np.zeros(2), 1.0, 1.0)

@@ -542,14 +542,14 @@ class SideCycle:
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
 
         # separations at the contact gear angle of each position (same lag for every pair),
-        # the pattern and the path (separation_mm, centroids: one compiled pass)
+        # the pattern (um) and the path (separation_mm, centroids: one compiled pass)
         compound_mm = compound_um * 1e-3
         kind = "normal_factor_mm" if separation == "normal" else "radius_mm"
         node_factor = getattr(self.sample, kind)
         face = field.pinion.face_mm - frame.toe_mm
         profile = field.pinion.profile_mm - frame.root_mm
         size = face.size * profile.size
-        sep = np.empty((positions * pairs, size))
+        sep_um = np.empty((positions * pairs, size))
         out = np.empty(size + 2 * positions)
         kernels.pattern_fields(
             np.ascontiguousarray(self.sample.clearance_rad).reshape(-1, size),
@@ -560,11 +560,10 @@ class SideCycle:
             compound_mm,
             face,
             profile,
-            sep,
+            sep_um,
             out,
         )
-        sep = sep.reshape((positions, pairs) + field.pinion.shape)
-        pattern = out[:size].reshape(field.pinion.shape) * 1e3
+        pattern = out[:size].reshape(field.pinion.shape)
         path_s, path_h = out[size : size + positions], out[size + positions :]
 
         # the zones measured on the refined field (gearopt.mesh.zone, every side's at once):
@@ -617,7 +616,7 @@ class SideCycle:
             contact_face_mm=self.cs[rows, carrying] - frame.toe_mm,
             contact_profile_mm=self.ch[rows, carrying] - frame.root_mm,
             edge=self.edge_all[rows, carrying],
-            separation_um=sep * 1e3,
+            separation_um=sep_um.reshape((positions, pairs) + field.pinion.shape),
             pattern_um=pattern,
             face_mm=face,
             profile_mm=profile,
