@@ -490,9 +490,7 @@ class MeshCycle:
             lag_rad=np.concatenate(
                 [np.concatenate([x["mean_lag_rad"], x["pattern_lag_rad"]]) for x in lines]
             ),
-            factor_mm=np.concatenate(
-                [np.concatenate([x["mean_factor_mm"], x["pattern_factor_mm"]]) for x in lines]
-            ),
+            factor_mm=_gathered_factors(lines, counts),
         )
         zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
         first = np.cumsum([0] + [3 + n for n in counts])[:-1]
@@ -582,6 +580,20 @@ class MeshCycle:
                 )
             )
         return out
+
+
+def _gathered_factors(lines, counts) -> NDArray:
+    """``(R, n_f, n_p)`` the sides' zone rows' node factors, M's rows then the pattern's of each
+    side (:meth:`SideCycle.assemble`'s ``lines``), gathered in one copy."""
+    shape = lines[0]["mean_factor_mm"].shape[1:]
+    factor = np.empty((sum(counts) + 3 * len(counts),) + shape)
+    at = 0
+    for x, n in zip(lines, counts, strict=True):
+        factor[at : at + 3] = x["mean_factor_mm"]
+        source, rows = x["pattern_factor_rows"]
+        np.take(source, rows, axis=0, out=factor[at + 3 : at + 3 + n], mode="clip")
+        at += 3 + n
+    return factor
 
 
 def _keys(u: NDArray, pitch: float) -> list:

@@ -524,8 +524,9 @@ class SideCycle:
             ``(lines, fields)``: ``lines`` the rows of the zones to measure (``mean_*``: M's
             position and its neighbours a quarter step either side; ``pattern_*``: the
             positions' pairs whose zones are not empty, with their positions and pair ids), each
-            with its pinion angle, lag, node factors and contact point; ``fields`` the
-            ToothContact's other fields.
+            with its pinion angle, lag, node factors and contact point (the pattern rows' node
+            factors as ``pattern_factor_rows``: the window sample's and the rows of it, copied
+            once where every side's are gathered); ``fields`` the ToothContact's other fields.
         """
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
@@ -583,7 +584,7 @@ class SideCycle:
             mean_contact_mm=np.stack([ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]], 1),
             pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
             pattern_lag_rad=np.repeat(lag, pairs)[held],
-            pattern_factor_mm=node_factor[self.inv[held]],
+            pattern_factor_rows=(node_factor, self.inv[held]),
             pattern_contact_mm=np.stack([self.cs.ravel()[held], self.ch.ravel()[held]], 1),
             pattern_position=held // pairs,
             pattern_pair=self.ids.ravel()[held],
