@@ -2,7 +2,10 @@
 :mod:`gearopt.contact.kernels`): the separations of every position's pairs, the pattern field
 and the carrying zones' centroids in one pass over the node fields, where numpy makes a
 temporary of every position's nodes at each step (:func:`gearopt.mesh.pattern.separation_mm`,
-:func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array).
+:func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and two steps of
+a side's mesh cycle on its few dozen samples, where numpy's per-call overhead outweighs the
+work: the contact interval's run of interior samples (:func:`interior_run`) and the crossing
+of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`).
 """
 
 from __future__ import annotations
