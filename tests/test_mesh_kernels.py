@@ -1,0 +1,87 @@
+"""The mesh cycle's compiled steps (:mod:`gearopt.mesh.kernels`) against the Python they replace:
+the hand-over guess's crossing against :func:`gearopt.mesh.handover.newton_form` and
+:func:`~gearopt.mesh.handover.illinois` on the same four samples a pair, the contact interval's
+run against the run search on numpy arrays; both to the last bit, compiled and as plain Python.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gearopt.mesh import kernels
+from gearopt.mesh.handover import illinois, newton_form, newton_value
+
+VARIANTS = [kernels.crossing_root, getattr(kernels.crossing_root, "py_func", None)]
+RUNS = [kernels.interior_run, getattr(kernels.interior_run, "py_func", None)]
+
+
+def python_crossing(v, lag, near, centres, step, half):
+    """The crossing (steps from the centres) by the Python functions, or NaN."""
+    fits = []
+    for rows, centre in zip(near, centres, strict=True):
+        z = (v[rows] - centre) / step
+        fits.append(newton_form(z.tolist(), lag[rows].tolist()))
+    (za, ca), (zb, cb) = fits
+    root = illinois(lambda x: newton_value(za, ca, x) - newton_value(zb, cb, x), -half, half)
+    return math.nan if root is None else root
+
+
+def python_run(v, inner, lag):
+    """``(lo, hi, spread)`` of the run of interior samples holding the least lag, else the
+    first longest, in the samples' order by ``v``."""
+    order = np.argsort(v)
+    inner, lag = inner[order], np.where(np.isfinite(lag), lag, np.inf)[order]
+    first = np.flatnonzero(np.diff(inner.astype(int))) + 1
+    last = np.append(first - 1, len(v) - 1).tolist()
+    runs = [(a, b) for a, b in zip([0, *first.tolist()], last, strict=True) if inner[a]]
+    if not runs:
+        return -1, -1
+    centre = int(np.argmin(lag))
+    around = [r for r in runs if r[0] <= centre <= r[1]]
+    lo, hi = around[0] if around else max(runs, key=lambda r: r[1] - r[0])
+    return lo, hi, float(np.ptp(lag[lo : hi + 1]))
+
+
+@pytest.mark.parametrize("crossing", [f for f in VARIANTS if f is not None])
+def test_crossing_is_the_python_crossing_bit_for_bit(crossing):
+    rng = np.random.default_rng(23)
+    step, found = 0.01, 0
+    for _ in range(300):
+        v = np.sort(rng.uniform(-0.2, 0.2, 40))
+        centres = np.array([rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1)])
+        near = np.argsort(np.abs(v[None, :] - centres[:, None]), axis=1)[:, :4]
+        near = np.ascontiguousarray(near)
+        # two lag curves that cross near the centres: a parabola and a line, with noise
+        x = (v - centres[0]) / step
+        lag = 1e-4 * np.where(np.arange(40) % 2 == 0, x * x, 1.0 + x) + rng.normal(0, 1e-6, 40)
+        edge = np.zeros(40, bool)
+        half = rng.uniform(0.2, 1.0)
+        got = crossing(v, lag, edge, near, centres, step, half)
+        z = np.abs((v[near] - centres[:, None]) / step)
+        if z.max() > 2.0:
+            assert math.isnan(got)
+            continue
+        want = python_crossing(v, lag, near, centres, step, half)
+        assert got == want or (math.isnan(got) and math.isnan(want))
+        found += not math.isnan(got)
+    assert found > 20  # crossings found, not only refusals
+
+
+@pytest.mark.parametrize("run", [f for f in RUNS if f is not None])
+def test_interior_run_is_the_run_search(run):
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        m = int(rng.integers(1, 30))
+        v = rng.permutation(np.arange(m) * 0.1 - 1.0)
+        inner = rng.random(m) < 0.7
+        lag = np.where(rng.random(m) < 0.1, np.inf, rng.normal(0.0, 1.0, m))
+        inner &= np.isfinite(lag)
+        order, lo, hi, spread = run(v, inner, lag)
+        assert np.array_equal(order, np.argsort(v))
+        want = python_run(v, inner, lag)
+        assert (lo, hi) == want[:2]
+        if lo >= 0:
+            assert spread == want[2]
