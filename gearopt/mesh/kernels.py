@@ -90,13 +90,13 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
 
 
 @compiled
-def interior_run(v, inner, lag):
+def interior_run(order, inner, lag):
     """The contact interval's run of samples (:meth:`gearopt.mesh.side.SideCycle.start_interval`).
 
     Parameters
     ----------
-    v
-        ``(m,)`` the samples' relative rotations (distinct).
+    order
+        ``(m,)`` the samples' order by relative rotation.
     inner
         ``(m,)`` True where a sample is an interior contact (finite, not at an edge).
     lag
@@ -105,11 +105,10 @@ def interior_run(v, inner, lag):
     Returns
     -------
     tuple
-        ``(order, lo, hi, spread)``: the samples' order by ``v``; the first and last places (in
-        that order) of the unbroken run of interior samples holding the least lag, else of the
-        first longest run (-1, -1 without one); the lags' spread (max - min) over that run.
+        ``(lo, hi, spread)``: the first and last places (in that order) of the unbroken run of
+        interior samples holding the least lag, else of the first longest run (-1, -1 without
+        one); the lags' spread (max - min) over that run.
     """
-    order = np.argsort(v)
     m = order.shape[0]
     centre = 0
     least = math.inf
@@ -139,7 +138,7 @@ def interior_run(v, inner, lag):
             top = max(top, x)
             bottom = min(bottom, x)
         spread = top - bottom
-    return order, lo, hi, spread
+    return lo, hi, spread
 
 
 @compiled
@@ -225,6 +224,6 @@ def warm() -> None:
     pattern_fields(
         one, one, index, np.zeros(1), index, 1.0, np.zeros(1), np.zeros(1), one.copy(), np.empty(3)
     )
-    interior_run(np.zeros(2), np.ones(2, np.bool_), np.zeros(2))
+    interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
     four = np.arange(4.0)
     crossing_root(four, four, four > 9.0, np.zeros((2, 4), np.intp), np.zeros(2), 1.0, 1.0)

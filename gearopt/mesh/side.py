@@ -191,7 +191,8 @@ class SideCycle:
         self.interval_done = False
         # the unbroken run of interior samples around the least lag (the mesh centre), or the
         # first longest run when the least lag is itself at an edge
-        order, lo_k, hi_k, spread = kernels.interior_run(v, inner, sample.minimum_rad)
+        order = np.argsort(v)
+        lo_k, hi_k, spread = kernels.interior_run(order, inner, sample.minimum_rad)
         v = v[order]
         if lo_k < 0:  # edge contact only: no interval, centred on the least lag
             gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
