@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from gearopt.analysis_options import check_options
 from gearopt.contact import ClearanceField, FieldSample, JointField
 from gearopt.mesh.frame import ARCSEC, ToothFrame, as_list
-from gearopt.mesh.pattern import sample_rows
+from gearopt.mesh.pattern import columns, sample_rows
 from gearopt.mesh.side import FLAT_ARCSEC, SideCycle
 from gearopt.mesh.zone import ZoneRows, Zones
 
@@ -496,7 +496,8 @@ class MeshCycle:
         first = np.cumsum([0] + [3 + n for n in counts])[:-1]
         mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])
-        reach = float(np.ptp(pinion.face_mm) + np.ptp(pinion.profile_mm))
+        face, profile = pinion.face_mm, pinion.profile_mm
+        reach = float((face.max() - face.min()) + (profile.max() - profile.min()))
         major_dir = zones.axes(mean_rows, contact[:, 0], contact[:, 1])
         major, middle = zones.chords(mean_rows, contact, major_dir, np.full(len(contact), reach))
         major, middle, major_dir = (
@@ -506,8 +507,8 @@ class MeshCycle:
         path = middle[:, 2] - middle[:, 1]
         norm = np.hypot(path[:, 0], path[:, 1])
         path = np.where(norm[:, None] > 1e-9, path / np.maximum(norm, 1e-300)[:, None], [1.0, 0.0])
-        across = np.stack([-path[:, 1], path[:, 0]], 1)
-        minor_dir = np.stack([-major_dir[:, 0, 1], major_dir[:, 0, 0]], 1)
+        across = columns(-path[:, 1], path[:, 0])
+        minor_dir = columns(-major_dir[:, 0, 1], major_dir[:, 0, 0])
         # one batch: the minor chord at M (zone M's reach either side of M) and the pattern
         # across the path at M: how far the pattern the positions' zones sweep runs either
         # side of M along the line across the path (the pairs whose contact points lie within
@@ -533,14 +534,16 @@ class MeshCycle:
                 keys += key
                 positions += pos
         origins = np.repeat(middle[:, 0], 4, axis=0)
-        directions = np.stack([minor_dir, -minor_dir, across, -across], 1).reshape(-1, 2)
+        directions = np.empty((n_sides, 4, 2))
+        directions[:, 0], directions[:, 1] = minor_dir, -minor_dir
+        directions[:, 2], directions[:, 3] = across, -across
         ends = zones.pattern_exits(
             np.array(ray),
             np.array(ray_rows, np.intp),
             np.array(keys),
             np.array(positions),
             origins,
-            directions,
+            directions.reshape(-1, 2),
             np.array([False, False, True, True] * n_sides),
         ).reshape(n_sides, 4)
         corner = np.array([frame.toe_mm, frame.root_mm])

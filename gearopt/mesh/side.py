@@ -13,7 +13,7 @@ from gearopt.contact import ClearanceField, ContactError, FieldSample
 from gearopt.mesh import kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, gear_path_angle
 from gearopt.mesh.handover import FIT_TAGS, ITERATION_TAGS, HandOver, Request, lag_crossing
-from gearopt.mesh.pattern import centroids, separation_mm
+from gearopt.mesh.pattern import centroids, columns, separation_mm
 
 __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 
@@ -176,7 +176,7 @@ class SideCycle:
         self.peak_at = self.peak_guess()
         self.peak_lags: dict = {}
         finite = self.lag[np.isfinite(self.lag)]
-        if finite.size and np.ptp(finite) >= FLAT_ARCSEC / ARCSEC:
+        if finite.size and finite.max() - finite.min() >= FLAT_ARCSEC / ARCSEC:
             self.ask_peak([-1, 0, 1])  # a flat TE (line contact): its least lag is noise
 
     # -- the contact interval ---------------------------------------------------------------
@@ -299,7 +299,8 @@ class SideCycle:
                     for c in (col_l, col_i)
                 ]
                 # a line contact: the TE flat, or the lags differing by noise
-                flat = min(np.ptp(self.lag), d_hi - d_lo) < FLAT_ARCSEC / ARCSEC
+                spread = self.lag.max() - self.lag.min()
+                flat = min(spread, d_hi - d_lo) < FLAT_ARCSEC / ARCSEC
                 self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step, flat)
                 guess = self.crossing(lo, hi)
                 if guess is None:
@@ -582,11 +583,11 @@ class SideCycle:
             mean_phi_rad=ex.phi_rad[3:6],
             mean_lag_rad=ex.minimum_rad[3:6],
             mean_factor_mm=getattr(ex, kind)[3:6],
-            mean_contact_mm=np.stack([ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]], 1),
+            mean_contact_mm=columns(ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]),
             pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
             pattern_lag_rad=np.repeat(lag, pairs)[held],
             pattern_factor_rows=(node_factor, self.inv[held]),
-            pattern_contact_mm=np.stack([self.cs.ravel()[held], self.ch.ravel()[held]], 1),
+            pattern_contact_mm=columns(self.cs.ravel()[held], self.ch.ravel()[held]),
             pattern_position=held // pairs,
             pattern_pair=self.ids.ravel()[held],
             interval=self.interval,
