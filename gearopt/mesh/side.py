@@ -432,7 +432,7 @@ class SideCycle:
             # middle of the contact interval (whose ends are solved, not noise)
             v_mid = 0.5 * (self.interval[0] + self.interval[1])
         dv = 0.25 * self.step
-        return [v_star, v_star - pitch, self.peak_guess(), v_mid, v_mid - dv, v_mid + dv]
+        return [v_star, v_star - pitch, self.peak_at, v_mid, v_mid - dv, v_mid + dv]
 
     # -- the TE peak (the least lag) ---------------------------------------------------------
 
