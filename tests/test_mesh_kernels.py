@@ -1,21 +1,62 @@
-"""The mesh cycle's compiled steps (:mod:`gearopt.mesh.kernels`) against the Python they replace:
-the hand-over guess's crossing against :func:`gearopt.mesh.handover.newton_form` and
-:func:`~gearopt.mesh.handover.illinois` on the same four samples a pair, the contact interval's
-run against the run search on numpy arrays; both to the last bit, compiled and as plain Python.
+"""The mesh cycle's compiled steps (:mod:`gearopt.mesh.kernels`) against the Python they replaced
+(kept here as their reference): the hand-over guess's crossing against the cubics in Newton's
+form and the Illinois method on Python floats, on the same four samples a pair; the contact
+interval's run against the run search on numpy arrays; both to the last bit, compiled and as
+plain Python.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 
 from gearopt.mesh import kernels
-from gearopt.mesh.handover import illinois, newton_form, newton_value
 
 VARIANTS = [kernels.crossing_root, getattr(kernels.crossing_root, "py_func", None)]
 RUNS = [kernels.interior_run, getattr(kernels.interior_run, "py_func", None)]
+
+
+def newton_form(z: list, g: list) -> tuple[list, list]:
+    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
+    for :func:`newton_value`."""
+    c = list(g)
+    for j in range(1, len(z)):
+        for i in range(len(z) - 1, j - 1, -1):
+            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
+    return z, c
+
+
+def newton_value(z: list, c: list, x: float) -> float:
+    """The polynomial of :func:`newton_form` at x (nested multiplication)."""
+    value = c[-1]
+    for i in range(len(c) - 2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
+
+
+def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):
+    """A root of ``func`` in [a, b] by the Illinois method (None without a sign change)."""
+    fa, fb = func(a), func(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if fa * fb > 0.0:
+        return None
+    for _ in range(100):
+        c = b - fb * (b - a) / (fb - fa)
+        fc = func(c)
+        if fc == 0.0 or abs(c - b) <= tol:
+            return c
+        if fc * fb < 0.0:
+            a, fa = b, fb
+        else:
+            fa *= 0.5
+        b, fb = c, fc
+    return b
 
 
 def python_crossing(v, lag, near, centres, step, half):

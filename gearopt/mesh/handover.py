@@ -25,7 +25,6 @@ can bend or step between positions, where a fixed number of secant steps does no
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -40,10 +39,7 @@ __all__ = [
     "ITERATION_TAGS",
     "HandOver",
     "Request",
-    "illinois",
     "lag_crossing",
-    "newton_form",
-    "newton_value",
     "parabola",
     "parabola_at",
     "parabola_root",
@@ -308,50 +304,9 @@ def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:
     mid = 0.5 * (lo + hi)
     centres = np.array([mid, mid - pitch])
     near = np.ascontiguousarray(np.argsort(np.abs(v[None, :] - centres[:, None]), axis=1)[:, :4])
-    # the cubics' divided differences and the Illinois method (newton_form, newton_value,
-    # illinois) compiled
+    # the cubics' divided differences and the Illinois method, compiled
     root = kernels.crossing_root(v, minimum, edge, near, centres, step, 0.5 * (hi - lo) / step)
     return None if math.isnan(root) else mid + step * root
-
-
-def newton_form(z: list, g: list) -> tuple[list, list]:
-    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
-    for :func:`newton_value`."""
-    c = list(g)
-    for j in range(1, len(z)):
-        for i in range(len(z) - 1, j - 1, -1):
-            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
-    return z, c
-
-
-def newton_value(z: list, c: list, x: float) -> float:
-    """The polynomial of :func:`newton_form` at x (nested multiplication)."""
-    value = c[-1]
-    for i in range(len(c) - 2, -1, -1):
-        value = value * (x - z[i]) + c[i]
-    return value
-
-
-def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):
-    """A root of ``func`` in [a, b] by the Illinois method (None without a sign change)."""
-    fa, fb = func(a), func(b)
-    if fa == 0.0:
-        return a
-    if fb == 0.0:
-        return b
-    if fa * fb > 0.0:
-        return None
-    for _ in range(100):
-        c = b - fb * (b - a) / (fb - fa)
-        fc = func(c)
-        if fc == 0.0 or abs(c - b) <= tol:
-            return c
-        if fc * fb < 0.0:
-            a, fa = b, fb
-        else:
-            fa *= 0.5
-        b, fb = c, fc
-    return b
 
 
 def parabola(xa: float, xb: float, ya: float, y0: float, yb: float):

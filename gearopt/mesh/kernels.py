@@ -152,9 +152,9 @@ def _newton_value(z, c, x):
 @compiled
 def crossing_root(v, lag, edge, near, centres, step, half):
     """The crossing of two pairs' lags interpolated (cubic, divided differences) through their
-    four nearest samples, by the Illinois method to 1e-12:
-    :func:`gearopt.mesh.handover.lag_crossing`'s arithmetic, step for step
-    (:func:`~gearopt.mesh.handover.newton_form`, :func:`~gearopt.mesh.handover.illinois`).
+    four nearest samples (Newton's form: divided differences, nested multiplication), by the
+    Illinois method (regula falsi halving the retained end's value) to 1e-12: the hand-over's
+    first guess (:func:`gearopt.mesh.handover.lag_crossing`).
 
     Parameters
     ----------
