@@ -175,6 +175,13 @@ def _stacked_tables(fields) -> dict:
         ]
     )
     pinion_fine = np.concatenate([t["fine"][1] for t in tables])
+    # the kernels' one table of both (the fine cells after the flank's, the band pointing
+    # there: :func:`gearopt.contact.kernels.pinion_at`)
+    kernel_coef = np.ascontiguousarray(np.concatenate([pinion_coef, pinion_fine]))
+    kernel_band = pinion_band.copy()
+    kernel_band[:, 0] = np.where(
+        pinion_band[:, 0] >= 0.0, pinion_band[:, 0] + len(pinion_coef), -1.0
+    )
     gear_cells = first.gear.cells.generated.size
     gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
     gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
@@ -195,6 +202,8 @@ def _stacked_tables(fields) -> dict:
         "pinion_coef": pinion_coef,
         "pinion_band": pinion_band,
         "pinion_fine": pinion_fine,
+        "kernel_coef": kernel_coef,
+        "kernel_band": kernel_band,
         "gear_cells": gear_cells,
         "gear_coef": gear_coef,
         "gear_ok": gear_ok,
@@ -376,10 +385,9 @@ class ContactEngine:
             *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
             np.ascontiguousarray(self.pinion_map),
             np.ascontiguousarray(self.pinion_const[:, 0]),
-            self.pinion_coef,
+            self.kernel_coef,
             np.ascontiguousarray(self.refine_cells),
-            np.ascontiguousarray(self.pinion_band),
-            np.ascontiguousarray(self.pinion_fine),
+            np.ascontiguousarray(self.kernel_band),
         )
         counts = self.node_real.sum(axis=1).astype(np.intp)
         return gear, pinion, counts

@@ -27,7 +27,7 @@ def warm() -> None:
     limits = np.zeros((1, 2))
     band = np.full((1, 4), -1.0)
     pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, limits)
-    pinion += (band, coef)
+    pinion += (band,)
     rows = (
         np.zeros((4, 1)),
         np.zeros((4, 1)),
