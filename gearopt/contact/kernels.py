@@ -150,7 +150,8 @@ def _atan2(y, x):
 
 @compiled
 def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
-    """Node fields of rows r (``rows`` as :func:`clearance_at`'s, ``side``: ``(n,)``) on the
+    """Node fields of the first n rows r (``rows`` as :func:`clearance_at`'s, ``side``: each
+    row's field; n = ``out.shape[1]``) on the
     generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
     coordinates ``xy`` (``(2, K, m)``), z terms ``z`` (``(4, K, m)``), normals' terms ``nxy``,
     ``nz`` (``(2, K, m)``); the nodes' polar angles in the gear frame by :func:`_atan2`.
@@ -162,7 +163,7 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     faces the gear flank, the clearance."""
     kx, ky, turn, sense, offset, _ = rows
     rho0, rho1, lim0, lim1, n_cols, tapered, d0, inv_ia, ib, h0, alpha, beta, coef, ok = gear
-    n = turn.shape[0]
+    n = out.shape[1]
     size = xy.shape[2]
     o0s, o1s, gxs, gys = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
     for r in range(n):
@@ -401,6 +402,7 @@ def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25, first=0):
 @compiled
 def refine(
     rows,
+    which,
     s,
     t,
     best,
@@ -412,10 +414,11 @@ def refine(
     gear,
     edge,
 ):
-    """:meth:`gearopt.contact.engine.ContactEngine.refine` row by row: constrained Newton steps from
-    ``(s, t)`` (updated in place with ``best``, the start values, NaN: the interpolated value
-    there; and ``edge``), at most ``caps[g]`` steps for the rows of group g, a group stopping
-    when none of its rows moved more than a thousandth of a cell."""
+    """:meth:`gearopt.contact.engine.ContactEngine.refine` start by start: constrained Newton
+    steps from ``(s, t)`` (updated in place with ``best``, the start values, NaN: the
+    interpolated value there; and ``edge``) on row ``which[p]`` of ``rows``, at most ``caps[g]``
+    steps for the starts of group g, a group stopping when none of its starts moved more than a
+    thousandth of a cell."""
     n = s.shape[0]
     fractions = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     f = np.empty((n, 9))
@@ -423,7 +426,7 @@ def refine(
     moving = np.zeros(n, np.bool_)
     taken = np.zeros(n, np.bool_)
     for r in range(n):
-        ok = _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r])
+        ok = _stencil(rows, which[r], s[r], t[r], cell, pinion, gear, f[r])
         if np.isnan(best[r]):
             best[r] = f[r, 0] if ok else math.inf
     small = 1e-3 * min(cell[0], cell[1])
@@ -460,7 +463,7 @@ def refine(
                 else:
                     ns = s[r] + fractions[i] * (st0 * cell[0])
                     nt = t[r] + fractions[i] * (st1 * cell[1])
-                value, on = _point_in(rows, r, ns, nt, pinion, gear, pinion[14])
+                value, on = _point_in(rows, which[r], ns, nt, pinion, gear, pinion[14])
                 if i < 0 or (i == 0 and newton):
                     edge[r] = (not on) and fall > tol[r]
                     if i < 0:
@@ -490,7 +493,7 @@ def refine(
         for r in range(n):
             if active[r] and taken[r]:  # (its centre is the point just taken)
                 f[r, 0] = best[r]
-                _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r], 0.25, 1)
+                _stencil(rows, which[r], s[r], t[r], cell, pinion, gear, f[r], 0.25, 1)
 
 
 @compiled(inline=True)
