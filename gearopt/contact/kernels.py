@@ -151,21 +151,22 @@ def _atan2(y, x):
 @compiled
 def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     """Node fields of the first n rows r (``rows`` as :func:`clearance_at`'s, ``side``: each
-    row's field; n = ``out.shape[1]``) on the
-    generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
-    coordinates ``xy`` (``(2, K, m)``), z terms ``z`` (``(4, K, m)``), normals' terms ``nxy``,
-    ``nz`` (``(2, K, m)``); the nodes' polar angles in the gear frame by :func:`_atan2`.
+    row's field; n = ``out.shape[1]``) on the generated nodes of each row's side:
+    ``count[k]`` nodes, grid indices ``index[k]``, coordinates ``xy`` (``(2, K, m)``), z
+    terms ``z`` (``(4, K, m)``), normals' terms ``nxy``, ``nz`` (``(2, K, m)``); the nodes'
+    polar angles in the gear frame by :func:`_atan2`.
     Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
     (0 off the mask) into ``out`` (``(3, n, nodes)``).
 
     Row by row in two passes over the nodes: the linear outputs, R2, the normal factor and
-    the gear's unit coordinates (no table look-up), then the gear cells and, where the point
-    faces the gear flank, the clearance."""
+    the gear's unit coordinates (no table look-up, no scattered store: vectorised), then the
+    gear cells and, where the point faces the gear flank, the clearance."""
     kx, ky, turn, sense, offset, _ = rows
     rho0, rho1, lim0, lim1, n_cols, tapered, d0, inv_ia, ib, h0, alpha, beta, coef, ok = gear
     n = out.shape[1]
     size = xy.shape[2]
     o0s, o1s, gxs, gys = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+    factors, radii_j = np.empty(size), np.empty(size)  # (the nodes' in order)
     for r in range(n):
         k = side[r]
         c = count[k]
@@ -191,12 +192,13 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
             o0s[j], o1s[j], gxs[j], gys[j] = o0, o1, gx, gy
             m0 = kx0 * nx[j] + ky0 * ny[j] + nz0[j]
             m1 = kx1 * nx[j] + ky1 * ny[j] + nz1[j]
-            factor[g[j]] = abs(m1 * o0 - m0 * o1)
-            radii[g[j]] = radius
+            factors[j] = abs(m1 * o0 - m0 * o1)
+            radii_j[j] = radius
         # the polar angles only where the point faces the gear flank (as _gear_gap, whose
         # clearance is kept only there)
         shift, row_turn, row_sense = offset[r], turn[r], sense[r]
         for j in range(c):
+            factor[g[j]], radii[g[j]] = factors[j], radii_j[j]
             a = _corner(gxs[j], lim0)
             b = _corner(gys[j], lim1)
             cell = int(a * n_cols + b) + shift
