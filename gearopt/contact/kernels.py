@@ -18,6 +18,14 @@ time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares t
   on a row, inlined into the kernels here and into the marking-compound zone's
   (:mod:`gearopt.contact.zone_kernels`).
 
+The point helpers (:func:`pinion_at`, :func:`gap_of` and what they inline) take the tables
+as tuples and read each entry where no branch lies between a table's first and last use:
+numba takes a reference on every array of a tuple bound to a variable (an inlined helper's
+parameter) and releases it after its last use, atomically, and prunes the pair only within
+one block. Across a branch (or through a call that takes the tables) that cost 28 atomic
+operations per point, as much as the evaluation itself; the loops over points are therefore
+written in the kernels that own them, the tables unpacked once outside.
+
 A numpy reference of the node fields, the point clearance and the refinement (the engine's
 whole-array paths before these kernels) lives with the tests (``tests/numpy_engine.py``); the
 kernels' parity test holds the two to the same results. Where numba cannot be imported, or
@@ -245,8 +253,8 @@ def point_fields(rows, points, normals, lin_z, const, gear, out, valid):
 
 @compiled
 def _evaluate(rows, r, s, t, pinion, gear, cells):
-    """:func:`_point_in` compiled once, called: the evaluations outside the stencil (a copy
-    inlined at each call site would multiply the compile time)."""
+    """:func:`_point_in` compiled once, called: the tangency's few evaluations outside its
+    stencil (a copy inlined at each call site would multiply the compile time)."""
     return _point_in(rows, r, s, t, pinion, gear, cells)
 
 
@@ -332,7 +340,7 @@ def clearance_at(rows, sh, pinion, gear, delta, valid):
     n, m = delta.shape
     for r in range(n):
         for p in range(m):
-            delta[r, p], valid[r, p] = _evaluate(
+            delta[r, p], valid[r, p] = _point_in(
                 rows, r, sh[0, r, p], sh[1, r, p], pinion, gear, pinion[14]
             )
 
