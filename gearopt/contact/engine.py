@@ -175,6 +175,13 @@ def _stacked_tables(fields) -> dict:
         ]
     )
     pinion_fine = np.concatenate([t["fine"][1] for t in tables])
+    # the kernels' one table of both (the fine cells after the flank's, the band pointing
+    # there: :func:`gearopt.contact.kernels.pinion_at`)
+    kernel_coef = np.ascontiguousarray(np.concatenate([pinion_coef, pinion_fine]))
+    kernel_band = pinion_band.copy()
+    kernel_band[:, 0] = np.where(
+        pinion_band[:, 0] >= 0.0, pinion_band[:, 0] + len(pinion_coef), -1.0
+    )
     gear_cells = first.gear.cells.generated.size
     gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
     gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
@@ -195,6 +202,8 @@ def _stacked_tables(fields) -> dict:
         "pinion_coef": pinion_coef,
         "pinion_band": pinion_band,
         "pinion_fine": pinion_fine,
+        "kernel_coef": kernel_coef,
+        "kernel_band": kernel_band,
         "gear_cells": gear_cells,
         "gear_coef": gear_coef,
         "gear_ok": gear_ok,
@@ -264,6 +273,7 @@ class ContactEngine:
                 raise GearoptError("fields", rule="joined fields must share grids and placement")
         self.b, self.c, self.ratio = first.b, first.c, first.ratio
         self.pinion_grid, self.gear_grid = first.pinion, first.gear
+        self.pinion_nodes = (first.pinion.face_mm, first.pinion.profile_mm)
         self.shape = first.pinion.shape
         self.sense = np.array([f.sense for f in fields], float)
         self.gear_sense = -self.sense
@@ -376,10 +386,9 @@ class ContactEngine:
             *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
             np.ascontiguousarray(self.pinion_map),
             np.ascontiguousarray(self.pinion_const[:, 0]),
-            self.pinion_coef,
+            self.kernel_coef,
             np.ascontiguousarray(self.refine_cells),
-            np.ascontiguousarray(self.pinion_band),
-            np.ascontiguousarray(self.pinion_fine),
+            np.ascontiguousarray(self.kernel_band),
         )
         counts = self.node_real.sum(axis=1).astype(np.intp)
         return gear, pinion, counts
@@ -422,7 +431,11 @@ class ContactEngine:
         n = phi.shape[0]
         side = np.array(np.broadcast_to(np.asarray(side, np.intp), (n,)))
         angle = np.array(np.broadcast_to(np.asarray(angle, float), (n,)))
-        maker = (
+        return row_constants(self._row_maker(), side, phi, angle)
+
+    def _row_maker(self) -> tuple:
+        """The engine's part of :func:`gearopt.contact.rows.row_constants`'s arguments."""
+        return (
             self.rotation,
             self.turn0,
             self.gear_sense,
@@ -430,7 +443,6 @@ class ContactEngine:
             int(self.gear_cells),
             int(self.pinion_cells),
         )
-        return row_constants(maker, side, phi, angle)
 
     def rows_of(self, side, phi, angle) -> EngineRows:
         """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one
@@ -604,25 +616,20 @@ class ContactEngine:
         fields, then the minima in compiled calls (:mod:`gearopt.contact.minima`)."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         n = len(phi)
-        side = np.array(np.broadcast_to(np.asarray(side, np.intp), phi.shape))
-        angle = np.broadcast_to(np.asarray(gear_angle_rad, float), phi.shape)
-        m = 0
+        m = 0 if near is None else np.size(near[1])
+        # the sampled rows, then the near rows (one table of constants for both)
+        side_all, phi_all = np.empty(n + m, np.intp), np.empty(n + m)
+        angle_all = np.zeros(n + m)
+        side_all[:n], phi_all[:n], angle_all[:n] = side, phi, gear_angle_rad
+        sh = np.empty((2, m))
         if near is not None:
-            n_side, n_phi, n_s, n_h = (np.atleast_1d(np.asarray(a)) for a in near)
-            m = len(n_phi)
-            n_side = np.array(np.broadcast_to(n_side, (m,)), np.intp)
-            side_all = np.concatenate([side, n_side])
-            phi_all = np.concatenate([phi, np.broadcast_to(np.asarray(n_phi, float), (m,))])
-            angle_all = np.concatenate([angle, np.zeros(m)])
-        else:
-            side_all, phi_all, angle_all = side, phi, angle
-        rows = self.row_tables(side, phi, angle)
-        near_rows = self.row_tables(side_all[n:], phi_all[n:], angle_all[n:])
+            side_all[n:], phi_all[n:], sh[0], sh[1] = near
+        rows = row_constants(self._row_maker(), side_all, phi_all, angle_all)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
         gear, pinion, counts = self.kernel_tables
         _kernels.node_fields(
             rows,
-            side,
+            side_all,
             counts,
             self.node_index,
             self.node_xy,
@@ -632,26 +639,30 @@ class ContactEngine:
             gear,
             out,
         )
-        sh = np.empty((2, 0)) if near is None else np.stack([n_s, n_h]).astype(float)
         point = np.empty((3, n))
-        at, take, origin, starts, s, h, best, caps, group, tol = minima_starts(
+        refined = np.empty(n, bool)
+        refined[:] = refine
+        at, take, origin, which, s, h, best, caps, group, tol = minima_starts(
             out[0],
-            side,
-            rows,
-            np.array(np.broadcast_to(np.asarray(refine, bool), phi.shape)),
+            side_all,
+            refined,
             self.refine_nodes,
             2,
-            (near_rows, side_all[n:], np.ascontiguousarray(sh.reshape(2, m))),
+            sh,
             near is not None,
             self.tolerances,
-            (self.pinion_grid.face_mm, self.pinion_grid.profile_mm),
+            self.pinion_nodes,
             point,
         )
         flags = np.zeros(len(s), bool)
         if len(s):
-            _kernels.refine(starts, s, h, best, caps, group, tol, self.cell, pinion, gear, flags)
+            _kernels.refine(
+                rows, which, s, h, best, caps, group, tol, self.cell, pinion, gear, flags
+            )
         edge = np.empty(n, bool)
-        minima_pick(out[1], side, at, take, origin, s, h, best, flags, self.tolerances, point, edge)
+        minima_pick(
+            out[1], side_all, at, take, origin, s, h, best, flags, self.tolerances, point, edge
+        )
         shape = (n,) + self.shape
         sample = FieldSample(
             phi_rad=phi,
@@ -734,6 +745,7 @@ class ContactEngine:
         gear, pinion, _ = self.kernel_tables
         _kernels.refine(
             self.row_tables(side, phi, angle),
+            np.arange(n),
             s,
             h,
             best,

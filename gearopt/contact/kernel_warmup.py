@@ -27,7 +27,7 @@ def warm() -> None:
     limits = np.zeros((1, 2))
     band = np.full((1, 4), -1.0)
     pinion = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1, False, 0.0, 0.0, 0.0, lin, const, coef, limits)
-    pinion += (band, coef)
+    pinion += (band,)
     rows = (
         np.zeros((4, 1)),
         np.zeros((4, 1)),
@@ -60,6 +60,7 @@ def warm() -> None:
     cell = np.ones(2)
     kernels.refine(
         rows,
+        np.zeros(1, ip),
         np.zeros(1),
         np.zeros(1),
         np.full(1, np.nan),
@@ -83,10 +84,9 @@ def warm() -> None:
     )
     one, flag = np.zeros((1, 1)), np.ones(1, np.bool_)
     tolerances, grid = np.ones((2, 1)), (np.zeros(1), np.zeros(1))
-    near = (rows, side, np.zeros((2, 1)))
     keep, point = flag.reshape(1, 1), np.empty((3, 1))
     at, take, origin, *_ = minima_starts(
-        one, side, rows, flag, keep, 2, near, False, tolerances, grid, point
+        one, side, flag, keep, 2, np.zeros((2, 1)), False, tolerances, grid, point
     )
     minima_pick(
         one,

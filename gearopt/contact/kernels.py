@@ -18,6 +18,14 @@ time, many times over); :class:`gearopt.contact.engine.ContactEngine` prepares t
   on a row, inlined into the kernels here and into the marking-compound zone's
   (:mod:`gearopt.contact.zone_kernels`).
 
+The point helpers (:func:`pinion_at`, :func:`gap_of` and what they inline) take the tables
+as tuples and read each entry where no branch lies between a table's first and last use:
+numba takes a reference on every array of a tuple bound to a variable (an inlined helper's
+parameter) and releases it after its last use, atomically, and prunes the pair only within
+one block. Across a branch (or through a call that takes the tables) that cost 28 atomic
+operations per point, as much as the evaluation itself; the loops over points are therefore
+written in the kernels that own them, the tables unpacked once outside.
+
 A numpy reference of the node fields, the point clearance and the refinement (the engine's
 whole-array paths before these kernels) lives with the tests (``tests/numpy_engine.py``); the
 kernels' parity test holds the two to the same results. Where numba cannot be imported, or
@@ -78,8 +86,14 @@ def _corner(x, limit):
 @compiled(inline=True)
 def _gear_unit(o2, o3, radius, gear):
     """The gear's unit grid coordinates ``(x, y)`` (y of the profile coordinate t on tapered
-    depth) of a point with the qz parts ``o2``, ``o3`` and the radius R2."""
-    rho0, rho1, _, _, _, tapered, d0, inv_ia, ib, h0, alpha, beta, _, _ = gear
+    depth) of a point with the qz parts ``o2``, ``o3`` and the radius R2.
+
+    (The point helpers here read their tables' entries where no branch lies between a
+    table's first and last use: numba then prunes the references it takes on them; across
+    a branch each point evaluation would take and release one on every array of the tables,
+    atomically, which cost as much as the evaluation.)"""
+    rho0, rho1, tapered, d0, inv_ia = gear[0], gear[1], gear[5], gear[6], gear[7]
+    ib, h0, alpha, beta = gear[8], gear[9], gear[10], gear[11]
     x = o2 + rho0 * radius
     y = o3 + rho1 * radius
     if tapered:
@@ -94,16 +108,15 @@ def _gear_gap(o0, o1, o2, o3, theta, turn, sense, offset, gear):
     qx, qy and the qz parts of the gear's unit coordinates; ``theta`` = atan2(o1, o0)) on a
     row: ``(delta, valid, R2)``. ``gear``: rho coefficients, limits, columns, taper (flag and
     constants), coefficients, valid cells."""
-    _, _, lim0, lim1, n_cols, _, _, _, _, _, _, _, coef, ok = gear
     radius = math.sqrt(o0 * o0 + o1 * o1)
     x, y = _gear_unit(o2, o3, radius, gear)
-    a = _corner(x, lim0)
-    b = _corner(y, lim1)
-    cell = int(a * n_cols + b) + offset
+    a = _corner(x, gear[2])
+    b = _corner(y, gear[3])
+    cell = int(a * gear[4] + b) + offset
     u = x - a
     v = y - b
-    valid = ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0
-    gap = _hermite(coef, cell, u, v) - theta
+    valid = gear[13][cell] & (u >= 0.0) & (u <= 1.0) & (v >= 0.0) & (v <= 1.0)
+    gap = _hermite(gear[12], cell, u, v) - theta
     gap += turn
     gap -= np.rint(gap * _TO_TURNS) * _TURN
     return gap * sense, valid, radius
@@ -145,46 +158,65 @@ def _atan2(y, x):
 
 @compiled
 def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
-    """Node fields of rows r (``rows`` as :func:`clearance_at`'s, ``side``: ``(n,)``) on the
-    generated nodes of each row's side: ``count[k]`` nodes, grid indices ``index[k]``,
-    coordinates ``xy`` (``(2, K, m)``), z terms ``z`` (``(4, K, m)``), normals' terms ``nxy``,
-    ``nz`` (``(2, K, m)``); the nodes' polar angles in the gear frame by :func:`_atan2`.
+    """Node fields of the first n rows r (``rows`` as :func:`clearance_at`'s, ``side``: each
+    row's field; n = ``out.shape[1]``) on the generated nodes of each row's side:
+    ``count[k]`` nodes, grid indices ``index[k]``, coordinates ``xy`` (``(2, K, m)``), z
+    terms ``z`` (``(4, K, m)``), normals' terms ``nxy``, ``nz`` (``(2, K, m)``); the nodes'
+    polar angles in the gear frame by :func:`_atan2`.
     Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
-    (0 off the mask) into ``out`` (``(3, n, nodes)``)."""
+    (0 off the mask) into ``out`` (``(3, n, nodes)``).
+
+    Row by row in two passes over the nodes: the linear outputs, R2, the normal factor and
+    the gear's unit coordinates (no table look-up, no scattered store: vectorised), then the
+    gear cells and, where the point faces the gear flank, the clearance."""
     kx, ky, turn, sense, offset, _ = rows
-    _, _, lim0, lim1, n_cols, _, _, _, _, _, _, _, coef, ok = gear
-    n = turn.shape[0]
+    rho0, rho1, lim0, lim1, n_cols, tapered, d0, inv_ia, ib, h0, alpha, beta, coef, ok = gear
+    n = out.shape[1]
+    size = xy.shape[2]
+    o0s, o1s, gxs, gys = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+    factors, radii_j = np.empty(size), np.empty(size)  # (the nodes' in order)
     for r in range(n):
         k = side[r]
-        out[0, r, :] = math.inf
-        out[1, r, :] = 0.0
-        out[2, r, :] = 0.0
-        for j in range(count[k]):
-            x, y = xy[0, k, j], xy[1, k, j]
-            o0 = kx[0, r] * x + ky[0, r] * y + z[0, k, j]
-            o1 = kx[1, r] * x + ky[1, r] * y + z[1, k, j]
-            o2 = kx[2, r] * x + ky[2, r] * y + z[2, k, j]
-            o3 = kx[3, r] * x + ky[3, r] * y + z[3, k, j]
+        c = count[k]
+        clearance, factor, radii = out[0, r], out[1, r], out[2, r]
+        clearance[:] = math.inf
+        factor[:] = 0.0
+        radii[:] = 0.0
+        x, y, nx, ny, g = xy[0, k], xy[1, k], nxy[0, k], nxy[1, k], index[k]
+        z0, z1, z2, z3, nz0, nz1 = z[0, k], z[1, k], z[2, k], z[3, k], nz[0, k], nz[1, k]
+        kx0, kx1, kx2, kx3 = kx[0, r], kx[1, r], kx[2, r], kx[3, r]
+        ky0, ky1, ky2, ky3 = ky[0, r], ky[1, r], ky[2, r], ky[3, r]
+        for j in range(c):
+            o0 = kx0 * x[j] + ky0 * y[j] + z0[j]
+            o1 = kx1 * x[j] + ky1 * y[j] + z1[j]
+            o2 = kx2 * x[j] + ky2 * y[j] + z2[j]
+            o3 = kx3 * x[j] + ky3 * y[j] + z3[j]
             radius = math.sqrt(o0 * o0 + o1 * o1)
-            # the gear cell first: the polar angles only where the point faces the gear
-            # flank (as _gear_gap, whose clearance is kept only there)
-            gx, gy = _gear_unit(o2, o3, radius, gear)
-            a = _corner(gx, lim0)
-            b = _corner(gy, lim1)
-            cell = int(a * n_cols + b) + offset[r]
-            u = gx - a
-            v = gy - b
-            g = index[k, j]
+            gx = o2 + rho0 * radius  # (as _gear_unit)
+            gy = o3 + rho1 * radius
+            if tapered:
+                d = gx * inv_ia + d0
+                gy = (gy + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
+            o0s[j], o1s[j], gxs[j], gys[j] = o0, o1, gx, gy
+            m0 = kx0 * nx[j] + ky0 * ny[j] + nz0[j]
+            m1 = kx1 * nx[j] + ky1 * ny[j] + nz1[j]
+            factors[j] = abs(m1 * o0 - m0 * o1)
+            radii_j[j] = radius
+        # the polar angles only where the point faces the gear flank (as _gear_gap, whose
+        # clearance is kept only there)
+        shift, row_turn, row_sense = offset[r], turn[r], sense[r]
+        for j in range(c):
+            factor[g[j]], radii[g[j]] = factors[j], radii_j[j]
+            a = _corner(gxs[j], lim0)
+            b = _corner(gys[j], lim1)
+            cell = int(a * n_cols + b) + shift
+            u = gxs[j] - a
+            v = gys[j] - b
             if ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0:
-                gap = _hermite(coef, cell, u, v) - _atan2(o1, o0)
-                gap += turn[r]
+                gap = _hermite(coef, cell, u, v) - _atan2(o1s[j], o0s[j])
+                gap += row_turn
                 gap -= np.rint(gap * _TO_TURNS) * _TURN
-                out[0, r, g] = gap * sense[r]
-            nx, ny = nxy[0, k, j], nxy[1, k, j]
-            m0 = kx[0, r] * nx + ky[0, r] * ny + nz[0, k, j]
-            m1 = kx[1, r] * nx + ky[1, r] * ny + nz[1, k, j]
-            out[1, r, g] = abs(m1 * o0 - m0 * o1)
-            out[2, r, g] = radius
+                clearance[g[j]] = gap * row_sense
 
 
 @compiled
@@ -219,23 +251,10 @@ def point_fields(rows, points, normals, lin_z, const, gear, out, valid):
             valid[r, p] = on
 
 
-@compiled(inline=True)
-def _pinion_theta(coef, band, fine, cell, u, v):
-    """The pinion's Theta at unit coordinates ``(u, v)`` of cell ``cell``: its own polynomial,
-    or where ``band`` says so its fine cells at the generated boundary
-    (:func:`gearopt.contact.boundary.boundary_cells`, whose ``band_theta`` is this in numpy)."""
-    b = band[cell, 0]
-    if b < 0.0:
-        return _hermite(coef, cell, u, v)
-    y = (band[cell, 1] + v) * band[cell, 2]
-    m = min(max(math.floor(y), 0.0), band[cell, 3] - 1.0)
-    return _hermite(fine, int(b + m), u, y - m)
-
-
 @compiled
 def _evaluate(rows, r, s, t, pinion, gear, cells):
-    """:func:`_point_in` compiled once, called: the evaluations outside the stencil (a copy
-    inlined at each call site would multiply the compile time)."""
+    """:func:`_point_in` compiled once, called: the tangency's few evaluations outside its
+    stencil (a copy inlined at each call site would multiply the compile time)."""
     return _point_in(rows, r, s, t, pinion, gear, cells)
 
 
@@ -253,19 +272,29 @@ def pinion_at(s, t, pinion, offset):
     """The row-independent part of :func:`_point_in` at grid coordinates ``(s, t)`` of the
     pinion tables ``offset`` cells in: ``(cell, u, v, px, py, l1, l2, l3, l4)``, the cell and
     the unit coordinates in it, the point's x and y in the pinion frame and the z terms of the
-    four linear outputs."""
-    (s0, h0, ia, ib, lim0, lim1, n_cols, tapered, pivot, alpha, beta, lin, const, coef) = pinion[
-        :14
-    ]
-    x = (s - s0) * ia
-    y = (t - h0) * ib
-    a = _corner(x, lim0)
-    b = _corner(y, lim1)
-    cell = int(a * n_cols + b) + offset
+    four linear outputs.
+
+    Theta is the cell's own polynomial, or where the band ``pinion[15]`` says so its fine
+    cells at the generated boundary (:func:`gearopt.contact.boundary.boundary_cells`, whose
+    ``band_theta`` is this in numpy), both in one table ``pinion[13]`` (the fine cells after
+    the flank's, the band's first column pointing there). Straight-line, as
+    :func:`_gear_unit`."""
+    x = (s - pinion[0]) * pinion[2]
+    y = (t - pinion[1]) * pinion[3]
+    a = _corner(x, pinion[4])
+    b = _corner(y, pinion[5])
+    cell = int(a * pinion[6] + b) + offset
     u = x - a
     v = y - b
-    theta = _pinion_theta(coef, pinion[15], pinion[16], cell, u, v)
-    h = t + (s - pivot) * (alpha + beta * t) if tapered else t
+    band = pinion[15]
+    first = band[cell, 0]
+    level = (band[cell, 1] + v) * band[cell, 2]
+    row = min(max(math.floor(level), 0.0), band[cell, 3] - 1.0)
+    fine = first >= 0.0
+    theta = _hermite(pinion[13], int(first + row) if fine else cell, u, level - row if fine else v)
+    tapered = t + (s - pinion[8]) * (pinion[9] + pinion[10] * t)
+    h = tapered if pinion[7] else t
+    lin, const = pinion[11], pinion[12]
     big_r = lin[0, 0] * s + lin[0, 1] * h + const[0]
     px = big_r * math.cos(theta)
     py = big_r * math.sin(theta)
@@ -285,16 +314,16 @@ def pinion_at(s, t, pinion, offset):
 @compiled(inline=True)
 def gap_of(rows, r, point, gear, cells):
     """:func:`_point_in` on row ``r`` of the pinion point ``point`` (:func:`pinion_at`)."""
-    kx, ky, turn, sense, offset, _ = rows
     cell, u, v, px, py, l1, l2, l3, l4 = point
+    kx, ky = rows[0], rows[1]
     o0 = kx[0, r] * px + ky[0, r] * py + l1
     o1 = kx[1, r] * px + ky[1, r] * py + l2
     o2 = kx[2, r] * px + ky[2, r] * py + l3
     o3 = kx[3, r] * px + ky[3, r] * py + l4
     theta = math.atan2(o1, o0)
-    gap, on, _ = _gear_gap(o0, o1, o2, o3, theta, turn[r], sense[r], offset[r], gear)
+    gap, on, _ = _gear_gap(o0, o1, o2, o3, theta, rows[2][r], rows[3][r], rows[4][r], gear)
     inside = v >= cells[cell, 0] + cells[cell, 1] * u  # the generated boundary (node_tables)
-    return gap, on and inside and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+    return gap, on & inside & (0.0 <= u) & (u <= 1.0) & (0.0 <= v) & (v <= 1.0)
 
 
 @compiled
@@ -305,12 +334,13 @@ def clearance_at(rows, sh, pinion, gear, delta, valid):
     ``rows``: ``kx``, ``ky`` (``(4, n)``), ``turn``, ``sense``, the gear's and the pinion's
     cell offsets (``(n,)``). ``pinion``: unit-coordinate origin and scale, limits, columns,
     taper (flag, pivot, alpha, beta), the map to R1 and the z terms (``(5, 2)``) with its
-    constants, coefficients, refinable cells, the fine cells at the generated boundary (their
-    table per cell and coefficients, :func:`gearopt.contact.boundary.boundary_cells`)."""
+    constants, the coefficients of its cells followed by those of the fine cells at the
+    generated boundary (:func:`gearopt.contact.boundary.boundary_cells`), the refinable
+    cells and the fine cells' table per cell (its first column indexing the coefficients)."""
     n, m = delta.shape
     for r in range(n):
         for p in range(m):
-            delta[r, p], valid[r, p] = _evaluate(
+            delta[r, p], valid[r, p] = _point_in(
                 rows, r, sh[0, r, p], sh[1, r, p], pinion, gear, pinion[14]
             )
 
@@ -363,25 +393,19 @@ def _pseudo_newton(g0, g1, hss, hsh, hhh, free):
     )
 
 
-@compiled
-def _stencil(rows, r, s, t, cell, pinion, gear, f, fraction=0.25, first=0):
-    """The clearance on the refinement's stencil around ``(s, t)`` (``fraction`` of a
-    ``cell``): centre, +s, -s, +t, -t, then the diagonals (++ +- -+ --), into ``f`` from point
-    ``first`` on; whether the centre is valid (False when it is not evaluated)."""
-    qs, qt = fraction * cell[0], fraction * cell[1]
-    valid = False
-    for i in range(first, 9):
-        a = _STENCIL_S[i] * qs
-        b = _STENCIL_T[i] * qt
-        f[i], on = _point_in(rows, r, s + a, t + b, pinion, gear, pinion[14])
-        if i == 0:
-            valid = on
-    return valid
+@compiled(inline=True)
+def _around(i, s, t, qs, qt):
+    """Point ``i`` of the refinement's stencil around ``(s, t)``, steps ``(qs, qt)``: centre,
+    +s, -s, +t, -t, then the diagonals (++ +- -+ --). (The callers evaluate the stencil in
+    their own loops: a call taking the tables would take and release a reference on each of
+    their arrays, a fifth of the nine evaluations' cost.)"""
+    return s + _STENCIL_S[i] * qs, t + _STENCIL_T[i] * qt
 
 
 @compiled
 def refine(
     rows,
+    which,
     s,
     t,
     best,
@@ -393,18 +417,24 @@ def refine(
     gear,
     edge,
 ):
-    """:meth:`gearopt.contact.engine.ContactEngine.refine` row by row: constrained Newton steps from
-    ``(s, t)`` (updated in place with ``best``, the start values, NaN: the interpolated value
-    there; and ``edge``), at most ``caps[g]`` steps for the rows of group g, a group stopping
-    when none of its rows moved more than a thousandth of a cell."""
+    """:meth:`gearopt.contact.engine.ContactEngine.refine` start by start: constrained Newton
+    steps from ``(s, t)`` (updated in place with ``best``, the start values, NaN: the
+    interpolated value there; and ``edge``) on row ``which[p]`` of ``rows``, at most ``caps[g]``
+    steps for the starts of group g, a group stopping when none of its starts moved more than a
+    thousandth of a cell."""
     n = s.shape[0]
     fractions = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
     f = np.empty((n, 9))
     active = np.ones(n, np.bool_)
     moving = np.zeros(n, np.bool_)
     taken = np.zeros(n, np.bool_)
+    qs, qt = 0.25 * cell[0], 0.25 * cell[1]
     for r in range(n):
-        ok = _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r])
+        ok = False
+        for i in range(9):
+            ps, pt = _around(i, s[r], t[r], qs, qt)
+            f[r, i], on = _point_in(rows, which[r], ps, pt, pinion, gear, pinion[14])
+            ok = on if i == 0 else ok
         if np.isnan(best[r]):
             best[r] = f[r, 0] if ok else math.inf
     small = 1e-3 * min(cell[0], cell[1])
@@ -441,7 +471,7 @@ def refine(
                 else:
                     ns = s[r] + fractions[i] * (st0 * cell[0])
                     nt = t[r] + fractions[i] * (st1 * cell[1])
-                value, on = _point_in(rows, r, ns, nt, pinion, gear, pinion[14])
+                value, on = _point_in(rows, which[r], ns, nt, pinion, gear, pinion[14])
                 if i < 0 or (i == 0 and newton):
                     edge[r] = (not on) and fall > tol[r]
                     if i < 0:
@@ -471,7 +501,9 @@ def refine(
         for r in range(n):
             if active[r] and taken[r]:  # (its centre is the point just taken)
                 f[r, 0] = best[r]
-                _stencil(rows, r, s[r], t[r], cell, pinion, gear, f[r], 0.25, 1)
+                for i in range(1, 9):
+                    ps, pt = _around(i, s[r], t[r], qs, qt)
+                    f[r, i], _ = _point_in(rows, which[r], ps, pt, pinion, gear, pinion[14])
 
 
 @compiled(inline=True)
@@ -506,7 +538,9 @@ def tangency(rows, s, t, cell, pinion, gear, generated, f):
     line contact: the point is not unique)."""
     q = 1.0 / 16.0
     for _ in range(32):
-        _stencil(rows, 0, s, t, cell, pinion, gear, f, q)
+        for i in range(9):
+            ps, pt = _around(i, s, t, q * cell[0], q * cell[1])
+            f[i], _ = _point_in(rows, 0, ps, pt, pinion, gear, pinion[14])
         g0 = (f[1] - f[2]) / (2.0 * q)
         g1 = (f[3] - f[4]) / (2.0 * q)
         hss = (f[1] + f[2] - 2.0 * f[0]) / (q * q)

@@ -24,7 +24,7 @@ __all__ = ["ENABLED", "minima_pick", "minima_starts"]
 
 @compiled
 def minima_starts(
-    field, side, rows, refined, keep, candidates, near, with_near, tolerances, grid, out
+    field, side, refined, keep, candidates, near_sh, with_near, tolerances, grid, out
 ):
     """The node minima of a sample's rows and the starts of their refinement.
 
@@ -33,20 +33,19 @@ def minima_starts(
     field
         ``(n, nodes)`` the rows' node clearances.
     side
-        ``(n,)`` each row's field.
-    rows
-        The rows' constants (as :func:`gearopt.contact.kernels.clearance_at` takes them).
+        ``(n + m,)`` each row's field, the n sampled rows' then the m near rows' (as the
+        rows of the refinement's constants).
     refined
         ``(n,)`` True where a row's minimum is refined.
     keep
         ``(sides, nodes)`` the refinable nodes.
     candidates
         How many of its lowest refinable nodes a row is refined from.
-    near
-        ``(constants, side, sh)``: rows refined from given points (gear angle 0), their
-        constants, fields and pinion grid coordinates ``(2, m)``; used only ``with_near``.
+    near_sh
+        ``(2, m)`` the pinion grid coordinates the near rows (rows refined from given points)
+        start from; used only ``with_near``.
     with_near
-        Whether there are near rows (else ``near`` is a placeholder).
+        Whether there are near rows (else ``near_sh`` is a placeholder).
     tolerances
         ``(2, sides)`` each field's refinement tolerance (rad) and edge tolerance (um).
     grid
@@ -57,12 +56,11 @@ def minima_starts(
     Returns
     -------
     tuple
-        ``(at, take, origin, constants, s, t, best, caps, group, tol)``: each row's least node
+        ``(at, take, origin, which, s, t, best, caps, group, tol)``: each row's least node
         (flat index), the refined rows, each start's row (the near rows' starts last, without
-        one), then :func:`gearopt.contact.kernels.refine`'s arguments (none to refine where
-        ``s`` is empty).
+        one), then :func:`gearopt.contact.kernels.refine`'s arguments (each start's row
+        among the n + m; none to refine where ``s`` is empty).
     """
-    near_rows, near_side, near_sh = near
     face, profile = grid
     n, size = field.shape
     n_p = profile.shape[0]
@@ -82,7 +80,7 @@ def minima_starts(
         out[2, r] = profile[at[r] % n_p]
         if refined[r]:
             chosen += 1
-    m = near_side.shape[0] if with_near else 0
+    m = near_sh.shape[1] if with_near else 0
     take = np.empty(chosen, np.intp)
     q = 0
     for r in range(n):
@@ -135,7 +133,7 @@ def minima_starts(
     for j in range(m):
         s[starts + j], t[starts + j] = near_sh[0, j], near_sh[1, j]
         best[starts + j] = np.nan
-        tol[starts + j] = tolerances[0, near_side[j]]
+        tol[starts + j] = tolerances[0, side[n + j]]
         group[starts + j] = 1 if chosen else 0
     if not chosen:
         caps = np.array([3], np.intp)
@@ -143,27 +141,12 @@ def minima_starts(
         caps = np.array([4, 3], np.intp)
     else:
         caps = np.array([4], np.intp)
-    # the starts' row constants: their rows' then the near rows'
-    kx, ky, turn, sense, offset, pinion_offset = rows
-    n_kx, n_ky, n_turn, n_sense, n_offset, n_pinion_offset = near_rows
-    out_kx, out_ky = np.empty((4, k)), np.empty((4, k))
-    out_turn, out_sense = np.empty(k), np.empty(k)
-    out_offset, out_pinion_offset = np.empty(k, np.intp), np.empty(k, np.intp)
-    for q in range(k):
-        if q < starts:
-            r = origin[q]
-            for i in range(4):
-                out_kx[i, q], out_ky[i, q] = kx[i, r], ky[i, r]
-            out_turn[q], out_sense[q] = turn[r], sense[r]
-            out_offset[q], out_pinion_offset[q] = offset[r], pinion_offset[r]
-        else:
-            r = q - starts
-            for i in range(4):
-                out_kx[i, q], out_ky[i, q] = n_kx[i, r], n_ky[i, r]
-            out_turn[q], out_sense[q] = n_turn[r], n_sense[r]
-            out_offset[q], out_pinion_offset[q] = n_offset[r], n_pinion_offset[r]
-    constants = (out_kx, out_ky, out_turn, out_sense, out_offset, out_pinion_offset)
-    return at, take, origin, constants, s, t, best, caps, group, tol
+    # each start's row: its sampled row's, then the near rows'
+    which = np.empty(k, np.intp)
+    which[:starts] = origin
+    for j in range(m):
+        which[starts + j] = n + j
+    return at, take, origin, which, s, t, best, caps, group, tol
 
 
 @compiled
