@@ -7,10 +7,13 @@ guess is where the cubic interpolants of the two pairs' sampled lags cross
 (:func:`lag_crossing`), checked by evaluations at the guess and an eighth of a position step to
 either side: the root of the parabola through the three differences stands when it is within a
 tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
-a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`:
-secant points guarded either side and the middle, four a step) until it is narrower than
-:data:`TOLERANCE_RAD`. A line contact (``flat``: its crossing lies in noise) keeps three steps
-on refinements (:meth:`HandOver.take_flat`).
+a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`)
+until it is narrower than :data:`TOLERANCE_RAD`: where D is smooth, the root of its inverse
+interpolants guarded either side as far as they disagree (it closes in about three steps);
+where D steps (a lag's least clearance jumping to another part of its flank: only D's sign
+tells the root) or is infinite, points evenly across the bracket, the stepping lag sampled
+alone once the other's is smooth across it. A line contact (``flat``: its crossing lies in
+noise) keeps three steps on refinements (:meth:`HandOver.take_flat`).
 
 A guess's checks are asked for as :class:`Request` rows, answered by the joint field's
 refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`): the
@@ -75,6 +78,10 @@ TOLERANCE_RAD = 1e-9
 ITERATIONS = 40
 #: the points evenly across the bracket of an iteration's step where D is not smooth
 SPREAD = 7
+#: the points evenly across the bracket where one pair's lag steps and the other's is smooth
+STEP_SPREAD = 7
+#: the widest bracket on which a stepping lag is sampled alone
+SINGLE_RAD = 1e-4
 
 
 class HandOver:
@@ -125,6 +132,21 @@ class HandOver:
         The points of the iteration's step being evaluated.
     width
         The bracket's width before the last step.
+    rise
+        ``d_b - d_a`` before the last step (D's rise across the bracket).
+    guarded
+        0 after an even step, 1 after a guarded step, 2 after its retry with wider guards.
+    smooth
+        The pair (0 leaving, 1 incoming) whose lag is interpolated, not sampled, in the step
+        being evaluated, or None.
+    asked
+        The tags of the lags asked for by the step being evaluated.
+    end_lags
+        Both pairs' lags ``(leaving, incoming)`` at the bracket's ends (None at the first ends).
+    samples
+        Each pair's sampled ``(x, lag)`` points (finite lags): the smooth pair's interpolation.
+    trail
+        Every ``(x, D)`` with D finite so far, the bracket's first ends among them.
     steps
         The iteration's evaluations so far.
     done
@@ -152,6 +174,7 @@ class HandOver:
         self.samples = ([], [])
         self.trail = [(lo, d_lo), (hi, d_hi)]
         self.rise = d_hi - d_lo
+        self.guarded = 0
 
     def fit_requests(self, x, pitch: float) -> list[Request]:
         """Check a guess ``x``: both pairs a delta either side of it (the evaluations at ``x``
@@ -286,10 +309,15 @@ class HandOver:
         self.rise = rise
         closing = w <= 0.25 * width
         stepping = not np.isfinite(rise) or (closing and rise > 0.5 * previous)
-        if stepping or not closing:
+        # a guarded step whose guards fell on one side of a root they nearly hit: once more,
+        # guards ten times wider
+        retry = not closing and self.guarded == 1 and min(-d_a, d_b) < 0.01 * rise
+        if stepping or not (closing or retry):
+            self.guarded = 0
             self.smooth = self.smooth_pair() if stepping else None
-            return list(a + w * np.arange(1, SPREAD + 1) / (SPREAD + 1))
-        self.smooth = None
+            n = SPREAD if self.smooth is None else STEP_SPREAD
+            return list(a + w * np.arange(1, n + 1) / (n + 1))
+        self.guarded, self.smooth = 2 if retry else 1, None
         # the inverse interpolants through the bracket's ends and one, then two more points:
         # the second's root, guarded as far as the two roots differ
         secant = a - d_a * w / (d_b - d_a)
@@ -297,9 +325,9 @@ class HandOver:
         roots = [secant] + [x for x in roots if x is not None and a < x < b]
         x = roots[-1]
         error = abs(x - roots[-2]) if len(roots) > 1 else 0.005 * w
-        guard = max(2.0 * error, 0.25 * TOLERANCE_RAD)
-        xs = [x - guard, x, x + guard]
-        if guard > 0.125 * w:
+        guard = max(2.0 * error, 0.25 * TOLERANCE_RAD) * (10.0 if retry else 1.0)
+        xs = [x - min(guard, 0.5 * (x - a)), x, x + min(guard, 0.5 * (b - x))]
+        if guard > 0.125 * w or retry:
             xs.append(0.5 * (a + b))
         return [x for x in xs if a < x < b]
 
@@ -308,11 +336,11 @@ class HandOver:
         (:meth:`take_iteration`), or None (both sampled)."""
         a, b, d_a, d_b = self.bracket[:4]
         ends = self.end_lags
-        if b - a > 1e-4 or ends[0] is None or ends[1] is None:
+        if b - a > SINGLE_RAD or ends[0] is None or ends[1] is None:
             return None
         for pair in (0, 1):
             change = abs(ends[1][pair] - ends[0][pair])
-            if change <= 1e-3 * (d_b - d_a) and len(self.samples[pair]) >= 3:
+            if change <= 0.05 * (d_b - d_a) and len(self.samples[pair]) >= 3:
                 return pair
         return None
 
