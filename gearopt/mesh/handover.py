@@ -338,6 +338,8 @@ class HandOver:
         ends = self.end_lags
         if b - a > SINGLE_RAD or ends[0] is None or ends[1] is None:
             return None
+        if not np.all(np.isfinite(ends[0] + ends[1])):  # a pair off the flanks
+            return None
         for pair in (0, 1):
             change = abs(ends[1][pair] - ends[0][pair])
             if change <= 0.05 * (d_b - d_a) and len(self.samples[pair]) >= 3:
