@@ -14,27 +14,10 @@ import numpy as np
 import pytest
 
 from gearopt.mesh import kernels
+from gearopt.mesh.handover import newton_form, newton_value
 
 VARIANTS = [kernels.crossing_root, getattr(kernels.crossing_root, "py_func", None)]
 RUNS = [kernels.interior_run, getattr(kernels.interior_run, "py_func", None)]
-
-
-def newton_form(z: list, g: list) -> tuple[list, list]:
-    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
-    for :func:`newton_value`."""
-    c = list(g)
-    for j in range(1, len(z)):
-        for i in range(len(z) - 1, j - 1, -1):
-            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
-    return z, c
-
-
-def newton_value(z: list, c: list, x: float) -> float:
-    """The polynomial of :func:`newton_form` at x (nested multiplication)."""
-    value = c[-1]
-    for i in range(len(c) - 2, -1, -1):
-        value = value * (x - z[i]) + c[i]
-    return value
 
 
 def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):

@@ -7,10 +7,13 @@ guess is where the cubic interpolants of the two pairs' sampled lags cross
 (:func:`lag_crossing`), checked by evaluations at the guess and an eighth of a position step to
 either side: the root of the parabola through the three differences stands when it is within a
 tenth of that from the guess, is evaluated anew once when further. Otherwise (edge contact, or
-a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`:
-secant points guarded either side and the middle, four a step) until it is narrower than
-:data:`TOLERANCE_RAD`. A line contact (``flat``: its crossing lies in noise) keeps three steps
-on refinements (:meth:`HandOver.take_flat`).
+a guess that does not settle) an iteration on the bracket (:meth:`HandOver.take_iteration`)
+until it is narrower than :data:`TOLERANCE_RAD`: where D is smooth, the root of its inverse
+interpolants guarded either side as far as they disagree (it closes in about three steps);
+where D steps (a lag's least clearance jumping to another part of its flank: only D's sign
+tells the root) or is infinite, points evenly across the bracket, the stepping lag sampled
+alone once the other's is smooth across it. A line contact (``flat``: its crossing lies in
+noise) keeps three steps on refinements (:meth:`HandOver.take_flat`).
 
 A guess's checks are asked for as :class:`Request` rows, answered by the joint field's
 refinement from nearby contact points (:meth:`gearopt.contact.JointField.minimum_near`): the
@@ -39,10 +42,14 @@ __all__ = [
     "ITERATION_TAGS",
     "HandOver",
     "Request",
+    "inverse_root",
     "lag_crossing",
+    "newton_form",
+    "newton_value",
     "parabola",
     "parabola_at",
     "parabola_root",
+    "SPREAD",
     "TOLERANCE_RAD",
 ]
 
@@ -67,6 +74,12 @@ ITERATION_TAGS = (("ho", 0, 0), ("ho", 1, 0))
 TOLERANCE_RAD = 1e-9
 #: the most steps of the iteration (bisection of a position step to 1e-9 rad takes about 26)
 ITERATIONS = 40
+#: the points evenly across the bracket of an iteration's step where D is not smooth
+SPREAD = 7
+#: the points evenly across the bracket where one pair's lag steps and the other's is smooth
+STEP_SPREAD = 7
+#: the widest bracket on which a stepping lag is sampled alone
+SINGLE_RAD = 1e-4
 
 
 class HandOver:
@@ -117,6 +130,21 @@ class HandOver:
         The points of the iteration's step being evaluated.
     width
         The bracket's width before the last step.
+    rise
+        ``d_b - d_a`` before the last step (D's rise across the bracket).
+    guarded
+        0 after an even step, 1 after a guarded step, 2 after its retry with wider guards.
+    smooth
+        The pair (0 leaving, 1 incoming) whose lag is interpolated, not sampled, in the step
+        being evaluated, or None.
+    asked
+        The tags of the lags asked for by the step being evaluated.
+    end_lags
+        Both pairs' lags ``(leaving, incoming)`` at the bracket's ends (None at the first ends).
+    samples
+        Each pair's sampled ``(x, lag)`` points (finite lags): the smooth pair's interpolation.
+    trail
+        Every ``(x, D)`` with D finite so far, the bracket's first ends among them.
     steps
         The iteration's evaluations so far.
     done
@@ -138,6 +166,13 @@ class HandOver:
         self.xs = []
         self.steps = 0
         self.done = False
+        self.asked = []
+        self.smooth = None
+        self.end_lags = [None, None]
+        self.samples = ([], [])
+        self.trail = [(lo, d_lo), (hi, d_hi)]
+        self.rise = d_hi - d_lo
+        self.guarded = 0
 
     def fit_requests(self, x, pitch: float) -> list[Request]:
         """Check a guess ``x``: both pairs a delta either side of it (the evaluations at ``x``
@@ -154,14 +189,19 @@ class HandOver:
         return out
 
     def iteration_rows(self, xs, pitch: float) -> list[tuple[float, tuple]]:
-        """An iteration step: both pairs at each of the points ``xs``, as ``(relative rotation,
-        tag)`` rows to sample (the lags as at every position; see the module docstring)."""
+        """An iteration step: the pairs at each of the points ``xs``, as ``(relative rotation,
+        tag)`` rows to sample (the lags as at every position; see the module docstring); where
+        one pair's lag steps and the other's is smooth across the bracket (:attr:`smooth`),
+        only the stepping pair. The tags asked for are :attr:`asked`."""
         self.mode = "iterate"
         self.xs = sorted({float(x) for x in np.atleast_1d(xs)})
         self.x = self.xs[0]
         out = []
         for j, x in enumerate(self.xs):
-            out += [(x, ("ho", 0, j)), (x - pitch, ("ho", 1, j))]
+            for pair, shift in ((0, 0.0), (1, pitch)):
+                if pair != self.smooth:
+                    out.append((x - shift, ("ho", pair, j)))
+        self.asked = [tag for _, tag in out]
         return out
 
     def take_fit(self, got: list, ex: FieldSample) -> tuple[str, float]:
@@ -200,33 +240,51 @@ class HandOver:
         self.round = 0  # not smooth there after all: the iteration on the bracket
         return "iterate", self.x0
 
-    def take_iteration(self, lags) -> list[float] | None:
-        """Take in both pairs' lags ``(leaving, incoming)`` at each point of ``xs``: the next
-        points to evaluate, or None once settled (at ``x``).
+    def take_iteration(self, got: dict) -> list[float] | None:
+        """Take in the lags asked for (:attr:`asked`; ``got[tag]``, tags ``("ho", pair, j)``,
+        pair 0 leaving, 1 incoming, at the ``j``-th point of ``xs``): the next points to
+        evaluate, or None once settled (at ``x``).
 
         The bracket moves to the first sign change of D = leaving - incoming along the points;
         D is +-inf where one pair is off the flanks (its sign still tells the side), NaN
-        (both off) drops the point. Next: the secant (regula falsi) point on the bracket, a
-        hundredth of the bracket either side of it (on smooth lags the root falls between
-        them) and the bracket's middle (where a lag steps, at least a halving); where a step left
-        more than a quarter of the bracket, eight points evenly across it. Settled once
-        the bracket is narrower than :data:`TOLERANCE_RAD`, at its middle, ``lag`` the greater
-        of the lower lags at its ends: at a crossing of continuous lags their common value,
-        where a pair's lag steps across the other's (its least clearance jumping to another
-        part of its flank) the TE's trough there.
+        (both off) drops the point. Settled once the bracket is narrower than
+        :data:`TOLERANCE_RAD`, at its middle, ``lag`` the greater of the lower lags at its ends:
+        at a crossing of continuous lags their common value, where a pair's lag steps across
+        the other's (its least clearance jumping to another part of its flank) the TE's trough
+        there.
+
+        Next (:meth:`next_points`): where D is smooth, its root interpolated through the
+        bracket's ends and the nearest other point and two guards either side, as far as the
+        interpolation's error; where D steps (the bracket closes in but D's rise across it
+        does not shrink with it), is infinite or a step left more than a quarter of the
+        bracket, :data:`SPREAD` points evenly across it. A stepping lag is sampled alone once
+        the other pair's lag changes by less than a thousandth of the step across a bracket
+        narrower than 1e-4 rad: the other's is then interpolated (a parabola through its three
+        nearest samples), which cannot move D's sign.
         """
         self.steps += 1
         a, b, d_a, d_b, low_a, low_b = self.bracket
-        points = [(a, d_a, low_a)]
+        points = [(a, d_a, low_a, self.end_lags[0])]
         with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
-            for x, (g_l, g_i) in zip(self.xs, lags, strict=True):
-                d = g_l - g_i
+            for j, x in enumerate(self.xs):
+                g = []
+                for pair in (0, 1):
+                    value = got.get(("ho", pair, j))
+                    if value is None:
+                        value = self.interpolated(pair, x)
+                    elif np.isfinite(value):
+                        self.samples[pair].append((x, float(value)))
+                    g.append(float(value))
+                d = g[0] - g[1]
+                if np.isfinite(d):
+                    self.trail.append((x, d))
                 if a < x < b and not np.isnan(d):
-                    points.append((x, d, min(g_l, g_i)))
-        points.append((b, d_b, low_b))
-        for (x0, d0, l0), (x1, d1, l1) in zip(points[:-1], points[1:], strict=True):
+                    points.append((x, d, min(g), tuple(g)))
+        points.append((b, d_b, low_b, self.end_lags[1]))
+        for (x0, d0, l0, e0), (x1, d1, l1, e1) in zip(points[:-1], points[1:], strict=True):
             if d0 <= 0.0 < d1 or d1 == 0.0:
                 a, b, d_a, d_b, low_a, low_b = x0, x1, d0, d1, l0, l1
+                self.end_lags = [e0, e1]
                 break
         self.bracket = [a, b, d_a, d_b, low_a, low_b]
         if d_b == 0.0:
@@ -237,16 +295,60 @@ class HandOver:
             if b - a <= TOLERANCE_RAD and low_a is not None and low_b is not None:
                 self.lag = float(max(low_a, low_b))
             return None
-        width, self.width = self.width, b - a
-        if b - a > 0.25 * width:  # not closing in (a lag steps): eight points across it
-            return list(a + (b - a) * np.arange(1, 9) / 9.0)
-        mid = 0.5 * (a + b)
-        secant = a - d_a * (b - a) / (d_b - d_a) if np.isfinite(d_a - d_b) else mid
-        if not a < secant < b:
-            secant = mid
-        guard = 0.01 * (b - a)
-        xs = [secant, secant - guard, secant + guard, mid]
+        return self.next_points()
+
+    def next_points(self) -> list[float]:
+        """The points of the iteration's next step on the bracket (:meth:`take_iteration`)."""
+        a, b, d_a, d_b = self.bracket[:4]
+        w = b - a
+        width, self.width = self.width, w
+        with np.errstate(invalid="ignore"):
+            rise, previous = d_b - d_a, self.rise
+        self.rise = rise
+        closing = w <= 0.25 * width
+        stepping = not np.isfinite(rise) or (closing and rise > 0.5 * previous)
+        # a guarded step whose guards fell on one side of a root they nearly hit: once more,
+        # guards ten times wider
+        retry = not closing and self.guarded == 1 and min(-d_a, d_b) < 0.01 * rise
+        if stepping or not (closing or retry):
+            self.guarded = 0
+            self.smooth = self.smooth_pair() if stepping else None
+            n = SPREAD if self.smooth is None else STEP_SPREAD
+            return list(a + w * np.arange(1, n + 1) / (n + 1))
+        self.guarded, self.smooth = 2 if retry else 1, None
+        # the inverse interpolants through the bracket's ends and one, then two more points:
+        # the second's root, guarded as far as the two roots differ
+        secant = a - d_a * w / (d_b - d_a)
+        roots = [inverse_root(self.bracket[:4], self.trail, count) for count in (1, 2)]
+        roots = [secant] + [x for x in roots if x is not None and a < x < b]
+        x = roots[-1]
+        error = abs(x - roots[-2]) if len(roots) > 1 else 0.005 * w
+        guard = max(2.0 * error, 0.25 * TOLERANCE_RAD) * (10.0 if retry else 1.0)
+        xs = [x - min(guard, 0.5 * (x - a)), x, x + min(guard, 0.5 * (b - x))]
+        if guard > 0.125 * w or retry:
+            xs.append(0.5 * (a + b))
         return [x for x in xs if a < x < b]
+
+    def smooth_pair(self) -> int | None:
+        """The pair whose lag is smooth across a stepping bracket, to be interpolated
+        (:meth:`take_iteration`), or None (both sampled)."""
+        a, b, d_a, d_b = self.bracket[:4]
+        ends = self.end_lags
+        if b - a > SINGLE_RAD or ends[0] is None or ends[1] is None:
+            return None
+        if not np.all(np.isfinite(ends[0] + ends[1])):  # a pair off the flanks
+            return None
+        for pair in (0, 1):
+            change = abs(ends[1][pair] - ends[0][pair])
+            if change <= 0.05 * (d_b - d_a) and len(self.samples[pair]) >= 3:
+                return pair
+        return None
+
+    def interpolated(self, pair: int, x: float) -> float:
+        """The lag of ``pair`` at ``x``: the parabola through its three nearest samples."""
+        near = sorted(self.samples[pair], key=lambda s: abs(s[0] - x))[:3]
+        z, c = newton_form([s[0] for s in near], [s[1] for s in near])
+        return newton_value(z, c, x)
 
     def flat_requests(self, x, pitch: float) -> list[Request]:
         """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from
@@ -307,6 +409,42 @@ def lag_crossing(v, minimum, edge, lo, hi, pitch, step) -> float | None:
     # the cubics' divided differences and the Illinois method, compiled
     root = kernels.crossing_root(v, minimum, edge, near, centres, step, 0.5 * (hi - lo) / step)
     return None if math.isnan(root) else mid + step * root
+
+
+def newton_form(z: list, g: list) -> tuple[list, list]:
+    """The polynomial through the points (z, g) by divided differences: ``(z, coefficients)``
+    for :func:`newton_value`."""
+    c = list(g)
+    for j in range(1, len(z)):
+        for i in range(len(z) - 1, j - 1, -1):
+            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
+    return z, c
+
+
+def newton_value(z: list, c: list, x: float) -> float:
+    """The polynomial of :func:`newton_form` at x (nested multiplication)."""
+    value = c[-1]
+    for i in range(len(c) - 2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
+
+
+def inverse_root(bracket, trail, count: int) -> float | None:
+    """The root of the inverse interpolant (x as a polynomial of D) through the bracket's ends
+    ``(a, b, d_a, d_b)`` and the ``count`` points of ``trail`` (``(x, d)`` rows) nearest the
+    bracket outside its ends, or None (too few such points, or D's values not distinct)."""
+    a, b, d_a, d_b = bracket
+    others = sorted(
+        ((x, d) for x, d in trail if x != a and x != b),
+        key=lambda p: min(abs(p[0] - a), abs(p[0] - b)),
+    )[:count]
+    if len(others) < count:
+        return None
+    d = [d_a, d_b] + [p[1] for p in others]
+    if len(set(d)) < len(d):
+        return None
+    z, c = newton_form(d, [a, b] + [p[0] for p in others])
+    return newton_value(z, c, 0.0)
 
 
 def parabola(xa: float, xb: float, ya: float, y0: float, yb: float):

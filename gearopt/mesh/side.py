@@ -359,11 +359,9 @@ class SideCycle:
             else:
                 self.ask_iteration(x)
             return
-        tags = [(("ho", 0, j), ("ho", 1, j)) for j in range(len(ho.xs))]
-        if not all(tag in self.answers for pair in tags for tag in pair):
+        if not all(tag in self.answers for tag in ho.asked):
             return
-        lags = [tuple(float(self.answers.pop(tag)[0]) for tag in pair) for pair in tags]
-        xs = ho.take_iteration(lags)
+        xs = ho.take_iteration({tag: float(self.answers.pop(tag)[0]) for tag in ho.asked})
         if xs is None:
             self.v_star, self.g_hand = ho.x, ho.lag
         else:
