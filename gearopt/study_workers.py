@@ -56,6 +56,11 @@ __all__ = ["Supervisor", "WorkerRole", "supervise"]
 #: seconds a stopped worker has to put its trial back before it is killed
 STOP_WAIT_S = 30.0
 
+#: seconds the supervisor lets its workers' messages gather before it reads them again (it
+#: wakes at once when a worker ends): a read per trial was a wake-up per trial, on cores the
+#: workers keep busy
+TICK_S = 0.25
+
 #: seconds a worker waits for another's ask (:meth:`WorkerRole.asking`) before it asks anyway
 ASK_WAIT_S = 10.0
 
@@ -243,8 +248,9 @@ class Supervisor:
                 continue
             c.busy_s += time.perf_counter() - mark
             c.busy_cpu_s += time.thread_time() - cpu
-            waits = [ch.conn for ch in live] + [ch.process.sentinel for ch in live]
-            mpc.wait(waits, timeout=HEARTBEAT_S)
+            sentinels = [ch.process.sentinel for ch in live]
+            mpc.wait([ch.conn for ch in live] + sentinels, timeout=HEARTBEAT_S)
+            mpc.wait(sentinels, timeout=TICK_S)  # (the messages of the next few trials)
             mark, cpu = time.perf_counter(), time.thread_time()
             for child in live:
                 self._read(child)
@@ -326,18 +332,24 @@ class Supervisor:
 
     def beat(self) -> None:
         """The supervisor's heartbeat, its workers' trials' (a long evaluation does not stop
-        them) and the recovery of other coordinators' trials."""
+        them), the recovery of other coordinators' trials and the study's trials read."""
         c = self.c
         o = c.opened
         o.results.heartbeat(c.me, c.spec.name, c.host, c.pid)
         mine = self.mine()
-        for trial in running_trials(c.study, o.storage):
+        running = running_trials(c.study, o.storage)
+        for trial in running:
             if trial.user_attrs.get(COORDINATOR) in mine:
                 trial_id = o.storage.get_trial_id_from_study_id_trial_number(
                     o.study_id, trial.number
                 )
                 o.storage.record_heartbeat(trial_id)
-        c.recovered += recover(c.study, o.storage, o.results, c.spec, c.tag, skip=mine)
+        c.recovered += recover(
+            c.study, o.storage, o.results, c.spec, c.tag, skip=mine, running=running
+        )
+        # the trials finished since the last beat, read now (Optuna's cached storage keeps
+        # them) rather than all at the run's end, where the count and the best trial wait
+        c.counts()
 
     def _stop(self, exc: BaseException) -> None:
         """Stop the workers (they put their trials back uncharged); kill the ones that do not
