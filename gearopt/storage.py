@@ -34,6 +34,7 @@ __all__ = [
     "create_sqlite",
     "default_storage_url",
     "fast_sqlite",
+    "held_reads",
     "masked_url",
     "rdb_storage",
     "storage_error",
@@ -307,6 +308,11 @@ def fast_sqlite(engine: sa.Engine) -> None:
     engine.dispose()  # connections made before the listener get the pragmas when remade
 
 
+def held_reads(view: WorkerStorage | None):
+    """``view``'s :meth:`WorkerStorage.hold`, or nothing (None: not a supervised worker)."""
+    return view.hold() if view is not None else contextlib.nullcontext()
+
+
 class WorkerStorage(optuna.storages.BaseStorage):
     """Optuna's cached RDB storage (:func:`optuna.storages.get_storage`) as a supervised
     worker uses it: the study's trials read once per :meth:`hold` rather than at every read,
@@ -369,12 +375,17 @@ class WorkerStorage(optuna.storages.BaseStorage):
     def get_all_trials(self, study_id, deepcopy=True, states=None) -> list:
         if not self.holding:
             return self.inner.get_all_trials(study_id, deepcopy=deepcopy, states=states)
-        if study_id not in self.read:
+        fresh = study_id not in self.read
+        if fresh:
             self.read[study_id] = self.inner.get_all_trials(study_id, deepcopy=False)
         trials = {t.number: t for t in self.read[study_id]}
         for trial_id in list(self.own):
             number = self._mine(trial_id).number
-            if self.inner.get_trial_id_from_study_id_trial_number(study_id, number) == trial_id:
+            if self.inner.get_trial_id_from_study_id_trial_number(study_id, number) != trial_id:
+                continue  # another study's
+            if fresh and number in trials and trials[number].state.is_finished():
+                del self.own[trial_id]  # finished by another process (its recovery)
+            else:
                 trials[number] = self.own[trial_id]
         found = [trials[n] for n in sorted(trials) if states is None or trials[n].state in states]
         return copy.deepcopy(found) if deepcopy else found

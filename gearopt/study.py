@@ -81,6 +81,7 @@ from gearopt.storage import (
     create_sqlite,
     default_storage_url,
     fast_sqlite,
+    held_reads,
     masked_url,
     rdb_storage,
     storage_error,
@@ -120,7 +121,7 @@ class OpenStudy:
     requeue: Requeue
     #: the trials the study held when the run opened it, given designs waiting excluded
     previous: int = 0
-    #: a supervised worker's view of the storage (its study's), else None
+    #: a supervised worker's view of the storage (its study's: one read per ask and tell)
     view: WorkerStorage | None = None
 
 
@@ -162,7 +163,6 @@ def _open(
                 # migration script, about half a second)
                 skip_compatibility_check=worker or made,
             )
-        # a supervised worker: one read of the study per ask and per tell
         view = WorkerStorage(rdb) if worker else None
         study = optuna.create_study(
             storage=view or rdb,
@@ -404,15 +404,10 @@ class Coordinator:
             hand.future.set_exception(exc)
         self.pending[hand.trial.number] = hand
 
-    def _once(self):
-        """A supervised worker's reads of the study served by one (:class:`WorkerStorage`)."""
-        view = self.opened.view
-        return view.hold() if view is not None else contextlib.nullcontext()
-
     def ask(self) -> bool:
         """Ask a trial, suggest its parameters and send it; False when the study's places
         are taken."""
-        with _held_stops(), self._once():  # asked and in hand at once
+        with _held_stops(), held_reads(self.opened.view):  # asked and in hand at once
             asking = self.role.asking() if self.role is not None else contextlib.nullcontext()
             with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
                 warnings.simplefilter("ignore", UserWarning)
@@ -447,7 +442,7 @@ class Coordinator:
                 self.role.give()
 
     def tell(self, number: int, outcome: TrialOutcome) -> None:
-        with _held_stops(), self._once():  # out of hand and told at once
+        with _held_stops(), held_reads(self.opened.view):  # out of hand and told at once
             self._tell(number, outcome)
 
     def _tell(self, number: int, outcome: TrialOutcome) -> None:
