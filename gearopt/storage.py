@@ -325,8 +325,8 @@ class WorkerStorage(optuna.storages.BaseStorage):
     trial is read from the database once, when first read after this process took it; every
     write through this storage is made in the database first, then applied to the copy as
     the database would store it (attributes through JSON, a finished trial's completion
-    time the moment it is told). With no other process writing meanwhile (one worker, or the
-    deterministic order), every read gives what a read of the database would; another
+    time the moment it is told). With no other process writing meanwhile (``--jobs 1``), every
+    read gives what a read of the database would (the same designs); another
     worker's writes are seen at the next hold, as Optuna's cached storage sees them at its
     next read. Outside a hold every read goes to Optuna's cached storage as before.
 

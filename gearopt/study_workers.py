@@ -332,7 +332,7 @@ class Supervisor:
 
     def beat(self) -> None:
         """The supervisor's heartbeat, its workers' trials' (a long evaluation does not stop
-        them), the recovery of other coordinators' trials and the study's trials read."""
+        them) and the recovery of other coordinators' trials."""
         c = self.c
         o = c.opened
         o.results.heartbeat(c.me, c.spec.name, c.host, c.pid)
@@ -347,9 +347,6 @@ class Supervisor:
         c.recovered += recover(
             c.study, o.storage, o.results, c.spec, c.tag, skip=mine, running=running
         )
-        # the trials finished since the last beat, read now (Optuna's cached storage keeps
-        # them) rather than all at the run's end, where the count and the best trial wait
-        c.counts()
 
     def _stop(self, exc: BaseException) -> None:
         """Stop the workers (they put their trials back uncharged); kill the ones that do not
