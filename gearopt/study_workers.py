@@ -167,6 +167,9 @@ class _Child:
     finished: bool = False
     stopped: bool = False
     messages: list = field(default_factory=list)
+    #: when it last told a trial (or started): its trial in hand was asked since, and its
+    #: heartbeat recorded then
+    told: float = field(default_factory=time.monotonic)
 
 
 class Supervisor:
@@ -279,6 +282,7 @@ class Supervisor:
                 if kind == "tag":
                     child.tag = message[1]
                 elif kind == "told":
+                    child.told = time.monotonic()
                     c.evaluated += 1
                     c.worker_s += message[1]
                     c.failed += bool(message[2])
@@ -337,9 +341,13 @@ class Supervisor:
         o = c.opened
         o.results.heartbeat(c.me, c.spec.name, c.host, c.pid)
         mine = self.mine()
+        # a worker that told a trial less than a beat ago asked its trial in hand since (and
+        # recorded its heartbeat then): only a longer trial needs one now
+        now = time.monotonic()
+        long = {ch.tag for ch in self.children if not ch.finished and now - ch.told > HEARTBEAT_S}
         running = running_trials(c.study, o.storage)
         for trial in running:
-            if trial.user_attrs.get(COORDINATOR) in mine:
+            if trial.user_attrs.get(COORDINATOR) in long - {None}:
                 trial_id = o.storage.get_trial_id_from_study_id_trial_number(
                     o.study_id, trial.number
                 )
