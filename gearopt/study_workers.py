@@ -9,7 +9,7 @@ sampler's and the storage's cost per trial is paid by the workers side by side r
 one process for all. The workers are forked on Linux (they inherit the supervisor's imports
 and warmed kernels), spawned elsewhere. The supervisor (:class:`Supervisor`, this process)
 opens the study, recovers what earlier runs left, starts the workers, shows the progress,
-keeps the heartbeats of the workers' trials and watches them:
+keeps the heartbeats of the workers' longer trials and watches them:
 
 - the run's places (COMPLETE trials still missing, less those running) are shared by the
   workers: one takes a place before it asks and gives it back when its trial does not
