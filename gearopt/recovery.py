@@ -177,6 +177,7 @@ def recover(
     skip: frozenset[str] | set[str] = frozenset(),
     *,
     starting: bool = False,
+    running: list | None = None,
 ) -> list[int]:
     """Fail and re-enqueue the RUNNING trials whose coordinator is gone (Optuna's stale-trial
     handling, then this host's dead coordinators, then trials without a coordinator); the
@@ -186,7 +187,8 @@ def recover(
     the worker's death, not a coordinator's). ``starting``: the caller holds no trial yet (a
     run's start, before its workers), so its own heartbeat does not stand for a trial asked a
     moment ago and not yet marked: with no other coordinator alive, such a trial is failed now,
-    not after the grace period."""
+    not after the grace period. ``running``: the RUNNING trials (:func:`running_trials`) when
+    the caller has just read them."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)
@@ -204,7 +206,7 @@ def recover(
     }
     requeue = Requeue(spec, results)
     done = []
-    for trial in running_trials(study, storage):
+    for trial in running_trials(study, storage) if running is None else running:
         owner = trial.user_attrs.get(COORDINATOR)
         if owner in skip:
             continue

@@ -26,6 +26,7 @@ is failed, so the views hold one row set per COMPLETE trial.
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import json
 import tempfile
 import time
@@ -141,6 +142,26 @@ def _rows(table: sa.Table, key: dict, tuples) -> list[dict]:
     return [{**key, **dict(zip(names, row, strict=True))} for row in tuples]
 
 
+@functools.cache
+def _insert_sql(table: sa.Table, dialect: sa.engine.Dialect) -> tuple[str, list | None]:
+    """The insert of every column of ``table`` in ``dialect``, and its parameters' order
+    (None for a named paramstyle)."""
+    compiled = table.insert().compile(dialect=dialect)
+    return str(compiled), compiled.positiontup
+
+
+def _insert_many(con: sa.Connection, table: sa.Table, rows: list[dict]) -> None:
+    """Insert ``rows`` (every column) through the driver's ``executemany``: SQLAlchemy's
+    per-row parameter handling cost more than SQLite's inserts (a trial's few hundred curve
+    points). Positional drivers (SQLite's ``?``) are given tuples in the statement's
+    parameter order, named ones (psycopg's ``%(name)s``) the rows as they are."""
+    sql, order = _insert_sql(table, con.dialect)
+    if order:
+        con.exec_driver_sql(sql, [tuple(row[n] for n in order) for row in rows])
+    else:
+        con.exec_driver_sql(sql, rows)
+
+
 def _utcnow() -> dt.datetime:
     return dt.datetime.now(dt.UTC).replace(tzinfo=None)
 
@@ -251,7 +272,7 @@ class ResultsStore:
                 self._delete(con, study, [outcome.number])
             for table, values in rows.items():
                 if values:
-                    con.execute(table.insert(), values)
+                    _insert_many(con, table, values)
 
     def forget(self, study: str, numbers: Iterable[int]) -> None:
         """Remove the rows of trials that were failed."""

@@ -1,12 +1,17 @@
 """A study's storage: the database URL (its default, its password kept out of every message),
 the checks before a study opens it (not SQLite in memory, a sound SQLite file, no one else's
 tables), Optuna's RDB
-storage made safe for coordinators starting together, and SQLite tuned for many commits."""
+storage made safe for coordinators starting together, SQLite tuned for many commits, and a
+worker's view of the storage that reads the study once per trial (:class:`WorkerStorage`)."""
 
 from __future__ import annotations
 
+import contextlib
+import copy
+import datetime as dt
 import functools
 import hashlib
+import json
 import os
 import re
 import sqlite3
@@ -22,12 +27,14 @@ from gearopt.results import SCHEMA_NAMES, ResultsStore
 from gearopt.studyfile import StudySpec
 
 __all__ = [
+    "WorkerStorage",
     "check_integrity",
     "check_own_tables",
     "check_storage_url",
     "create_sqlite",
     "default_storage_url",
     "fast_sqlite",
+    "held_reads",
     "masked_url",
     "rdb_storage",
     "storage_error",
@@ -299,3 +306,166 @@ def fast_sqlite(engine: sa.Engine) -> None:
         cursor.close()
 
     engine.dispose()  # connections made before the listener get the pragmas when remade
+
+
+def held_reads(view: WorkerStorage | None):
+    """``view``'s :meth:`WorkerStorage.hold`, or nothing (None: not a supervised worker)."""
+    return view.hold() if view is not None else contextlib.nullcontext()
+
+
+class WorkerStorage(optuna.storages.BaseStorage):
+    """Optuna's cached RDB storage (:func:`optuna.storages.get_storage`) as a supervised
+    worker uses it: the study's trials read once per :meth:`hold` rather than at every read,
+    and the trials this process asked kept in memory with its own writes applied.
+
+    Inside :meth:`hold` (a worker's ask and suggest, or its tell) the first read of the
+    study's trials is the only one: later reads (TPE reads them twice more per ask, Optuna's
+    ask and tell read the trial in hand three times) are served from it, with this process's
+    trials (created or popped from the queue here) replaced by their copies in memory. A
+    trial is read from the database once, when first read after this process took it; every
+    write through this storage is made in the database first, then applied to the copy as
+    the database would store it (attributes through JSON, a finished trial's completion
+    time the moment it is told). With no other process writing meanwhile (``--jobs 1``), every
+    read gives what a read of the database would (the same designs); another
+    worker's writes are seen at the next hold, as Optuna's cached storage sees them at its
+    next read. Outside a hold every read goes to Optuna's cached storage as before.
+
+    Not thread-safe: one coordinator's thread uses it. It has no heartbeat of its own (the
+    coordinator records them on the RDB storage): a worker does not fail other coordinators'
+    stale trials, its supervisor does.
+    """
+
+    def __init__(self, rdb: optuna.storages.RDBStorage) -> None:
+        self.inner = optuna.storages.get_storage(rdb)
+        #: this process's unfinished trials by id: a copy, or None until first read
+        self.own: dict[int, optuna.trial.FrozenTrial | None] = {}
+        self.read: dict[int, list] = {}  # the hold's read of each study's trials
+        self.holding = 0
+
+    @contextlib.contextmanager
+    def hold(self):
+        """Reads of the study's trials served by one read of the database (the class text)."""
+        self.holding += 1
+        try:
+            yield self
+        finally:
+            self.holding -= 1
+            if not self.holding:
+                self.read.clear()
+                self.own = {
+                    k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
+                }
+
+    def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
+        trial = self.own[trial_id]
+        if trial is None:
+            trial = self.own[trial_id] = copy.deepcopy(self.inner.get_trial(trial_id))
+        return trial
+
+    # --- reads ----------------------------------------------------------------------------
+
+    def get_trial(self, trial_id: int) -> optuna.trial.FrozenTrial:
+        if self.holding and trial_id in self.own:
+            return copy.deepcopy(self._mine(trial_id))
+        trial = self.inner.get_trial(trial_id)
+        if trial_id in self.own and self.own[trial_id] is not None:
+            self.own[trial_id] = copy.deepcopy(trial)
+        return trial
+
+    def get_all_trials(self, study_id, deepcopy=True, states=None) -> list:
+        if not self.holding:
+            return self.inner.get_all_trials(study_id, deepcopy=deepcopy, states=states)
+        fresh = study_id not in self.read
+        if fresh:
+            self.read[study_id] = self.inner.get_all_trials(study_id, deepcopy=False)
+        trials = {t.number: t for t in self.read[study_id]}
+        for trial_id in list(self.own):
+            number = self._mine(trial_id).number
+            if self.inner.get_trial_id_from_study_id_trial_number(study_id, number) != trial_id:
+                continue  # another study's
+            if fresh and number in trials and trials[number].state.is_finished():
+                del self.own[trial_id]  # finished by another process (its recovery)
+            else:
+                trials[number] = self.own[trial_id]
+        found = [trials[n] for n in sorted(trials) if states is None or trials[n].state in states]
+        return copy.deepcopy(found) if deepcopy else found
+
+    def get_trial_id_from_study_id_trial_number(self, study_id: int, trial_number: int) -> int:
+        return self.inner.get_trial_id_from_study_id_trial_number(study_id, trial_number)
+
+    # --- trials: writes -------------------------------------------------------------------
+
+    def create_new_trial(self, study_id: int, template_trial=None) -> int:
+        trial_id = self.inner.create_new_trial(study_id, template_trial)
+        self.own[trial_id] = None
+        return trial_id
+
+    def set_trial_state_values(self, trial_id: int, state, values=None) -> bool:
+        done = self.inner.set_trial_state_values(trial_id, state, values)
+        if done and trial_id not in self.own and state == optuna.trial.TrialState.RUNNING:
+            self.own[trial_id] = None  # popped from the queue here
+        elif done and self.own.get(trial_id) is not None:
+            trial = self.own[trial_id]
+            if values is not None:
+                trial.values = [float(v) for v in values]
+            trial.state = state
+            if state.is_finished():
+                trial.datetime_complete = dt.datetime.now()
+        return done
+
+    def set_trial_param(self, trial_id: int, param_name: str, param_value_internal, distribution):
+        self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
+        if self.own.get(trial_id) is not None:
+            trial = self.own[trial_id]
+            trial.params[param_name] = distribution.to_external_repr(param_value_internal)
+            trial.distributions[param_name] = distribution
+
+    def set_trial_user_attr(self, trial_id: int, key: str, value) -> None:
+        self.inner.set_trial_user_attr(trial_id, key, value)
+        if self.own.get(trial_id) is not None:
+            self.own[trial_id].user_attrs[key] = json.loads(json.dumps(value))
+
+    def set_trial_system_attr(self, trial_id: int, key: str, value) -> None:
+        self.inner.set_trial_system_attr(trial_id, key, value)
+        if self.own.get(trial_id) is not None:
+            self.own[trial_id].system_attrs[key] = json.loads(json.dumps(value))
+
+    def set_trial_intermediate_value(self, trial_id: int, step: int, intermediate_value) -> None:
+        self.inner.set_trial_intermediate_value(trial_id, step, intermediate_value)
+        if self.own.get(trial_id) is not None:
+            self.own[trial_id] = None  # read again (not a study gearopt runs)
+
+    # --- studies: Optuna's cached storage as it is -----------------------------------------
+
+    def create_new_study(self, directions, study_name=None) -> int:
+        return self.inner.create_new_study(directions, study_name)
+
+    def delete_study(self, study_id: int) -> None:
+        self.inner.delete_study(study_id)
+
+    def set_study_user_attr(self, study_id: int, key: str, value) -> None:
+        self.inner.set_study_user_attr(study_id, key, value)
+
+    def set_study_system_attr(self, study_id: int, key: str, value) -> None:
+        self.inner.set_study_system_attr(study_id, key, value)
+
+    def get_study_id_from_name(self, study_name: str) -> int:
+        return self.inner.get_study_id_from_name(study_name)
+
+    def get_study_name_from_id(self, study_id: int) -> str:
+        return self.inner.get_study_name_from_id(study_id)
+
+    def get_study_directions(self, study_id: int) -> list:
+        return self.inner.get_study_directions(study_id)
+
+    def get_study_user_attrs(self, study_id: int) -> dict:
+        return self.inner.get_study_user_attrs(study_id)
+
+    def get_study_system_attrs(self, study_id: int) -> dict:
+        return self.inner.get_study_system_attrs(study_id)
+
+    def get_all_studies(self) -> list:
+        return self.inner.get_all_studies()
+
+    def remove_session(self) -> None:
+        self.inner.remove_session()

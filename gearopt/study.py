@@ -74,12 +74,14 @@ from gearopt.recovery import (
 from gearopt.results import ResultsStore, artifact_dir, upload_figures
 from gearopt.samplers import sampler_for
 from gearopt.storage import (
+    WorkerStorage,
     check_integrity,
     check_own_tables,
     check_storage_url,
     create_sqlite,
     default_storage_url,
     fast_sqlite,
+    held_reads,
     masked_url,
     rdb_storage,
     storage_error,
@@ -119,6 +121,8 @@ class OpenStudy:
     requeue: Requeue
     #: the trials the study held when the run opened it, given designs waiting excluded
     previous: int = 0
+    #: a supervised worker's view of the storage (its study's: one read per ask and tell)
+    view: WorkerStorage | None = None
 
 
 def open_study(spec: StudySpec, storage: str | None = None):
@@ -159,8 +163,9 @@ def _open(
                 # migration script, about half a second)
                 skip_compatibility_check=worker or made,
             )
+        view = WorkerStorage(rdb) if worker else None
         study = optuna.create_study(
-            storage=rdb,
+            storage=view or rdb,
             sampler=sampler_for(spec, stream, previous),
             study_name=spec.name,
             directions=spec.directions,
@@ -207,6 +212,7 @@ def _open(
         results=results,
         requeue=requeue,
         previous=previous,
+        view=view,
     )
 
 
@@ -401,7 +407,7 @@ class Coordinator:
     def ask(self) -> bool:
         """Ask a trial, suggest its parameters and send it; False when the study's places
         are taken."""
-        with _held_stops():  # asked and in hand at once
+        with _held_stops(), held_reads(self.opened.view):  # asked and in hand at once
             asking = self.role.asking() if self.role is not None else contextlib.nullcontext()
             with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
                 warnings.simplefilter("ignore", UserWarning)
@@ -436,12 +442,12 @@ class Coordinator:
                 self.role.give()
 
     def tell(self, number: int, outcome: TrialOutcome) -> None:
-        with _held_stops():  # out of hand and told at once
+        with _held_stops(), held_reads(self.opened.view):  # out of hand and told at once
             self._tell(number, outcome)
 
     def _tell(self, number: int, outcome: TrialOutcome) -> None:
         hand = self.pending.pop(number)
-        trial, storage = hand.trial, self.opened.storage
+        trial = hand.trial
         self.evaluated += 1
         self.worker_s += outcome.seconds
         if outcome.failed:
@@ -457,9 +463,9 @@ class Coordinator:
         )
         if outcome.figures:
             upload_figures(artifact_dir(self.spec), trial, outcome.figures)
-        if outcome.constraints:
+        if outcome.constraints:  # (through the study's storage: a worker's keeps the trial)
             values = list(outcome.constraints.values())
-            storage.set_trial_system_attr(hand.trial_id, CONSTRAINTS_KEY, values)
+            trial.storage.set_trial_system_attr(hand.trial_id, CONSTRAINTS_KEY, values)
         if outcome.warnings:
             trial.set_user_attr("gearopt_warnings", outcome.warnings[:20])
         self.study.tell(trial, list(outcome.values))

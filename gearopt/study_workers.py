@@ -9,7 +9,7 @@ sampler's and the storage's cost per trial is paid by the workers side by side r
 one process for all. The workers are forked on Linux (they inherit the supervisor's imports
 and warmed kernels), spawned elsewhere. The supervisor (:class:`Supervisor`, this process)
 opens the study, recovers what earlier runs left, starts the workers, shows the progress,
-keeps the heartbeats of the workers' trials and watches them:
+keeps the heartbeats of the workers' longer trials and watches them:
 
 - the run's places (COMPLETE trials still missing, less those running) are shared by the
   workers: one takes a place before it asks and gives it back when its trial does not
@@ -55,6 +55,11 @@ __all__ = ["Supervisor", "WorkerRole", "supervise"]
 
 #: seconds a stopped worker has to put its trial back before it is killed
 STOP_WAIT_S = 30.0
+
+#: seconds the supervisor lets its workers' messages gather before it reads them again (it
+#: wakes at once when a worker ends): a read per trial was a wake-up per trial, on cores the
+#: workers keep busy
+TICK_S = 0.25
 
 #: seconds a worker waits for another's ask (:meth:`WorkerRole.asking`) before it asks anyway
 ASK_WAIT_S = 10.0
@@ -162,6 +167,9 @@ class _Child:
     finished: bool = False
     stopped: bool = False
     messages: list = field(default_factory=list)
+    #: when it last told a trial (or started): its trial in hand was asked since, and its
+    #: heartbeat recorded then
+    told: float = field(default_factory=time.monotonic)
 
 
 class Supervisor:
@@ -243,8 +251,9 @@ class Supervisor:
                 continue
             c.busy_s += time.perf_counter() - mark
             c.busy_cpu_s += time.thread_time() - cpu
-            waits = [ch.conn for ch in live] + [ch.process.sentinel for ch in live]
-            mpc.wait(waits, timeout=HEARTBEAT_S)
+            sentinels = [ch.process.sentinel for ch in live]
+            mpc.wait([ch.conn for ch in live] + sentinels, timeout=HEARTBEAT_S)
+            mpc.wait(sentinels, timeout=TICK_S)  # (the messages of the next few trials)
             mark, cpu = time.perf_counter(), time.thread_time()
             for child in live:
                 self._read(child)
@@ -273,6 +282,7 @@ class Supervisor:
                 if kind == "tag":
                     child.tag = message[1]
                 elif kind == "told":
+                    child.told = time.monotonic()
                     c.evaluated += 1
                     c.worker_s += message[1]
                     c.failed += bool(message[2])
@@ -331,13 +341,20 @@ class Supervisor:
         o = c.opened
         o.results.heartbeat(c.me, c.spec.name, c.host, c.pid)
         mine = self.mine()
-        for trial in running_trials(c.study, o.storage):
-            if trial.user_attrs.get(COORDINATOR) in mine:
+        # a worker that told a trial less than a beat ago asked its trial in hand since (and
+        # recorded its heartbeat then): only a longer trial needs one now
+        now = time.monotonic()
+        long = {ch.tag for ch in self.children if not ch.finished and now - ch.told > HEARTBEAT_S}
+        running = running_trials(c.study, o.storage)
+        for trial in running:
+            if trial.user_attrs.get(COORDINATOR) in long - {None}:
                 trial_id = o.storage.get_trial_id_from_study_id_trial_number(
                     o.study_id, trial.number
                 )
                 o.storage.record_heartbeat(trial_id)
-        c.recovered += recover(c.study, o.storage, o.results, c.spec, c.tag, skip=mine)
+        c.recovered += recover(
+            c.study, o.storage, o.results, c.spec, c.tag, skip=mine, running=running
+        )
 
     def _stop(self, exc: BaseException) -> None:
         """Stop the workers (they put their trials back uncharged); kill the ones that do not
