@@ -17,18 +17,11 @@ from gearopt.jit import compiled
 __all__ = ["swept_exits", "union_exits"]
 
 
-@compiled
-def _separation(rows, r, s, t, pinion, gear, zone):
-    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
-    rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
-    point = pinion_at(s, t, pinion, rows[5][r])
-    return _separation_of(rows, r, point, _zone_at(s, t, zone), pinion, gear, zone)
-
-
 @compiled(inline=True)
-def _zone_at(s, t, zone):
-    """The node factors' bilinear cell ``(i, j)`` and weights ``(u, v)`` at ``(s, t)``."""
-    _, _, s0, ds, t0, dt, last0, last1, _ = zone
+def _zone_at(s, t, grid):
+    """The node factors' bilinear cell ``(i, j)`` and weights ``(u, v)`` at ``(s, t)``.
+    ``grid``: the factors' origin, spacing and last cells, ``(s0, ds, t0, dt, last0, last1)``."""
+    s0, ds, t0, dt, last0, last1 = grid
     x = min(max((s - s0) / ds, 0.0), last0 + 1.0)
     y = min(max((t - t0) / dt, 0.0), last1 + 1.0)
     i = min(int(x), int(last0))
@@ -37,18 +30,19 @@ def _zone_at(s, t, zone):
 
 
 @compiled(inline=True)
-def _separation_of(rows, r, point, at, pinion, gear, zone):
-    """:func:`_separation` of row ``r`` at the pinion point ``point`` (:func:`pinion_at`)
-    in the factors' cell ``at`` (:func:`_zone_at`)."""
-    lag, factor = zone[0], zone[1]
-    delta, valid = gap_of(rows, r, point, gear, pinion[14])
-    if not valid:
-        return math.inf
+def _separation_of(rows, r, point, at, gear, cells, lag, factor):
+    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at the pinion point ``point``
+    (:func:`pinion_at`, its cell offset the row's) in the factors' cell ``at``
+    (:func:`_zone_at`); ``cells``: the pinion's refinable cells (``pinion[14]``), ``lag`` and
+    ``factor`` the rows' lags and node factors. (Every table read before the one branch: see
+    :mod:`gearopt.contact.kernels` on the references numba takes.)"""
     i, j, u, v = at
     f = (1.0 - u) * ((1.0 - v) * factor[r, i, j] + v * factor[r, i, j + 1]) + u * (
         (1.0 - v) * factor[r, i + 1, j] + v * factor[r, i + 1, j + 1]
     )
-    return (delta - lag[r]) * f
+    shift = lag[r]
+    delta, valid = gap_of(rows, r, point, gear, cells)
+    return (delta - shift) * f if valid else math.inf
 
 
 @compiled(inline=True)
@@ -67,62 +61,53 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
-@compiled(inline=True)
-def _swept(p, table):
-    """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
-    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``; the
-    pinion point there ``point``, :func:`pinion_at`, for the rows of the pinion cell offset
-    ``offset``, and the factors' cell ``at``). ``table``: ``(rows, pinion, gear, zone,
-    pair_row, prev, nxt, ray, tau, f, have, point, offset, at)``."""
-    rows, pinion, gear, zone, pair_row, prev, nxt, ray, tau, f, have, point, offset, at = table
-    for q in (prev[p], p, nxt[p]):
-        if q >= 0 and not have[q]:
-            r = pair_row[q]
-            if rows[5][r] == offset:
-                f[q] = _separation_of(rows, r, point, at, pinion, gear, zone)
-            else:
-                s = ray[0] + tau * ray[2]
-                t = ray[1] + tau * ray[3]
-                f[q] = _separation(rows, r, s, t, pinion, gear, zone)
-            have[q] = True
-    g = f[p]
-    if prev[p] >= 0 and nxt[p] >= 0:
-        fa, fd = f[prev[p]], f[nxt[p]]
-        curv = fa - 2.0 * g + fd
-        finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
-        if finite and g <= fa and g <= fd and curv > 0.0:
-            g = g - 0.125 * (fd - fa) ** 2 / curv
-    return g
-
-
 @compiled
 def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint, kept):
     """With ``hint[0]`` < 0 the pattern at ``tau`` along a ray of pairs ``a:b``, the least swept
-    separation (:func:`_swept`) minus the compound; else -1.0 inside, +1.0 out, trying pair
-    ``hint[0]`` (the last found inside) first and the others until one is inside. ``kept``:
-    ``f`` and ``have`` hold the separations at this ``tau`` already (the last call's, there)."""
-    c = zone[8]
+    separation minus the compound; else -1.0 inside, +1.0 out, trying pair ``hint[0]`` (the
+    last found inside) first and the others until one is inside. ``kept``: ``f`` and ``have``
+    hold the separations at this ``tau`` already (the last call's, there).
+
+    Pair p's swept separation is its separation at ``tau`` at its least over the motion, as
+    ``gearopt.mesh.zone``'s ``_swept``: the parabola through it and its neighbours' (``prev``,
+    ``nxt``) where it is the least of the three; each separation evaluated once (``f``,
+    ``have``), in this loop (a call taking the tables would reference and release each of
+    their arrays, :mod:`gearopt.contact.kernels`)."""
+    lag, factor, s0, ds, t0, dt, last0, last1, c = zone
+    cells, offsets = pinion[14], rows[5]
     if not kept:
         have[a:b] = False
     s = ray[0] + tau * ray[2]
     t = ray[1] + tau * ray[3]
-    first = hint[0] if hint[0] >= 0 else a
-    offset = rows[5][pair_row[first]]
-    point = pinion_at(s, t, pinion, offset)
-    at = _zone_at(s, t, zone)
-    table = (rows, pinion, gear, zone, pair_row, prev, nxt, ray, tau, f, have, point, offset, at)
-    if hint[0] >= 0:
-        if _swept(hint[0], table) < c:
-            return -1.0
-        for p in range(a, b):
-            if _swept(p, table) < c:
-                hint[0] = p
-                return -1.0
-        return 1.0
+    searching = hint[0] >= 0
+    offset = offsets[pair_row[hint[0] if searching else a]]
+    point = pinion_at(s, t, pinion, offset)  # (the rows of one pinion cell offset)
+    at = _zone_at(s, t, (s0, ds, t0, dt, last0, last1))
     least = math.inf
-    for p in range(a, b):
-        least = min(least, _swept(p, table))
-    return least - c
+    for i in range(-1 if searching else 0, b - a):
+        p = hint[0] if i < 0 else a + i
+        for q in (prev[p], p, nxt[p]):
+            if q >= 0 and not have[q]:
+                r = pair_row[q]
+                if offsets[r] != offset:
+                    offset = offsets[r]
+                    point = pinion_at(s, t, pinion, offset)
+                f[q] = _separation_of(rows, r, point, at, gear, cells, lag, factor)
+                have[q] = True
+        g = f[p]
+        if prev[p] >= 0 and nxt[p] >= 0:
+            fa, fd = f[prev[p]], f[nxt[p]]
+            curv = fa - 2.0 * g + fd
+            finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
+            if finite and g <= fa and g <= fd and curv > 0.0:
+                g = g - 0.125 * (fd - fa) ** 2 / curv
+        if not searching:
+            least = min(least, g)
+        elif g < c:
+            if i >= 0:
+                hint[0] = p
+            return -1.0
+    return 1.0 if searching else least - c
 
 
 @compiled
@@ -184,25 +169,27 @@ def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     zone that held the ray up to that sample gives a crossing of its separation through the
     compound (``zone[8]``; through a flank's boundary, on the finer scan ``zoom``); the
     farthest is the exit. Writes ``out`` ``(K,)``."""
-    c = zone[8]
+    lag, factor, s0, ds, t0, dt, last0, last1, c = zone
+    grid = (s0, ds, t0, dt, last0, last1)
+    cells, offsets = pinion[14], rows[5]
     m = tau.shape[1]
     f = np.empty((pair_row.shape[0], m))
     for k in range(rays.shape[0]):
         a, b = start[k], start[k + 1]
         ox, oy, dx, dy = rays[k, 0], rays[k, 1], rays[k, 2], rays[k, 3]
         j = 0
-        offset = rows[5][pair_row[a]] if b > a else 0
+        offset = offsets[pair_row[a]] if b > a else 0
         while j < m:
             held = False
             s, t = ox + tau[k, j] * dx, oy + tau[k, j] * dy
             point = pinion_at(s, t, pinion, offset)  # (the rows of one pinion cell offset)
-            at = _zone_at(s, t, zone)
+            at = _zone_at(s, t, grid)
             for p in range(a, b):
                 r = pair_row[p]
-                if rows[5][r] == offset:
-                    f[p, j] = _separation_of(rows, r, point, at, pinion, gear, zone) - c
-                else:
-                    f[p, j] = _separation(rows, r, s, t, pinion, gear, zone) - c
+                if offsets[r] != offset:
+                    offset = offsets[r]
+                    point = pinion_at(s, t, pinion, offset)
+                f[p, j] = _separation_of(rows, r, point, at, gear, cells, lag, factor) - c
                 held = held or f[p, j] < 0.0
             if not held:
                 break
@@ -219,16 +206,15 @@ def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
                 t0 = tau[k, max(j - 2, 0)]
                 x = _crossing(t0, f[p, j - 2] if j >= 2 else math.nan, t1, f1, t2, f2)
             else:
+                r = pair_row[p]
                 za = fa = zb = fb = 0.0
                 out_first = False
                 for i in range(zoom.shape[0]):
                     zb = t1 + (t2 - t1) * zoom[i]
-                    fb = (
-                        _separation(
-                            rows, pair_row[p], ox + zb * dx, oy + zb * dy, pinion, gear, zone
-                        )
-                        - c
-                    )
+                    s, t = ox + zb * dx, oy + zb * dy
+                    point = pinion_at(s, t, pinion, offsets[r])
+                    at = _zone_at(s, t, grid)
+                    fb = _separation_of(rows, r, point, at, gear, cells, lag, factor) - c
                     if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
                         break
                     out_first = not fb < 0.0
