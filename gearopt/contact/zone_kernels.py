@@ -3,6 +3,12 @@ a side's zones sweep (:func:`swept_exits`) and from their union (:func:`union_ex
 :class:`gearopt.mesh.zone.Zones`. The clearance at a pinion point is the contact engine's
 (:func:`gearopt.contact.kernels.pinion_at`, :func:`gearopt.contact.kernels.gap_of`), scaled by
 the zone's node factors into the separation (normal or circumferential) the compound measures.
+
+Each kernel evaluates its points in its own loops, the tables unpacked once and read by the
+inlined :func:`_separation_of` before its one branch: a call taking the tables, or an inlined
+helper holding them across branches, would take and release a reference on each of their
+arrays at every point, atomically (as in :mod:`gearopt.contact.kernels`), more than the
+kernels' own work.
 """
 
 from __future__ import annotations
