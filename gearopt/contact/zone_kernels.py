@@ -3,6 +3,12 @@ a side's zones sweep (:func:`swept_exits`) and from their union (:func:`union_ex
 :class:`gearopt.mesh.zone.Zones`. The clearance at a pinion point is the contact engine's
 (:func:`gearopt.contact.kernels.pinion_at`, :func:`gearopt.contact.kernels.gap_of`), scaled by
 the zone's node factors into the separation (normal or circumferential) the compound measures.
+
+Each kernel evaluates its points in its own loops, the tables unpacked once and read by the
+inlined :func:`_separation_of` before its one branch: a call taking the tables, or an inlined
+helper holding them across branches, would take and release a reference on each of their
+arrays at every point, atomically (as in :mod:`gearopt.contact.kernels`), more than the
+kernels' own work.
 """
 
 from __future__ import annotations
@@ -17,18 +23,11 @@ from gearopt.jit import compiled
 __all__ = ["swept_exits", "union_exits"]
 
 
-@compiled
-def _separation(rows, r, s, t, pinion, gear, zone):
-    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at ``(s, t)``. ``zone``: the
-    rows' lags and node factors, the grid's origin, spacing and last cells, the compound."""
-    point = pinion_at(s, t, pinion, rows[5][r])
-    return _separation_of(rows, r, point, _zone_at(s, t, zone), pinion, gear, zone)
-
-
 @compiled(inline=True)
-def _zone_at(s, t, zone):
-    """The node factors' bilinear cell ``(i, j)`` and weights ``(u, v)`` at ``(s, t)``."""
-    _, _, s0, ds, t0, dt, last0, last1, _ = zone
+def _zone_at(s, t, grid):
+    """The node factors' bilinear cell ``(i, j)`` and weights ``(u, v)`` at ``(s, t)``.
+    ``grid``: the factors' origin, spacing and last cells, ``(s0, ds, t0, dt, last0, last1)``."""
+    s0, ds, t0, dt, last0, last1 = grid
     x = min(max((s - s0) / ds, 0.0), last0 + 1.0)
     y = min(max((t - t0) / dt, 0.0), last1 + 1.0)
     i = min(int(x), int(last0))
@@ -37,18 +36,19 @@ def _zone_at(s, t, zone):
 
 
 @compiled(inline=True)
-def _separation_of(rows, r, point, at, pinion, gear, zone):
-    """:func:`_separation` of row ``r`` at the pinion point ``point`` (:func:`pinion_at`)
-    in the factors' cell ``at`` (:func:`_zone_at`)."""
-    lag, factor = zone[0], zone[1]
-    delta, valid = gap_of(rows, r, point, gear, pinion[14])
-    if not valid:
-        return math.inf
+def _separation_of(rows, r, point, at, gear, cells, lag, factor):
+    """:meth:`gearopt.mesh.zone.Zones.separation` of row ``r`` at the pinion point ``point``
+    (:func:`pinion_at`, its cell offset the row's) in the factors' cell ``at``
+    (:func:`_zone_at`); ``cells``: the pinion's refinable cells (``pinion[14]``), ``lag`` and
+    ``factor`` the rows' lags and node factors. (Every table read before the one branch: see
+    :mod:`gearopt.contact.kernels` on the references numba takes.)"""
     i, j, u, v = at
     f = (1.0 - u) * ((1.0 - v) * factor[r, i, j] + v * factor[r, i, j + 1]) + u * (
         (1.0 - v) * factor[r, i + 1, j] + v * factor[r, i + 1, j + 1]
     )
-    return (delta - lag[r]) * f
+    shift = lag[r]
+    delta, valid = gap_of(rows, r, point, gear, cells)
+    return (delta - shift) * f if valid else math.inf
 
 
 @compiled(inline=True)
@@ -67,62 +67,10 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
-@compiled(inline=True)
-def _swept(p, table):
-    """Pair ``p``'s separation at ``tau`` along the ray at its least over the motion, as
-    ``gearopt.mesh.zone``'s ``_swept`` (each separation evaluated once: ``f``, ``have``; the
-    pinion point there ``point``, :func:`pinion_at`, for the rows of the pinion cell offset
-    ``offset``, and the factors' cell ``at``). ``table``: ``(rows, pinion, gear, zone,
-    pair_row, prev, nxt, ray, tau, f, have, point, offset, at)``."""
-    rows, pinion, gear, zone, pair_row, prev, nxt, ray, tau, f, have, point, offset, at = table
-    for q in (prev[p], p, nxt[p]):
-        if q >= 0 and not have[q]:
-            r = pair_row[q]
-            if rows[5][r] == offset:
-                f[q] = _separation_of(rows, r, point, at, pinion, gear, zone)
-            else:
-                s = ray[0] + tau * ray[2]
-                t = ray[1] + tau * ray[3]
-                f[q] = _separation(rows, r, s, t, pinion, gear, zone)
-            have[q] = True
-    g = f[p]
-    if prev[p] >= 0 and nxt[p] >= 0:
-        fa, fd = f[prev[p]], f[nxt[p]]
-        curv = fa - 2.0 * g + fd
-        finite = math.isfinite(fa) and math.isfinite(g) and math.isfinite(fd)
-        if finite and g <= fa and g <= fd and curv > 0.0:
-            g = g - 0.125 * (fd - fa) ** 2 / curv
-    return g
-
-
-@compiled
-def _swept_min(rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray, tau, f, have, hint, kept):
-    """With ``hint[0]`` < 0 the pattern at ``tau`` along a ray of pairs ``a:b``, the least swept
-    separation (:func:`_swept`) minus the compound; else -1.0 inside, +1.0 out, trying pair
-    ``hint[0]`` (the last found inside) first and the others until one is inside. ``kept``:
-    ``f`` and ``have`` hold the separations at this ``tau`` already (the last call's, there)."""
-    c = zone[8]
-    if not kept:
-        have[a:b] = False
-    s = ray[0] + tau * ray[2]
-    t = ray[1] + tau * ray[3]
-    first = hint[0] if hint[0] >= 0 else a
-    offset = rows[5][pair_row[first]]
-    point = pinion_at(s, t, pinion, offset)
-    at = _zone_at(s, t, zone)
-    table = (rows, pinion, gear, zone, pair_row, prev, nxt, ray, tau, f, have, point, offset, at)
-    if hint[0] >= 0:
-        if _swept(hint[0], table) < c:
-            return -1.0
-        for p in range(a, b):
-            if _swept(p, table) < c:
-                hint[0] = p
-                return -1.0
-        return 1.0
-    least = math.inf
-    for p in range(a, b):
-        least = min(least, _swept(p, table))
-    return least - c
+# the stages of a ray in swept_exits: the scan (pair by pair until one is inside); the whole
+# field at the first sample out, at the one before and the one before that; the finer scan of
+# the bracket (through a flank's boundary); the whole field at its sample out and its last in
+_SCAN, _OUT, _BEFORE, _TWO_BEFORE, _ZOOM, _ZOOM_OUT, _ZOOM_IN = range(7)
 
 
 @compiled
@@ -132,48 +80,125 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
     motion ``prev``, ``nxt``, -1 without) scanned at ``tau[k]`` up to its first exit, a sample
     inside once a pair is; the field whole only where it brackets the exit (the same result;
     at a sample found out, every pair's separation is known already); an exit through a
-    flank's boundary on the finer scan ``zoom``."""
+    flank's boundary on the finer scan ``zoom``.
+
+    The pattern at a sample ``x``: while scanning, -1.0 inside, +1.0 out, trying the pair
+    last found inside (``hint``) first and the others until one is inside; else the least
+    swept separation minus the compound. Pair p's swept separation is its separation at its
+    least over the motion, as ``gearopt.mesh.zone``'s ``_swept``: the parabola through it and
+    its neighbours' where it is the least of the three; each separation evaluated once at a
+    sample (``f``, ``have``; ``kept``: known from the last sample, there). A ray's samples
+    are taken in one loop, stage by stage, each separation evaluated in it (a call taking
+    the tables would reference and release each of their arrays, and an inlined helper
+    taking them, across its branches: :mod:`gearopt.contact.kernels`)."""
+    lag, factor, s0, ds, t0, dt, last0, last1, c = zone
+    grid = (s0, ds, t0, dt, last0, last1)
+    cells, offsets = pinion[14], rows[5]
     f = np.empty(pair_row.shape[0])
     have = np.zeros(pair_row.shape[0], np.bool_)
-    m = tau.shape[1]
-    full = np.full(1, -1, np.intp)
+    m, n_zoom = tau.shape[1], zoom.shape[0]
     for k in range(rays.shape[0]):
-        a, b, ray = start[k], start[k + 1], rays[k]
-        hint = np.full(1, a, np.intp)
+        a, b = start[k], start[k + 1]
         out[k] = 0.0
-        zoned = (rows, pinion, gear, zone, a, b, pair_row, prev, nxt, ray)
-        if not b > a or _swept_min(*zoned, tau[k, 0], f, have, hint, False) > 0.0:
+        if not b > a:
             continue
-        j = 1
-        while j < m:
-            if _swept_min(*zoned, tau[k, j], f, have, hint, False) > 0.0:
+        hint = a
+        stage, j, i = _SCAN, 0, 0
+        t1 = t2 = g = gm1 = za = zb = fb = 0.0
+        inside = out_first = False
+        while True:
+            searching, kept = False, False
+            if stage == _SCAN:
+                x, searching = tau[k, j], True
+            elif stage == _OUT:
+                x, kept = t2, True  # (every pair known: found out there)
+            elif stage == _BEFORE:
+                x = t1
+            elif stage == _TWO_BEFORE:
+                x = tau[k, j - 2]
+            elif stage == _ZOOM:
+                zb = t1 + (t2 - t1) * zoom[i]
+                x, searching = zb, True
+            elif stage == _ZOOM_OUT:
+                x, kept = zb, not inside
+            else:
+                x = za
+            # the pattern at x
+            if not kept:
+                have[a:b] = False
+            s = rays[k, 0] + x * rays[k, 2]
+            t = rays[k, 1] + x * rays[k, 3]
+            offset = offsets[pair_row[hint if searching else a]]
+            point = pinion_at(s, t, pinion, offset)  # (the rows of one pinion cell offset)
+            at = _zone_at(s, t, grid)
+            value = 1.0 if searching else math.inf
+            for n in range(-1 if searching else 0, b - a):
+                p = hint if n < 0 else a + n
+                for q in (prev[p], p, nxt[p]):
+                    if q >= 0 and not have[q]:
+                        r = pair_row[q]
+                        if offsets[r] != offset:
+                            offset = offsets[r]
+                            point = pinion_at(s, t, pinion, offset)
+                        f[q] = _separation_of(rows, r, point, at, gear, cells, lag, factor)
+                        have[q] = True
+                swept = f[p]
+                if prev[p] >= 0 and nxt[p] >= 0:
+                    fa, fd = f[prev[p]], f[nxt[p]]
+                    curv = fa - 2.0 * swept + fd
+                    finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
+                    if finite and swept <= fa and swept <= fd and curv > 0.0:
+                        swept = swept - 0.125 * (fd - fa) ** 2 / curv
+                if not searching:
+                    value = min(value, swept)
+                elif swept < c:
+                    hint = p
+                    value = -1.0
+                    break
+            if not searching:
+                value -= c
+            # the next stage
+            if stage == _SCAN:
+                if value > 0.0:
+                    if j == 0:
+                        break
+                    t1, t2, stage = tau[k, j - 1], tau[k, j], _OUT
+                    continue
+                j += 1
+                if j == m:
+                    out[k] = tau[k, m - 1]
+                    break
+            elif stage == _OUT:
+                g = value
+                stage = _BEFORE if math.isfinite(g) else (_ZOOM if n_zoom > 0 else _ZOOM_OUT)
+            elif stage == _BEFORE:
+                gm1 = value
+                if j < 2:
+                    out[k] = _crossing(tau[k, 0], math.nan, t1, gm1, t2, g)
+                    break
+                stage = _TWO_BEFORE
+            elif stage == _TWO_BEFORE:
+                out[k] = _crossing(tau[k, j - 2], value, t1, gm1, t2, g)
                 break
-            j += 1
-        if j == m:
-            out[k] = tau[k, m - 1]
-            continue
-        t1, t2 = tau[k, j - 1], tau[k, j]
-        g = _swept_min(*zoned, t2, f, have, full, True)  # (every pair known: out at t2)
-        if math.isfinite(g):
-            gm1 = _swept_min(*zoned, t1, f, have, full, False)
-            gm2 = math.nan
-            if j >= 2:
-                gm2 = _swept_min(*zoned, tau[k, j - 2], f, have, full, False)
-            out[k] = _crossing(tau[k, max(j - 2, 0)], gm2, t1, gm1, t2, g)
-            continue
-        za = zb = 0.0
-        inside = False
-        out_first = False  # (the bracket: the first sample out, but never before the second)
-        for i in range(zoom.shape[0]):
-            zb = t1 + (t2 - t1) * zoom[i]
-            inside = _swept_min(*zoned, zb, f, have, hint, False) < 0.0
-            if i >= 1 and (out_first or not inside or i == zoom.shape[0] - 1):
+            elif stage == _ZOOM:
+                inside = value < 0.0
+                if i >= 1 and (out_first or not inside or i == n_zoom - 1):
+                    stage = _ZOOM_OUT
+                    continue
+                out_first = not inside
+                za = zb
+                i += 1
+                if i == n_zoom:
+                    stage = _ZOOM_OUT
+            elif stage == _ZOOM_OUT:
+                fb, stage = value, _ZOOM_IN
+            else:
+                out[k] = (
+                    _crossing(za, math.nan, za, value, zb, fb)
+                    if math.isfinite(fb)
+                    else 0.5 * (za + zb)
+                )
                 break
-            out_first = not inside
-            za = zb
-        fb = _swept_min(*zoned, zb, f, have, full, not inside)
-        fa = _swept_min(*zoned, za, f, have, full, False)
-        out[k] = _crossing(za, math.nan, za, fa, zb, fb) if math.isfinite(fb) else 0.5 * (za + zb)
 
 
 @compiled
@@ -184,25 +209,27 @@ def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     zone that held the ray up to that sample gives a crossing of its separation through the
     compound (``zone[8]``; through a flank's boundary, on the finer scan ``zoom``); the
     farthest is the exit. Writes ``out`` ``(K,)``."""
-    c = zone[8]
+    lag, factor, s0, ds, t0, dt, last0, last1, c = zone
+    grid = (s0, ds, t0, dt, last0, last1)
+    cells, offsets = pinion[14], rows[5]
     m = tau.shape[1]
     f = np.empty((pair_row.shape[0], m))
     for k in range(rays.shape[0]):
         a, b = start[k], start[k + 1]
         ox, oy, dx, dy = rays[k, 0], rays[k, 1], rays[k, 2], rays[k, 3]
         j = 0
-        offset = rows[5][pair_row[a]] if b > a else 0
+        offset = offsets[pair_row[a]] if b > a else 0
         while j < m:
             held = False
             s, t = ox + tau[k, j] * dx, oy + tau[k, j] * dy
             point = pinion_at(s, t, pinion, offset)  # (the rows of one pinion cell offset)
-            at = _zone_at(s, t, zone)
+            at = _zone_at(s, t, grid)
             for p in range(a, b):
                 r = pair_row[p]
-                if rows[5][r] == offset:
-                    f[p, j] = _separation_of(rows, r, point, at, pinion, gear, zone) - c
-                else:
-                    f[p, j] = _separation(rows, r, s, t, pinion, gear, zone) - c
+                if offsets[r] != offset:
+                    offset = offsets[r]
+                    point = pinion_at(s, t, pinion, offset)
+                f[p, j] = _separation_of(rows, r, point, at, gear, cells, lag, factor) - c
                 held = held or f[p, j] < 0.0
             if not held:
                 break
@@ -219,16 +246,15 @@ def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
                 t0 = tau[k, max(j - 2, 0)]
                 x = _crossing(t0, f[p, j - 2] if j >= 2 else math.nan, t1, f1, t2, f2)
             else:
+                r = pair_row[p]
                 za = fa = zb = fb = 0.0
                 out_first = False
                 for i in range(zoom.shape[0]):
                     zb = t1 + (t2 - t1) * zoom[i]
-                    fb = (
-                        _separation(
-                            rows, pair_row[p], ox + zb * dx, oy + zb * dy, pinion, gear, zone
-                        )
-                        - c
-                    )
+                    s, t = ox + zb * dx, oy + zb * dy
+                    point = pinion_at(s, t, pinion, offsets[r])
+                    at = _zone_at(s, t, grid)
+                    fb = _separation_of(rows, r, point, at, gear, cells, lag, factor) - c
                     if i >= 1 and (out_first or not fb < 0.0 or i == zoom.shape[0] - 1):
                         break
                     out_first = not fb < 0.0
