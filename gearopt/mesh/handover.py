@@ -74,10 +74,9 @@ ITERATION_TAGS = (("ho", 0, 0), ("ho", 1, 0))
 TOLERANCE_RAD = 1e-9
 #: the most steps of the iteration (bisection of a position step to 1e-9 rad takes about 26)
 ITERATIONS = 40
-#: the points evenly across the bracket of an iteration's step where D is not smooth
+#: the points evenly across the bracket of an iteration's step where D is not smooth (both
+#: pairs sampled, or the stepping pair alone)
 SPREAD = 7
-#: the points evenly across the bracket where one pair's lag steps and the other's is smooth
-STEP_SPREAD = 7
 #: the widest bracket on which a stepping lag is sampled alone
 SINGLE_RAD = 1e-4
 
@@ -258,7 +257,7 @@ class HandOver:
         interpolation's error; where D steps (the bracket closes in but D's rise across it
         does not shrink with it), is infinite or a step left more than a quarter of the
         bracket, :data:`SPREAD` points evenly across it. A stepping lag is sampled alone once
-        the other pair's lag changes by less than a thousandth of the step across a bracket
+        the other pair's lag changes by at most a twentieth of D's rise across a bracket
         narrower than 1e-4 rad: the other's is then interpolated (a parabola through its three
         nearest samples), which cannot move D's sign.
         """
@@ -313,8 +312,7 @@ class HandOver:
         if stepping or not (closing or retry):
             self.guarded = 0
             self.smooth = self.smooth_pair() if stepping else None
-            n = SPREAD if self.smooth is None else STEP_SPREAD
-            return list(a + w * np.arange(1, n + 1) / (n + 1))
+            return list(a + w * np.arange(1, SPREAD + 1) / (SPREAD + 1))
         self.guarded, self.smooth = 2 if retry else 1, None
         # the inverse interpolants through the bracket's ends and one, then two more points:
         # the second's root, guarded as far as the two roots differ
