@@ -28,7 +28,6 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import RegularGridInterpolator
 
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
@@ -518,13 +517,7 @@ class EnvelopeSurface:
     def parameters_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` generation parameters at grid coordinates, by Newton from the grid."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
-        start = RegularGridInterpolator(
-            (self.face_mm, self.profile_mm),
-            self.q,
-            method="linear",
-            bounds_error=False,
-            fill_value=None,
-        )(np.stack([s.ravel(), h.ravel()], axis=-1))
+        start = _bilinear(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
         flank = np.full(s.size, self.index)
         q, _, _, ok, _ = _newton(
             self.family,
@@ -632,6 +625,26 @@ class EnvelopeSurface:
         moved = q[:, None, None, :] + delta[None]
         geo = self.family.geometry(moved, np.full(moved.shape[:-1], self.index))
         return self._to_frame(geo["point"])
+
+
+def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
+    """``(n, 3)`` bilinear interpolation of ``values`` ``(n_f, n_p, 3)`` on the grid at points
+    ``(s, h)`` ``(n,)``, the edge cells' planes beyond the grid: the arithmetic of scipy's
+    ``RegularGridInterpolator(method="linear", fill_value=None)``, the same bits, without its
+    set-up (a tenth of the cost on a few hundred points)."""
+
+    def cell(grid, x):  # the cell's index along one axis and the point's fraction across it
+        g = np.asarray(grid, float)
+        k = np.clip(np.searchsorted(g, x, side="right") - 1, 0, len(g) - 2)
+        return k, (x - g[k]) / (g[k + 1] - g[k])
+
+    (i, y0), (j, y1) = cell(face_mm, s), cell(profile_mm, h)
+    a0, a1 = 1.0 - y0, 1.0 - y1
+    out = values[i, j] * (a0 * a1)[:, None]
+    out += values[i, j + 1] * (a0 * y1)[:, None]
+    out += values[i + 1, j] * (y0 * a1)[:, None]
+    out += values[i + 1, j + 1] * (y0 * y1)[:, None]
+    return out
 
 
 def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
