@@ -519,7 +519,7 @@ class EnvelopeSurface:
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
         start = _bilinear(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
         flank = np.full(s.size, self.index)
-        q, _, _, ok, _ = _newton(
+        q, _, jac, ok, _ = _newton(
             self.family,
             start,
             flank,
@@ -528,8 +528,10 @@ class EnvelopeSurface:
             max_iter=30,
             give_up=(30, np.inf),
         )
-        if not ok.all():  # continuation from the nearest generated node (a tool whose edge
-            # changes curvature, e.g. a blade's tip fillet, can stall Newton from the start)
+        if not ok.all() and ok.any():  # a tool whose edge changes curvature (a blade's tip
+            # fillet, say) can stall Newton from the grid's start: from a converged neighbour
+            self._from_neighbours(s.ravel(), h.ravel(), q, jac, ok)
+        if not ok.all():  # else continuation from the nearest generated node
             bad = np.flatnonzero(~ok)
             q[bad], ok[bad] = self._continued(s.ravel()[bad], h.ravel()[bad])
         if not ok.all():
@@ -539,6 +541,43 @@ class EnvelopeSurface:
                 f"{int((~ok).sum())} of {len(ok)} points (outside the generated flank?)",
             )
         return q.reshape(*s.shape, 3)
+
+    def _from_neighbours(self, face_mm, profile_mm, q, jac, ok, reach: float = 0.5) -> None:
+        """Solve the points not ``ok`` again by plain Newton from the nearest converged point
+        of the same call, where one lies within ``reach`` grid cells (the fine cells' next
+        level, :mod:`gearopt.contact.boundary`); accepted on that point's sheet (its
+        Jacobian's sign: not past a fold). ``q``, ``jac``, ``ok`` ``(n, ...)`` in place."""
+        ds = float(np.ptp(self.face_mm)) / max(len(self.face_mm) - 1, 1)
+        dh = float(np.ptp(self.profile_mm)) / max(len(self.profile_mm) - 1, 1)
+        bad, good = np.flatnonzero(~ok), np.flatnonzero(ok)
+        gap = ((face_mm[good][None, :] - face_mm[bad, None]) / ds) ** 2
+        gap += ((profile_mm[good][None, :] - profile_mm[bad, None]) / dh) ** 2
+        # only from points no farther from the pitch line (as the solver's repair)
+        gap[np.abs(profile_mm[good])[None, :] > np.abs(profile_mm[bad])[:, None]] = np.inf
+        pick = np.argmin(gap, axis=1)
+        near = gap[np.arange(len(bad)), pick] <= reach * reach
+        bad, from_ = bad[near], good[pick[near]]
+        if not bad.size:
+            return
+        flank = np.full(bad.size, self.index)
+        big_l, big_r = self._axial_plane(face_mm[bad], profile_mm[bad])
+        l0, r0 = self._axial_plane(face_mm[from_], profile_mm[from_])
+        a = self.family.scale_mm
+        rhs = np.stack([(big_l - l0) / a, (big_r - r0) / a, np.zeros(bad.size)], axis=-1)
+        start = q[from_] + np.linalg.solve(jac[from_], rhs[..., None])[..., 0]
+        qn, _, jn, conv, _ = _newton(
+            self.family,
+            start,
+            flank,
+            big_l,
+            big_r,
+            tol=self.tol,
+            max_iter=30,
+            give_up=(30, np.inf),
+            chords=False,
+        )
+        conv &= np.sign(np.linalg.det(jn)) == np.sign(np.linalg.det(jac[from_]))
+        q[bad[conv]], jac[bad[conv]], ok[bad[conv]] = qn[conv], jn[conv], True
 
     def _continued(self, face_mm: NDArray, profile_mm: NDArray, steps: int = 16, tries: int = 4):
         """Parameters ``(n, 3)`` and convergence ``(n,)`` at grid coordinates, by plain Newton
