@@ -299,6 +299,28 @@ class ContactEngine:
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         self.tolerances = np.stack([self.tol_rad, self.tol_um])
 
+    def node_values(self):
+        """``(clearance, normal factor)`` at the pinion's grid nodes on side 0 at pinion angle 0,
+        the gear at its ideal angle (+inf and 0 off the mask): :meth:`sample`'s node fields of
+        that row (the same bits), without its minimum (a field placing its gear)."""
+        side, zero = np.zeros(1, np.intp), np.zeros(1)
+        rows = row_constants(self._row_maker(), side, zero, zero.copy())
+        out = np.empty((3, 1, self.shape[0] * self.shape[1]))
+        gear, _, counts = self.kernel_tables
+        _kernels.node_fields(
+            rows,
+            side,
+            counts,
+            self.node_index,
+            self.node_xy,
+            self.node_z,
+            self.node_nxy,
+            self.node_nz,
+            gear,
+            out,
+        )
+        return out[0, 0], out[1, 0]
+
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
 

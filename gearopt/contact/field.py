@@ -35,6 +35,8 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -52,6 +54,20 @@ __all__ = [
     "FieldSample",
     "PointClearance",
 ]
+
+
+def median(values) -> float:
+    """The median of a 1-D array of at least one value: :func:`numpy.median`'s value (the same
+    bits: the middle order statistics by a partition, the two middle ones' mean), without its
+    general set-up."""
+    n = values.size
+    k = n // 2
+    if np.isnan(values).any():
+        return math.nan
+    if n % 2:
+        return float(np.partition(values, k)[k])
+    part = np.partition(values, (k - 1, k))
+    return float((part[k - 1] + part[k]) / 2.0)
 
 
 class ContactError(GearoptError):
@@ -121,28 +137,35 @@ class ClearanceField:
         self.node_factor_mm: float | None = None
         self.phase_rad, self._shift = 0.0, 0.0
         self._engine = ContactEngine([self])
-        if phase_rad is None:
-            delta, valid = self._node_clearance()
-            phase_rad = -self.gear_sense * float(np.median(delta[valid]))
-        self.phase_rad = float(phase_rad)
-        self._engine.place([self])
-        delta, valid = self._node_clearance()
-        centre = float(np.median(self.gear_sense * delta[valid]))
-        self.node_factor_mm = self._node_factor
+        delta, valid, factor = self._node_clearance()
         pitch = self.gear.pitch_rad
+        centre = None
+        if phase_rad is None:
+            middle = median(delta[valid])
+            phase_rad = -self.gear_sense * middle
+            if np.all(np.abs(delta[valid] - middle) < 1.0) and pitch > 1e-3:
+                # the clearance at the new phase is this less its median, turned by no whole
+                # turn: its median rounds to no whole pitch
+                centre = 0.0
+        self.phase_rad = float(phase_rad)
+        if centre is None:
+            self._engine.place([self])
+            delta, valid, _ = self._node_clearance()
+            centre = median(self.gear_sense * delta[valid])
+        self.node_factor_mm = factor
         self._shift = pitch * round(centre / pitch)
         self._engine.place([self])
 
     def _node_clearance(self):
-        sample = self._engine.sample(np.zeros(1, np.intp), np.zeros(1), 0.0, refine=False)
-        valid = np.isfinite(sample.clearance_rad[0])
-        if valid.any():
-            self._node_factor = float(np.median(sample.normal_factor_mm[0][valid]))
+        """The clearance at the nodes at the mean position, where it is finite and the median
+        normal factor there (it does not depend on the phase)."""
+        delta, factor = self._engine.node_values()
+        valid = np.isfinite(delta)
         if not valid.any():
             raise ContactError(
                 "flanks", rule="the pinion flank does not face the gear flank at the mean position"
             )
-        return sample.clearance_rad[0], valid
+        return delta, valid, median(factor[valid])
 
     @property
     def gear_offset_rad(self) -> float:
