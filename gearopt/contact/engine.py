@@ -147,41 +147,48 @@ def _stacked_tables(fields) -> dict:
     # apart, contiguous
     sizes = [t["nodes"].size for t in tables]
     count = max(sizes) + 1
-    pad = [np.r_[np.arange(n), np.zeros(count - n, np.intp)] for n in sizes]
-    node_index = np.stack([t["nodes"][k] for t, k in zip(tables, pad, strict=True)])
+    pad = [np.arange(count) for _ in sizes]
+    for k, n in zip(pad, sizes, strict=True):
+        k[n:] = 0
+    node_index = np.empty((len(tables), count), np.intp)
+    for i, (t, k) in enumerate(zip(tables, pad, strict=True)):
+        np.take(t["nodes"], k, out=node_index[i])
     node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
     # each grid node's column in its side's node tables (off-mask: the padding after them)
     node_slot = np.stack(
         [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
     )
-    points = tuple(
-        np.stack([t["points"][a][k] for t, k in zip(tables, pad, strict=True)]) for a in range(3)
-    )
-    normals = tuple(
-        np.stack([t["normals"][a][k] for t, k in zip(tables, pad, strict=True)]) for a in range(3)
-    )
+    # (x, y) of each side's nodes and of their normals ``(2, K, count)``, z ``(K, count)``
+    node_xy, node_nxy = np.empty((2, len(tables), count)), np.empty((2, len(tables), count))
+    point_z, normal_z = np.empty((len(tables), count)), np.empty((len(tables), count))
+    for i, (t, k) in enumerate(zip(tables, pad, strict=True)):
+        for a in range(2):
+            np.take(t["points"][a], k, out=node_xy[a, i])
+            np.take(t["normals"][a], k, out=node_nxy[a, i])
+        np.take(t["points"][2], k, out=point_z[i])
+        np.take(t["normals"][2], k, out=normal_z[i])
+    points, normals = (node_xy[0], node_xy[1], point_z), (node_nxy[0], node_nxy[1], normal_z)
     # the refinable nodes and cells: the generated ones on the fine cells at the
     # generated boundary, else two cells above the lowest generated nodes (node_tables)
     refine_nodes = np.stack([t["keep"] for t in tables])
     refine_cells = np.ascontiguousarray(np.concatenate([t["cells"] for t in tables]))
     pinion_cells = len(tables[0]["cells"])
-    pinion_coef = np.concatenate([f.pinion.cells.coefficients for f in fields])
-    # the fine cells at each side's generated boundary (their indices offset per side)
-    offsets = np.cumsum([0] + [len(t["fine"][1]) for t in tables[:-1]])
-    pinion_band = np.concatenate(
-        [
-            np.where(t["fine"][0][:, :1] >= 0.0, t["fine"][0] + [k, 0, 0, 0], t["fine"][0])
-            for t, k in zip(tables, offsets, strict=True)
-        ]
-    )
-    pinion_fine = np.concatenate([t["fine"][1] for t in tables])
-    # the kernels' one table of both (the fine cells after the flank's, the band pointing
-    # there: :func:`gearopt.contact.kernels.pinion_at`)
-    kernel_coef = np.ascontiguousarray(np.concatenate([pinion_coef, pinion_fine]))
+    # the kernels' one table of the flanks' cells and the fine cells at each side's generated
+    # boundary after them, the band pointing there (:func:`gearopt.contact.kernels.pinion_at`)
+    own = [f.pinion.cells.coefficients for f in fields]
+    fine = [t["fine"][1] for t in tables]
+    n_own = sum(len(c) for c in own)
+    kernel_coef = np.concatenate(own + fine)
+    pinion_coef, pinion_fine = kernel_coef[:n_own], kernel_coef[n_own:]
+    # the fine cells' indices offset per side (in the fine cells' table; the band's -1: none)
+    pinion_band = np.concatenate([t["fine"][0] for t in tables])
+    start, offset = 0, 0
+    for t, cells in zip(tables, fine, strict=True):
+        side = pinion_band[start : start + len(t["fine"][0]), 0]
+        side[side >= 0.0] += offset
+        start, offset = start + len(t["fine"][0]), offset + len(cells)
     kernel_band = pinion_band.copy()
-    kernel_band[:, 0] = np.where(
-        pinion_band[:, 0] >= 0.0, pinion_band[:, 0] + len(pinion_coef), -1.0
-    )
+    kernel_band[:, 0] = np.where(pinion_band[:, 0] >= 0.0, pinion_band[:, 0] + n_own, -1.0)
     gear_cells = first.gear.cells.generated.size
     gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
     gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
@@ -196,6 +203,8 @@ def _stacked_tables(fields) -> dict:
         "node_slot": node_slot,
         "points": points,
         "normals": normals,
+        "node_xy": node_xy,
+        "node_nxy": node_nxy,
         "refine_nodes": refine_nodes,
         "refine_cells": refine_cells,
         "pinion_cells": pinion_cells,
@@ -339,17 +348,15 @@ class ContactEngine:
         cg, sg = math.cos(g), math.sin(g)
         lin = np.array([b[0], b[1], ia * cg * b[2], -ib * sg * b[2]])
         const = np.array([c[0], c[1], ia * (cg * c[2] - s0), -ib * (sg * c[2] + h0)])
-        self.rotation = np.concatenate(
-            [np.stack([lin[:, 0], lin[:, 1]], 1), np.stack([lin[:, 1], -lin[:, 0]], 1)]
-        )
+        self.rotation = np.empty((8, 2))
+        self.rotation[:4, 0], self.rotation[:4, 1] = lin[:, 0], lin[:, 1]
+        self.rotation[4:, 0], self.rotation[4:, 1] = lin[:, 1], -lin[:, 0]
         self.rho_coef = np.array([ia * sg, ib * cg])
         self.gear_table = (np.array([gc.last_row, gc.last_column]), gc.columns)
         self.lin_z, self.const = np.ascontiguousarray(lin[:, 2]), const
-        # the node tables: x, y and the z terms (with the constants) of every side's nodes;
-        # the normals' x, y and z terms of qx, qy (no constants)
-        self.node_xy = np.stack([self.points[0], self.points[1]])
+        # the node tables: the z terms (with the constants) of every side's nodes; the
+        # normals' z terms of qx, qy (no constants); their x, y: the flanks' (node_xy, node_nxy)
         self.node_z = lin[:, 2, None, None] * self.points[2] + const[:, None, None]
-        self.node_nxy = np.stack([self.normals[0], self.normals[1]])
         self.node_nz = lin[:2, 2, None, None] * self.normals[2]
         # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
         # z terms (z = L1 = s cos g1 - h sin g1)
@@ -359,9 +366,9 @@ class ContactEngine:
             np.array([[pc.face_scale], [pc.profile_scale]]),
         )
         self.pinion_table = (np.array([pc.last_row, pc.last_column]), pc.columns)
-        self.pinion_map = np.concatenate(
-            [np.array([[sg1, cg1]]), np.stack([lin[:, 2] * cg1, -lin[:, 2] * sg1], 1)]
-        )
+        self.pinion_map = np.empty((5, 2))
+        self.pinion_map[0] = sg1, cg1
+        self.pinion_map[1:, 0], self.pinion_map[1:, 1] = lin[:, 2] * cg1, -lin[:, 2] * sg1
         self.pinion_const = np.concatenate([[0.0], const])[:, None]
         # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
         self.pinion_taper = first.pinion.taper
