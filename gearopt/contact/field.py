@@ -135,23 +135,22 @@ class ClearanceField:
         #: mm of normal separation per rad of gear rotation at the mean position (the median
         #: over the nodes in contact; None until measured)
         self.node_factor_mm: float | None = None
-        self.phase_rad, self._shift = 0.0, 0.0
+        self.phase_rad = 0.0 if phase_rad is None else float(phase_rad)
+        self._shift = 0.0
         self._engine = ContactEngine([self])
         delta, valid, factor = self._node_clearance()
         pitch = self.gear.pitch_rad
-        centre = None
+        centre = median(self.gear_sense * delta[valid])
         if phase_rad is None:
-            middle = median(delta[valid])
-            phase_rad = -self.gear_sense * middle
-            if np.all(np.abs(delta[valid] - middle) < 1.0) and pitch > 1e-3:
-                # the clearance at the new phase is this less its median, turned by no whole
-                # turn: its median rounds to no whole pitch
+            self.phase_rad = -centre  # (the gear turned back by the median clearance)
+            if np.all(np.abs(self.gear_sense * delta[valid] - centre) < 1.0) and pitch > 1e-3:
+                # the clearance at this phase is the one at phase 0 less its median, turned by
+                # no whole turn: its median is 0, no whole pitch
                 centre = 0.0
-        self.phase_rad = float(phase_rad)
-        if centre is None:
-            self._engine.place([self])
-            delta, valid, _ = self._node_clearance()
-            centre = median(self.gear_sense * delta[valid])
+            else:
+                self._engine.place([self])
+                delta, valid, _ = self._node_clearance()
+                centre = median(self.gear_sense * delta[valid])
         self.node_factor_mm = factor
         self._shift = pitch * round(centre / pitch)
         self._engine.place([self])
