@@ -42,41 +42,24 @@ def fine_layout(face, profile, low, mask, dp, step_mm, reach_mm, below_mm, rows_
     bottom = np.zeros(n_f - 1, np.intp)
     top = np.zeros(n_f - 1, np.intp)
     rows = np.zeros(n_f - 1, np.bool_)
-    any_row = False
-    for i in range(n_f - 1):
-        a, b = low[i], low[i + 1]
-        both = np.isfinite(a) and np.isfinite(b) and lowest[i] < n_p and lowest[i + 1] < n_p
-        lo = 0.0
-        reach = 0.0
-        if both:
-            lo = math.floor((min(a, b) - profile[0]) / dp)
-            reach = math.ceil((max(a, b) + reach_mm - profile[0]) / dp)
-        bottom[i] = int(min(max(lo, 0.0), n_p - 2.0))
-        t = max(float(max(lowest[i], lowest[i + 1]) + rows_above), reach)
-        top[i] = int(min(t, n_p - 1.0))
-        rows[i] = both and top[i] > bottom[i]
-        any_row = any_row or rows[i]
-    if not any_row:
-        empty = np.zeros(0)
-        return (
-            0,
-            0,
-            bottom,
-            top,
-            rows,
-            np.zeros(0, np.intp),
-            np.zeros((0, 0), np.bool_),
-            empty,
-            empty,
-            np.zeros((0, 4)),
-        )
-    k = max(1, math.ceil(dp / step_mm - 1e-9))
-    step = dp / k
     first, last = n_p, 0
     for i in range(n_f - 1):
+        a, b = low[i], low[i + 1]
+        both = math.isfinite(a) and math.isfinite(b) and lowest[i] < n_p and lowest[i + 1] < n_p
+        lo, reach = 0.0, 0.0
+        if both:
+            lo = float(math.floor((min(a, b) - profile[0]) / dp))
+            reach = float(math.ceil((max(a, b) + reach_mm - profile[0]) / dp))
+        bottom[i] = int(min(max(lo, 0.0), n_p - 2.0))
+        top[i] = int(min(max(float(max(lowest[i], lowest[i + 1]) + rows_above), reach), n_p - 1.0))
+        rows[i] = both and top[i] > bottom[i]
         if rows[i]:
             first, last = min(first, bottom[i]), max(last, top[i])
-    level0, n_levels = first * k, last * k - first * k + 1
+    k, step, level0, n_levels = 0, 0.0, 0, 0
+    if first < n_p:  # some face row has fine cells
+        k = max(1, math.ceil(dp / step_mm - 1e-9))
+        step = dp / k
+        level0, n_levels = first * k, last * k - first * k + 1
     in_cols = np.zeros(n_f, np.bool_)
     for i in range(n_f - 1):
         if rows[i]:
@@ -87,7 +70,7 @@ def fine_layout(face, profile, low, mask, dp, step_mm, reach_mm, below_mm, rows_
     count = 0
     for c in range(len(cols)):
         edge = low[cols[c]]
-        if np.isfinite(edge):
+        if math.isfinite(edge):
             for m in range(n_levels):
                 if profile[0] + (level0 + m) * step >= edge - below_mm:
                     exact[c, m] = True

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gearopt.contact import kernels, zone_kernels
+from gearopt.contact import boundary_kernels, kernels, zone_kernels
 from gearopt.contact.minima import minima_pick, minima_starts
 from gearopt.contact.rows import row_constants
 
@@ -102,3 +102,4 @@ def warm() -> None:
         np.zeros((3, 1)),
         np.empty(1, np.bool_),
     )
+    boundary_kernels.warm()
