@@ -544,9 +544,11 @@ class EnvelopeSurface:
 
     def _from_neighbours(self, face_mm, profile_mm, q, jac, ok, reach: float = 0.5) -> None:
         """Solve the points not ``ok`` again by plain Newton from the nearest converged point
-        of the same call, where one lies within ``reach`` grid cells (the fine cells' next
-        level, :mod:`gearopt.contact.boundary`); accepted on that point's sheet (its
-        Jacobian's sign: not past a fold). ``q``, ``jac``, ``ok`` ``(n, ...)`` in place."""
+        of the same call no farther from the pitch line, where one lies within ``reach`` grid
+        cells (the next level of :mod:`gearopt.contact.boundary`'s fine cells), moved by the
+        first-order predictor of its Jacobian; accepted on that point's sheet (the
+        Jacobian's sign: not past a fold). ``q``, ``jac``, ``ok`` ``(n, ...)`` in place: the
+        16-step continuation (:meth:`_continued`, a millisecond) only where this fails."""
         ds = float(np.ptp(self.face_mm)) / max(len(self.face_mm) - 1, 1)
         dh = float(np.ptp(self.profile_mm)) / max(len(self.profile_mm) - 1, 1)
         bad, good = np.flatnonzero(~ok), np.flatnonzero(ok)

@@ -23,6 +23,12 @@ the tangency point is solved on beyond the flank). On the conjugate face-milled 
 (``studies/face_milling_conjugate.toml``) they are within 0.001 um of the exact surface, its own
 cells 4 um off in the cell through the boundary and 0.03 um in the one above.
 
+The table is made once per flank (both fields of a flank and its aligned and misaligned
+placements share it): the exact surface solved at the corners in one batch (a corner where
+Newton stalls from the grid's start is solved from its converged neighbour,
+:meth:`gearopt.envelope.EnvelopeSurface.parameters_at`), the rest in the compiled kernels of
+:mod:`gearopt.contact.boundary_kernels`.
+
 The contact engine evaluates the pinion through this table (:mod:`gearopt.contact.kernels`'s
 point evaluations), so its refined minimum, tangency points and zones reach the generated
 boundary on the same accurate interpolant (:func:`gearopt.contact.engine.node_tables`). A flank

@@ -200,6 +200,7 @@ def _stacked_tables(fields) -> dict:
         "cell": cell,
         "node_index": node_index,
         "node_real": node_real,
+        "node_counts": np.array(sizes, np.intp),
         "node_slot": node_slot,
         "points": points,
         "normals": normals,
@@ -306,29 +307,8 @@ class ContactEngine:
         scale = np.array([f.node_factor_mm or 50.0 for f in fields])
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
-        self.tolerances = np.stack([self.tol_rad, self.tol_um])
-
-    def node_values(self):
-        """``(clearance, normal factor)`` at the pinion's grid nodes on side 0 at pinion angle 0,
-        the gear at its ideal angle (+inf and 0 off the mask): :meth:`sample`'s node fields of
-        that row (the same bits), without its minimum (a field placing its gear)."""
-        side, zero = np.zeros(1, np.intp), np.zeros(1)
-        rows = row_constants(self._row_maker(), side, zero, zero.copy())
-        out = np.empty((3, 1, self.shape[0] * self.shape[1]))
-        gear, _, counts = self.kernel_tables
-        _kernels.node_fields(
-            rows,
-            side,
-            counts,
-            self.node_index,
-            self.node_xy,
-            self.node_z,
-            self.node_nxy,
-            self.node_nz,
-            gear,
-            out,
-        )
-        return out[0, 0], out[1, 0]
+        self.tolerances = np.empty((2, len(fields)))
+        self.tolerances[0], self.tolerances[1] = self.tol_rad, self.tol_um
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -369,7 +349,8 @@ class ContactEngine:
         self.pinion_map = np.empty((5, 2))
         self.pinion_map[0] = sg1, cg1
         self.pinion_map[1:, 0], self.pinion_map[1:, 1] = lin[:, 2] * cg1, -lin[:, 2] * sg1
-        self.pinion_const = np.concatenate([[0.0], const])[:, None]
+        self.pinion_const = np.zeros((5, 1))
+        self.pinion_const[1:, 0] = const
         # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
         self.pinion_taper = first.pinion.taper
         gear_taper = first.gear.taper
@@ -419,7 +400,7 @@ class ContactEngine:
             np.ascontiguousarray(self.refine_cells),
             np.ascontiguousarray(self.kernel_band),
         )
-        counts = self.node_real.sum(axis=1).astype(np.intp)
+        counts = self.node_counts
         return gear, pinion, counts
 
     def untaper(self, xy) -> None:

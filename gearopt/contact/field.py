@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.assembly import Placement
+from gearopt.contact import kernels
 from gearopt.contact.engine import ContactEngine, node_tables, remembered_tables
 from gearopt.contact.samples import FieldSample, PointClearance
 from gearopt.errors import GearoptError
@@ -158,7 +159,13 @@ class ClearanceField:
     def _node_clearance(self):
         """The clearance at the nodes at the mean position, where it is finite and the median
         normal factor there (it does not depend on the phase)."""
-        delta, factor = self._engine.node_values()
+        engine = self._engine  # its node fields of row (side 0, phi 0): sample's, no minimum
+        side = np.zeros(1, np.intp)
+        out = np.empty((3, 1, engine.shape[0] * engine.shape[1]))
+        gear, _, counts = engine.kernel_tables
+        nodes = (engine.node_index, engine.node_xy, engine.node_z, engine.node_nxy, engine.node_nz)
+        kernels.node_fields(engine.row_tables(side, 0.0), side, counts, *nodes, gear, out)
+        delta, factor = out[0, 0], out[1, 0]
         valid = np.isfinite(delta)
         if not valid.any():
             raise ContactError(
