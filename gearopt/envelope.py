@@ -681,10 +681,12 @@ def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
 
     (i, y0), (j, y1) = cell(face_mm, s), cell(profile_mm, h)
     a0, a1 = 1.0 - y0, 1.0 - y1
-    out = values[i, j] * (a0 * a1)[:, None]
-    out += values[i, j + 1] * (a0 * y1)[:, None]
-    out += values[i + 1, j] * (y0 * a1)[:, None]
-    out += values[i + 1, j + 1] * (y0 * y1)[:, None]
+    n_p = values.shape[1]
+    flat, k = values.reshape(-1, values.shape[-1]), i * n_p + j
+    out = np.take(flat, k, axis=0) * (a0 * a1)[:, None]
+    out += np.take(flat, k + 1, axis=0) * (a0 * y1)[:, None]
+    out += np.take(flat, k + n_p, axis=0) * (y0 * a1)[:, None]
+    out += np.take(flat, k + n_p + 1, axis=0) * (y0 * y1)[:, None]
     return out
 
 
