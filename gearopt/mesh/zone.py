@@ -421,8 +421,9 @@ class Zones:
         side's rays in one scan (the same results as one call per side, at the cost of one)."""
         rows = [np.asarray(side[0], np.intp) for side in sides]
         contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
-        every = np.concatenate(contact)
-        sep = self.separation(np.concatenate(rows), every[:, :1], every[:, 1:])[:, 0]
+        every = np.ascontiguousarray(np.concatenate(contact))
+        sep = np.empty(len(every))  # (self.separation at the contact points, compiled)
+        zone_kernels.separations(*self.tables(), np.concatenate(rows), every, sep)
         sep = np.split(sep, np.cumsum([len(r) for r in rows])[:-1])
         found = [
             self._outline_rays(r, c, g, *side[2:])
