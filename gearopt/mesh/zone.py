@@ -174,6 +174,15 @@ class Zones:
         sep = (delta - self.rows.lag_rad[r][:, None]) * self.factor(r, s, h)
         return np.where(valid, sep, np.inf)
 
+    def point_separations(self, r, points) -> NDArray:
+        """:meth:`separation` of rows ``r`` ``(K,)`` at one point each, ``points`` ``(K, 2)``
+        (:func:`gearopt.contact.zone_kernels.separations`, on the zones' tables)."""
+        out = np.empty(len(points))
+        zone_kernels.separations(
+            *self.tables(), np.asarray(r, np.intp), np.ascontiguousarray(points, float), out
+        )
+        return out
+
     def quadratic(self, r, face_mm, profile_mm) -> NDArray:
         """``(K, 5)`` the clearance's local quadratic form about points ``(face_mm,
         profile_mm)`` of rows ``r``: ``(g_s, g_h, H_ss, H_sh, H_hh)`` (rad per mm, per mm^2),
@@ -421,9 +430,7 @@ class Zones:
         side's rays in one scan (the same results as one call per side, at the cost of one)."""
         rows = [np.asarray(side[0], np.intp) for side in sides]
         contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
-        every = np.ascontiguousarray(np.concatenate(contact))
-        sep = np.empty(len(every))  # (self.separation at the contact points, compiled)
-        zone_kernels.separations(*self.tables(), np.concatenate(rows), every, sep)
+        sep = self.point_separations(np.concatenate(rows), np.concatenate(contact))
         sep = np.split(sep, np.cumsum([len(r) for r in rows])[:-1])
         found = [
             self._outline_rays(r, c, g, *side[2:])
