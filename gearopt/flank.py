@@ -318,11 +318,15 @@ class FlankMap:
             value = np.asarray(getattr(self, name))
             if value.shape != shape:
                 raise GearoptError(f"FlankMap.{name}", value.shape, f"must have shape {shape}")
-            if value.dtype != bool and not np.all(np.isfinite(value)):
+            if value.dtype != bool and not np.isfinite(value).all():
                 raise GearoptError(f"FlankMap.{name}", rule="must be finite at every node")
         for name in ("face_mm", "profile_mm"):
             step = np.diff(np.asarray(getattr(self, name), float))
-            if step.size < 1 or step.min() <= 0.0 or np.ptp(step) > 1e-9 * abs(step.mean()):
+            if (
+                step.size < 1
+                or (low := step.min()) <= 0.0
+                or step.max() - low > 1e-9 * abs(step.sum() / step.size)  # (np.ptp, np.mean)
+            ):
                 raise GearoptError(
                     f"FlankMap.{name}", rule="must be increasing with a uniform step"
                 )

@@ -8,6 +8,7 @@ touches storage; a bad design is an outcome (``error``), not an exception.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import tempfile
@@ -89,14 +90,17 @@ def _patterns(label: str, evaluation) -> list[tuple]:
 
 
 def _settings(design) -> list[tuple[str, str, float]]:
-
-    settings = get_machine_model(design.model).basic_settings(design).as_dict()
-    return [
-        (member, key, float(value))
-        for member in ("pinion", "gear")
-        for key, value in settings[member].items()
-        if isinstance(value, int | float) and not isinstance(value, bool)
-    ]
+    """Rows of the settings table: each member's scalar settings (the numbers of
+    :meth:`~gearopt.machine.MachineSettings.as_dict`, read off the fields without its copies)."""
+    settings = get_machine_model(design.model).basic_settings(design)
+    rows = []
+    for member in ("pinion", "gear"):
+        of = getattr(settings, member)
+        for f in dataclasses.fields(of):
+            value = getattr(of, f.name)
+            if isinstance(value, int | float) and not isinstance(value, bool):
+                rows.append((member, f.name, float(value)))
+    return rows
 
 
 def _figures(spec: StudySpec, design, evaluations) -> list[tuple[str, bytes]]:

@@ -1,7 +1,9 @@
-"""The zones' scans in whole-array numpy (:meth:`gearopt.mesh.zone.Zones.exits` and
-:meth:`~gearopt.mesh.zone.Zones.pattern_exits` before their compiled kernels,
-:func:`gearopt.contact.zone_kernels.union_exits` and
-:func:`~gearopt.contact.zone_kernels.swept_exits`):
+"""The zones' scans in whole-array numpy (:meth:`gearopt.mesh.zone.Zones.exits`,
+:meth:`~gearopt.mesh.zone.Zones.pattern_exits` and
+:meth:`~gearopt.mesh.zone.Zones.point_separations` before their compiled kernels,
+:func:`gearopt.contact.zone_kernels.union_exits`,
+:func:`~gearopt.contact.zone_kernels.swept_exits` and
+:func:`~gearopt.contact.zone_kernels.separations`):
 every sample of every ray evaluated through :meth:`gearopt.mesh.zone.Zones.along` (the
 engine's point clearance, itself the numpy reference under :func:`tests.numpy_engine.install`).
 Kept for the kernels' parity test; production code never imports this module.
@@ -15,13 +17,24 @@ from numpy.typing import NDArray
 from gearopt.mesh.zone import NEAR, SCAN, SPREAD, ZOOM, Zones
 
 #: the methods of :class:`gearopt.mesh.zone.Zones` this module replaces
-METHODS = {"exits": "zone_exits", "pattern_exits": "zone_pattern_exits"}
+METHODS = {
+    "exits": "zone_exits",
+    "pattern_exits": "zone_pattern_exits",
+    "point_separations": "zone_point_separations",
+}
 
 
 def install(monkeypatch) -> None:
     """Put the numpy scans in place of the zones' compiled ones."""
     for name, ours in METHODS.items():
         monkeypatch.setattr(Zones, name, globals()[ours])
+
+
+def zone_point_separations(self, r, points) -> NDArray:
+    """:meth:`gearopt.mesh.zone.Zones.point_separations` by :meth:`~gearopt.mesh.zone.Zones.
+    separation` (the engine's point clearance)."""
+    points = np.asarray(points, float).reshape(-1, 2)
+    return self.separation(np.asarray(r, np.intp), points[:, :1], points[:, 1:])[:, 0]
 
 
 def zone_exits(self, ray, r, origins, directions, reach) -> NDArray:

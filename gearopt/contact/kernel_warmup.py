@@ -78,6 +78,7 @@ def warm() -> None:
     start, pair_row, tau = np.array([0, 1], ip), np.zeros(1, ip), np.zeros((1, 2))
     rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)
     zone_kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
+    zone_kernels.separations(rows, pinion, gear, zone, pair_row, np.zeros((1, 2)), out)
     none = np.full(1, -1, ip)
     zone_kernels.swept_exits(
         rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out

@@ -20,7 +20,7 @@ import numpy as np
 from gearopt.contact.kernels import gap_of, pinion_at
 from gearopt.jit import compiled
 
-__all__ = ["swept_exits", "union_exits"]
+__all__ = ["separations", "swept_exits", "union_exits"]
 
 
 @compiled(inline=True)
@@ -265,3 +265,20 @@ def union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
                     x = 0.5 * (za + zb)
             result = math.nan if (x != x or result != result) else max(result, x)
         out[k] = result
+
+
+@compiled
+def separations(rows, pinion, gear, zone, r, points, out):
+    """:meth:`gearopt.mesh.zone.Zones.separation` of rows ``r`` ``(K,)`` at one point each,
+    ``points`` ``(K, 2)`` (face, profile), into ``out`` ``(K,)`` (+inf off the flanks): on the
+    tables the zones' other kernels take, without the rows' set-up of a clearance
+    evaluation."""
+    lag, factor, s0, ds, t0, dt, last0, last1, c = zone
+    grid = (s0, ds, t0, dt, last0, last1)
+    cells, offsets = pinion[14], rows[5]
+    for k in range(r.shape[0]):
+        row = r[k]
+        s, t = points[k, 0], points[k, 1]
+        point = pinion_at(s, t, pinion, offsets[row])
+        at = _zone_at(s, t, grid)
+        out[k] = _separation_of(rows, row, point, at, gear, cells, lag, factor)

@@ -102,9 +102,12 @@ def backlash(
     if not np.all(np.isfinite(lag)):
         raise ContactError("backlash", rule="at some positions no pair touches on the drive side")
     gear_angle = -drive.gear_sense * lag
-    phi = drive.sense * u
-    c = coast.sample(phi.ravel(), np.repeat(gear_angle, pairs)).minimum_rad.reshape(u.shape)
-    rotational = c.min(axis=1)
+    # positions a pitch apart put the same relative rotations on their pairs (the same keys
+    # in the same order): the same drive lag, the same coast configuration, sampled once
+    _, once, again = np.unique(inv.reshape(u.shape), axis=0, return_index=True, return_inverse=True)
+    phi = drive.sense * u[once]
+    c = coast.sample(phi.ravel(), np.repeat(gear_angle[once], pairs)).minimum_rad
+    rotational = c.reshape(phi.shape).min(axis=1)[again.ravel()]
     if not np.all(np.isfinite(rotational)):
         raise ContactError(
             "backlash", rule="at some positions the other flanks do not face each other"

@@ -174,6 +174,15 @@ class Zones:
         sep = (delta - self.rows.lag_rad[r][:, None]) * self.factor(r, s, h)
         return np.where(valid, sep, np.inf)
 
+    def point_separations(self, r, points) -> NDArray:
+        """:meth:`separation` of rows ``r`` ``(K,)`` at one point each, ``points`` ``(K, 2)``
+        (:func:`gearopt.contact.zone_kernels.separations`, on the zones' tables)."""
+        out = np.empty(len(points))
+        zone_kernels.separations(
+            *self.tables(), np.asarray(r, np.intp), np.ascontiguousarray(points, float), out
+        )
+        return out
+
     def quadratic(self, r, face_mm, profile_mm) -> NDArray:
         """``(K, 5)`` the clearance's local quadratic form about points ``(face_mm,
         profile_mm)`` of rows ``r``: ``(g_s, g_h, H_ss, H_sh, H_hh)`` (rad per mm, per mm^2),
@@ -421,8 +430,7 @@ class Zones:
         side's rays in one scan (the same results as one call per side, at the cost of one)."""
         rows = [np.asarray(side[0], np.intp) for side in sides]
         contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
-        every = np.concatenate(contact)
-        sep = self.separation(np.concatenate(rows), every[:, :1], every[:, 1:])[:, 0]
+        sep = self.point_separations(np.concatenate(rows), np.concatenate(contact))
         sep = np.split(sep, np.cumsum([len(r) for r in rows])[:-1])
         found = [
             self._outline_rays(r, c, g, *side[2:])
@@ -465,23 +473,27 @@ class Zones:
         inside = np.flatnonzero((sep <= self.compound_mm) & on)
         _, first = np.unique(np.round(u[inside] * 1e9), return_index=True)
         station = inside[first]  # (np.unique sorts by the rotation)
-        if station.size > STATIONS:  # evenly by rotation, both ends kept
-            station = station[
-                np.unique(np.linspace(0, station.size - 1, STATIONS).round().astype(int))
-            ]
+        if station.size > STATIONS:  # evenly by rotation, both ends kept (steps above one:
+            # the rounded indices are distinct)
+            station = station[np.linspace(0, station.size - 1, STATIONS).round().astype(np.intp)]
         if station.size < 2:
             return None
         c = contact[station]
         if tangency:
             c = self.tangency_points(rows[station], c)
-        tangent = np.gradient(c, axis=0)
+        tangent = np.empty_like(c)  # np.gradient's: central differences, one-sided at the ends
+        tangent[1:-1] = (c[2:] - c[:-2]) / 2.0
+        tangent[0], tangent[-1] = c[1] - c[0], c[-1] - c[-2]
         tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
         across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
         # rays: each station across either way, then the two ends along the path
         origins = np.concatenate([c, c, c[[0, -1]]])
         directions = np.concatenate([across, -across, [-tangent[0], tangent[-1]]])
         from_station = np.concatenate([np.arange(len(c))] * 2 + [[0, len(c) - 1]])
-        offset = np.abs(np.einsum("knd,kd->kn", contact[None, :, :] - c[:, None, :], tangent))
+        offset = np.abs(
+            (contact[None, :, 0] - c[:, None, 0]) * tangent[:, 0, None]
+            + (contact[None, :, 1] - c[:, None, 1]) * tangent[:, 1, None]
+        )
         ray, near = np.nonzero(offset[from_station] <= reach_mm)
         return (
             origins,
@@ -573,7 +585,13 @@ def extended_factors(factor_mm: NDArray) -> NDArray:
 def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
     """The rows of the same ray and tooth pair at the previous and next positions (-1
     without)."""
-    order = np.lexsort((position, key, ray))
+    ray, key, position = (np.asarray(a, np.int64) for a in (ray, key, position))
+    if len(ray):  # one stable sort of one code in the order (ray, key, position): lexsort's
+        k0, p0 = key.min(), position.min()
+        code = (ray * (key.max() - k0 + 1) + (key - k0)) * (position.max() - p0 + 1)
+        order = np.argsort(code + (position - p0), kind="stable")
+    else:
+        order = np.zeros(0, np.intp)
     same = (np.diff(ray[order]) == 0) & (np.diff(key[order]) == 0)
     step = same & (np.diff(position[order]) == 1)
     prev, nxt = np.full(len(ray), -1, np.intp), np.full(len(ray), -1, np.intp)

@@ -8,8 +8,9 @@ that a grid of a few hundred nodes costs its points rather than numpy's fixed ov
 (the numpy path makes some three hundred calls per evaluation, the solver a dozen evaluations
 per member). The numpy functions stay the reference and the complex-step path.
 
-The blade systems come as a table ``(n_systems, N_FIELDS)`` (:func:`system_table`), one row per
-system in the order of :data:`FIELDS`; ``flank`` ``(n,)`` picks each point's row.
+The blade systems come as a table (:func:`system_table`), one row per system: the columns of
+:data:`FIELDS`, then the constant sines and cosines of :data:`TRIG_FIELDS`; ``flank`` ``(n,)``
+picks each point's row.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ __all__ = [
     "meshing_jacobians",
     "newton",
     "system_table",
+    "TRIG_FIELDS",
     "warm",
 ]
 
@@ -57,8 +59,15 @@ FIELDS = (
 )
 
 
+#: the columns after :data:`FIELDS`: the sines and cosines of the pressure angle and the
+#: machine root angle, constant per system (math.sin and math.cos, the functions the kernels'
+#: own calls are: the same bits, once per system instead of at every evaluation)
+TRIG_FIELDS = ("sin_pressure", "cos_pressure", "sin_root", "cos_root")
+
+
 def system_table(systems) -> np.ndarray:
-    """``(n_systems, len(FIELDS))`` float table of blade systems (:data:`FIELDS`)."""
+    """``(n_systems, len(FIELDS) + len(TRIG_FIELDS))`` float table of blade systems
+    (:data:`FIELDS`, then :data:`TRIG_FIELDS`)."""
     rows = []
     for b in systems:
         dxd, dem, dxb = b.work_offset_mm
@@ -82,17 +91,22 @@ def system_table(systems) -> np.ndarray:
                 dxb,
                 b.phase_rad,
                 b.profile_curvature_per_mm,
+                math.sin(b.pressure_angle_rad),
+                math.cos(b.pressure_angle_rad),
+                math.sin(b.machine_root_angle_rad),
+                math.cos(b.machine_root_angle_rad),
             ]
         )
-    return np.ascontiguousarray(np.array(rows, dtype=float).reshape(-1, len(FIELDS)))
+    width = len(FIELDS) + len(TRIG_FIELDS)
+    return np.ascontiguousarray(np.array(rows, dtype=float).reshape(-1, width))
 
 
 @compiled(inline=True)
 def _edge(t, u):
     """Edge point and first u-derivatives (x_a, y_a, x_a', y_a') of row ``t`` (family.edge)."""
-    side, pressure = t[0], t[6]
+    side = t[0]
     par, apex, k = t[8], t[9], t[17]
-    sa, ca = math.sin(pressure), math.cos(pressure)
+    sa, ca = t[18], t[19]  # sin, cos of the pressure angle t[6]
     w = u - apex
     q = par * w * w
     dq = 2.0 * par * w
@@ -113,8 +127,8 @@ def _edge(t, u):
 @compiled(inline=True)
 def _edge_second(t, u):
     """Second u-derivatives (x_a'', y_a'') of row ``t`` (family.edge_second)."""
-    side, pressure, par, k = t[0], t[6], t[8], t[17]
-    sa, ca = math.sin(pressure), math.cos(pressure)
+    side, par, k = t[0], t[8], t[17]
+    sa, ca = t[18], t[19]  # sin, cos of the pressure angle t[6]
     if k == 0.0:
         return side * (-2.0 * par * ca), -2.0 * par * sa
     s, c = math.sin(k * u), math.cos(k * u)
@@ -138,8 +152,7 @@ def _components(t, u, theta, psi):
     rc = t[1]
     px, py, pz = cx + rc * s1 + xa * s2, cy - rc * c1 - xa * c2, -ya
     ux, uy, uz = dxa * s2, -dxa * c2, -dya
-    g = t[10]
-    ca, sa = math.cos(g), math.sin(g)
+    ca, sa = t[21], t[20]  # cos, sin of the machine root angle t[10]
     dxd, dem, dxb = t[13], t[14], t[15]
     ox, oy, oz = dxd * ca, dem, dxd * sa + dxb
     rx, ry, rz = px - ox, py - oy, pz - oz
@@ -500,8 +513,7 @@ def geometries(table, flank, q, point, normal):
         t = table[flank[i]]
         theta, psi = q[i, 1], q[i, 2]
         p, _, _, r_u, r_t, _, _, _ = _components(t, q[i, 0], theta, psi)
-        g = t[10]
-        sg, cg = math.sin(g), math.cos(g)
+        sg, cg = t[20], t[21]  # of the machine root angle t[10]
         psi_g = t[11] * psi - t[12] * theta  # eq 23
         cp, sp = math.cos(psi_g), math.sin(psi_g)
         dxd, dem, dxb = t[13], t[14], t[15]
@@ -535,7 +547,7 @@ def warm() -> None:
     without the kernels."""
     if not ENABLED:
         return
-    table = np.zeros((2, len(FIELDS)))
+    table = np.zeros((2, len(FIELDS) + len(TRIG_FIELDS)))
     table[:, 0], table[:, 1], table[:, 3] = 1.0, 100.0, 50.0
     table[1, 17] = 1e-3
     flank, q, u = np.array([0, 1], np.intp), np.zeros((2, 3)), np.zeros(2)
