@@ -29,6 +29,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from gearopt.determinants import det_signs
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
@@ -38,7 +39,6 @@ from gearopt.flank import (
     mirror_image,
     turned,
 )
-from gearopt.jit import ENABLED, compiled
 
 __all__ = [
     "GeneratingFamily",
@@ -47,7 +47,6 @@ __all__ = [
     "solve_envelope",
     "flank_map",
     "require_flank",
-    "warm_kernels",
 ]
 
 _H = 1e-30  # complex step
@@ -210,55 +209,6 @@ def _newton(family, q, flank, big_l, big_r, *, tol, max_iter, give_up=(3, 1e-6),
     return q, f, jac, np.isfinite(norm) & (norm <= tol), iterations
 
 
-def _det_signs(jac: NDArray) -> NDArray:
-    """``np.sign(np.linalg.det(jac))`` of Jacobians ``(..., 3, 3)``, compiled when the kernels
-    are (:func:`_det_signs_kernel`), without numpy's cost per matrix."""
-    if not ENABLED:
-        return np.sign(np.linalg.det(jac))
-    flat = np.ascontiguousarray(jac, float).reshape(-1, 3, 3)
-    out = np.empty(len(flat))
-    _det_signs_kernel(flat, out)
-    return out.reshape(jac.shape[:-2])
-
-
-@compiled
-def _det_signs_kernel(jac, out):
-    """The signs of the determinants of ``jac`` ``(n, 3, 3)`` into ``out``, as numpy's det
-    has them: LAPACK's LU with partial pivoting (the first largest pivot; the multipliers by
-    the pivot's reciprocal), the sign the row swaps' times the pivots' (0 with a zero pivot,
-    NaN with a NaN)."""
-    for k in range(jac.shape[0]):
-        a00, a01, a02 = jac[k, 0, 0], jac[k, 0, 1], jac[k, 0, 2]
-        a10, a11, a12 = jac[k, 1, 0], jac[k, 1, 1], jac[k, 1, 2]
-        a20, a21, a22 = jac[k, 2, 0], jac[k, 2, 1], jac[k, 2, 2]
-        sign = 1.0
-        if abs(a10) > abs(a00) and abs(a10) >= abs(a20):
-            a00, a01, a02, a10, a11, a12 = a10, a11, a12, a00, a01, a02
-            sign = -sign
-        elif abs(a20) > abs(a00) and abs(a20) > abs(a10):
-            a00, a01, a02, a20, a21, a22 = a20, a21, a22, a00, a01, a02
-            sign = -sign
-        if a00 != 0.0:
-            r = 1.0 / a00
-            l1, l2 = a10 * r, a20 * r
-            a11, a12 = a11 - l1 * a01, a12 - l1 * a02
-            a21, a22 = a21 - l2 * a01, a22 - l2 * a02
-        if abs(a21) > abs(a11):
-            a11, a12, a21, a22 = a21, a22, a11, a12
-            sign = -sign
-        if a11 != 0.0:
-            a22 = a22 - a21 * (1.0 / a11) * a12
-        for d in (a00, a11, a22):
-            sign = sign * (1.0 if d > 0.0 else (-1.0 if d < 0.0 else (0.0 if d == 0.0 else d)))
-        out[k] = sign
-
-
-def warm_kernels() -> None:
-    """Compile the solver's own kernel (:func:`_det_signs`), or load it from numba's disk
-    cache, in this process (:func:`gearopt.warmup.warm_kernels`). Nothing without kernels."""
-    _det_signs(np.eye(3)[None])
-
-
 def _predictor(family, jac, sg, cg):
     """d q / d h ``(n, 3)`` along the profile at fixed face position, from Jacobians ``jac``.
 
@@ -341,7 +291,7 @@ def solve_envelope(
             f"{s[bad % n_f]:.3f} mm (Newton did not converge): the machine settings do not "
             "generate this flank",
         )
-    sign0 = _det_signs(jac0).reshape(k, n_f)
+    sign0 = det_signs(jac0).reshape(k, n_f)
     # every node at once from a second-order predictor along the profile (the curvature of
     # q(h) by a difference of the first-order predictor over a short step eps)
     dq_dh = _predictor(family, jac0, sg, cg)
@@ -369,7 +319,7 @@ def solve_envelope(
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
     j0 = int(np.argmin(np.abs(h)))
-    det = _det_signs(jac)  # (the determinants' signs: all the solver reads of them)
+    det = det_signs(jac)  # (the determinants' signs: all the solver reads of them)
     good = converged & (det == sign0[..., None])
     toward = np.where(np.arange(n_p) > j0, -1, np.where(np.arange(n_p) < j0, 1, 0))
     neighbour = np.broadcast_to(np.arange(n_p) + toward, shape)
@@ -390,7 +340,7 @@ def solve_envelope(
         iterations = max(iterations, it)
         sel = (fk[ok], fi[ok], pj[ok])
         q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
-        det[sel] = _det_signs(jr[ok])
+        det[sel] = det_signs(jr[ok])
     unfolded = det == sign0[..., None]
     good = converged & unfolded
     # on the sheet: connected to the pitch row through good nodes of the column

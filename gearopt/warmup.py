@@ -9,7 +9,7 @@ import sys
 import threading
 import time
 
-from gearopt import envelope, flank
+from gearopt import determinants, flank
 from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
@@ -46,7 +46,7 @@ def warm_kernels(*, announce: bool = True) -> float:
         timer.start()
     try:
         flank.warm_kernels()
-        envelope.warm_kernels()
+        determinants.warm_kernels()
         contact_kernels.warm()
         mesh_kernels.warm()
         loaded_kernels.warm()

@@ -57,6 +57,7 @@ LAYERS = (
             "gearopt.kinematics",
             "gearopt.solve",
             "gearopt.jit",
+            "gearopt.determinants",
         ),
     ),
     (
