@@ -324,7 +324,14 @@ class MeshCycle:
         )
         pinion = self.fields[0].pinion
         contact = np.array([[x.contact_face_mm[r], x.contact_profile_mm[r]] for x, r in samples])
-        zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
+        zones = Zones(
+            self.joint,
+            pinion.face_mm,
+            pinion.profile_mm,
+            rows,
+            self.compound_um * 1e-3,
+            owned=True,  # (the factors stacked for them)
+        )
         return zones, contact
 
     def beyond_requests(self) -> list[tuple[int, float]]:
@@ -492,7 +499,14 @@ class MeshCycle:
             ),
             factor_mm=_gathered_factors(lines, counts),
         )
-        zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
+        zones = Zones(
+            self.joint,
+            pinion.face_mm,
+            pinion.profile_mm,
+            rows,
+            self.compound_um * 1e-3,
+            owned=True,  # (the factors gathered for them)
+        )
         first = np.cumsum([0] + [3 + n for n in counts])[:-1]
         mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])

@@ -5,7 +5,8 @@ temporary of every position's nodes at each step (:func:`gearopt.mesh.pattern.se
 :func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and two steps of
 a side's mesh cycle on its few dozen samples, where numpy's per-call overhead outweighs the
 work: the contact interval's run of interior samples (:func:`interior_run`) and the crossing
-of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`).
+of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`); and the
+zones' node factors continued below the generated boundary (:func:`extend_factors`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "crossing_root", "interior_run", "pattern_fields", "warm"]
+__all__ = ["ENABLED", "crossing_root", "extend_factors", "interior_run", "pattern_fields", "warm"]
 
 
 @compiled
@@ -215,6 +216,26 @@ def crossing_root(v, lag, edge, near, centres, step, half):
     return b
 
 
+@compiled
+def extend_factors(f):
+    """Node factors ``f`` ``(R, n_f, n_p)`` (0 off the generated nodes; in place): in each face
+    column whose lowest generated node (the first factor above 0) has a node below it and one
+    above it, the node below continued linearly from that node and the one above, where the one
+    above is generated, else given that node's factor
+    (:func:`gearopt.mesh.zone.extended_factors`)."""
+    rows, n_f, n_p = f.shape
+    for r in range(rows):
+        for i in range(n_f):
+            low = -1
+            for j in range(n_p):
+                if f[r, i, j] > 0.0:
+                    low = j
+                    break
+            if low >= 1 and low + 1 < n_p:
+                above = f[r, i, low + 1]
+                f[r, i, low - 1] = 2.0 * f[r, i, low] - above if above > 0.0 else f[r, i, low]
+
+
 def warm() -> None:
     """Compile the kernels, or load them from the disk cache (as
     :func:`gearopt.contact.kernel_warmup.warm`); nothing without them."""
@@ -225,5 +246,6 @@ def warm() -> None:
         one, one, index, np.zeros(1), index, 1.0, np.zeros(1), np.zeros(1), one.copy(), np.empty(3)
     )
     interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
+    extend_factors(np.zeros((1, 1, 3)))
     four = np.arange(4.0)
     crossing_root(four, four, four > 9.0, np.zeros((2, 4), np.intp), np.zeros(2), 1.0, 1.0)
