@@ -436,12 +436,14 @@ class MeshCycle:
         f_refine += [True] * (len(probes) + len(beyond))
         n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for side in self.sides:
-            for request in side.take_requests():
-                n_side.append(side.index)
-                n_v.append(request.v)
-                n_s.append(request.face)
-                n_h.append(request.profile)
-                owners.append((side, request.tag))
+            requests = side.take_requests()
+            if requests:
+                v, face, profile, tags = zip(*requests, strict=True)
+                n_side += [side.index] * len(requests)
+                n_v += v
+                n_s += face
+                n_h += profile
+                owners += [(side, tag) for tag in tags]
         f_side = np.array(f_side, np.intp)
         f_phi = sense[f_side] * np.array(f_v)
         f_refine = np.array(f_refine, bool)

@@ -6,6 +6,8 @@ Definitions: :mod:`gearopt.mesh`.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -208,11 +210,13 @@ class SideCycle:
         self.end_face, self.end_profile = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
         self.interval = (float(self.end_inside[0]), float(self.end_inside[1]))
         parts = 2**BISECTIONS
-        for e in np.flatnonzero(self.end_open):
-            a, b = self.end_inside[e], self.end_outside[e]
-            s, h = self.end_face[e], self.end_profile[e]
-            for j in range(1, parts):
-                self.requests.append(Request(a + (b - a) * j / parts, s, h, ("ci", e, j)))
+        inside, outside = self.end_inside.tolist(), self.end_outside.tolist()
+        faces, profiles = self.end_face.tolist(), self.end_profile.tolist()
+        for e in np.flatnonzero(self.end_open).tolist():
+            a, b, s, h = inside[e], outside[e], faces[e], profiles[e]
+            self.requests += [
+                Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
+            ]
 
     def interval_finish(self) -> None:
         """Bisect each open bracket on the answers of its candidate points, then move it to the
@@ -228,7 +232,7 @@ class SideCycle:
             for _ in range(BISECTIONS):
                 m = (ja + jb) // 2
                 value, s1, h1, edge = self.answers[("ci", e, m)]
-                if np.isfinite(value) and not edge:
+                if math.isfinite(value) and not edge:
                     ja = m
                     self.end_face[e], self.end_profile[e] = s1, h1
                 else:
