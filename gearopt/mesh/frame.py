@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gearopt.contact import ClearanceField, FieldSample
-from gearopt.flank_jet import FlankJet, cross
+from gearopt.flank_jet import FlankJet
 
 __all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
 
@@ -149,7 +149,24 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
     mid = 0.5 * (points[0] + points[1])
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
-    _, p_s, p_h, *_ = FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
+    p_s, p_h = _tangents(FlankJet(field.gear), float(s2), float(h2))
     return path_angle(
-        points[1] - points[0], cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+        points[1] - points[0], _cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
     )
+
+
+def _tangents(jet: FlankJet, s: float, h: float):
+    """The flank's tangents ``(p_s, p_h)`` at ``(s, h)`` (:meth:`FlankJet.surface`'s, its
+    vector arithmetic on Python floats, component by component)."""
+    theta, t_s, t_h, *_ = jet.polar(s, h)
+    sg, cg = jet.sg, jet.cg
+    big_r = s * sg + h * cg
+    ca, sa = math.cos(theta + 0.0), math.sin(theta + 0.0)
+    r_s, r_h = big_r * t_s, big_r * t_h
+    p_s = (sg * ca + r_s * -sa + cg * 0.0, sg * sa + r_s * ca + cg * 0.0, sg * 0.0 + r_s * 0.0 + cg)
+    p_h = (cg * ca + r_h * -sa - sg * 0.0, cg * sa + r_h * ca - sg * 0.0, cg * 0.0 + r_h * 0.0 - sg)
+    return p_s, p_h
+
+
+def _cross(a, b) -> tuple[float, float, float]:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
