@@ -291,10 +291,10 @@ class SideCycle:
             col_i = [[c for c, x in enumerate(row) if x == leave - 1] for row in rows]
             if any(not c for c in col_l + col_i):
                 continue
-            with np.errstate(invalid="ignore"):  # inf - inf where a pair is off the flanks
-                d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
-                d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
-            finite = np.isfinite(d_lo) and np.isfinite(d_hi)
+            # (Python floats: inf - inf, where a pair is off the flanks, is NaN without a warning)
+            d_lo = float(g[k, col_l[0][0]]) - float(g[k, col_i[0][0]])
+            d_hi = float(g[k + 1, col_l[1][0]]) - float(g[k + 1, col_i[1][0]])
+            finite = math.isfinite(d_lo) and math.isfinite(d_hi)
             if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
                 lo, hi = t[k] + leave * pitch, t[k + 1] + leave * pitch
                 cs, ch = self.cs, self.ch
