@@ -265,20 +265,20 @@ class MeshCycle:
         ends of that range (a contact still inside the flanks there would cut the contact
         interval short), all sides in one call; the sides start anew on it."""
         t, p1, step = self.t, self.pitch, self.step
-        windows, rows_side, rows_u = [], [], []
+        windows, rows_side, rows_u, start = [], [], [], 0
         for k in range(len(self.fields)):
             ids = np.round((centres[k] - t) / p1)[:, None] + self.windows[k][None, :]
             u = t[:, None] + ids * p1  # (n, pairs): each pair's base-pair relative rotation
             key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
             _, first, inv = np.unique(key, return_index=True, return_inverse=True)
             uu = u.ravel()[first]
-            ext = np.concatenate([uu.min() - step * EXTEND, uu.max() + step * EXTEND])
-            windows.append((u, ids, inv, len(rows_u), len(first)))
-            rows_side += [k] * (len(first) + len(ext))
-            rows_u += list(uu) + list(ext)
-        side_rows = np.array(rows_side, np.intp)
+            rows_u += [uu, uu.min() - step * EXTEND, uu.max() + step * EXTEND]
+            windows.append((u, ids, inv, start, len(first)))
+            start += len(first) + 2 * len(EXTEND)
+            rows_side.append(np.full(len(first) + 2 * len(EXTEND), k, np.intp))
+        side_rows = np.concatenate(rows_side)
         self.ends = {}
-        main = self.joint.sample(side_rows, self.sense[side_rows] * np.array(rows_u))
+        main = self.joint.sample(side_rows, self.sense[side_rows] * np.concatenate(rows_u))
         self.sides = [
             SideCycle(
                 k,
