@@ -344,7 +344,9 @@ class HandOver:
 
     def interpolated(self, pair: int, x: float) -> float:
         """The lag of ``pair`` at ``x``: the parabola through its three nearest samples."""
-        near = sorted(self.samples[pair], key=lambda s: abs(s[0] - x))[:3]
+        samples = self.samples[pair]
+        far = np.abs(np.array([s[0] for s in samples]) - x)
+        near = [samples[k] for k in np.argsort(far, kind="stable")[:3].tolist()]
         z, c = newton_form([s[0] for s in near], [s[1] for s in near])
         return newton_value(z, c, x)
 
@@ -432,16 +434,18 @@ def inverse_root(bracket, trail, count: int) -> float | None:
     ``(a, b, d_a, d_b)`` and the ``count`` points of ``trail`` (``(x, d)`` rows) nearest the
     bracket outside its ends, or None (too few such points, or D's values not distinct)."""
     a, b, d_a, d_b = bracket
-    others = sorted(
-        ((x, d) for x, d in trail if x != a and x != b),
-        key=lambda p: min(abs(p[0] - a), abs(p[0] - b)),
-    )[:count]
+    if not trail:
+        return None
+    x, d = (np.array(column, float) for column in zip(*trail, strict=True))
+    keep = np.flatnonzero((x != a) & (x != b))
+    far = np.minimum(np.abs(x[keep] - a), np.abs(x[keep] - b))
+    others = keep[np.argsort(far, kind="stable")[:count]]  # (the first of equals first)
     if len(others) < count:
         return None
-    d = [d_a, d_b] + [p[1] for p in others]
+    d = [d_a, d_b] + d[others].tolist()
     if len(set(d)) < len(d):
         return None
-    z, c = newton_form(d, [a, b] + [p[0] for p in others])
+    z, c = newton_form(d, [a, b] + x[others].tolist())
     return newton_value(z, c, 0.0)
 
 
