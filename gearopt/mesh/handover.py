@@ -264,21 +264,21 @@ class HandOver:
         self.steps += 1
         a, b, d_a, d_b, low_a, low_b = self.bracket
         points = [(a, d_a, low_a, self.end_lags[0])]
-        with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
-            for j, x in enumerate(self.xs):
-                g = []
-                for pair in (0, 1):
-                    value = got.get(("ho", pair, j))
-                    if value is None:
-                        value = self.interpolated(pair, x)
-                    elif np.isfinite(value):
-                        self.samples[pair].append((x, float(value)))
-                    g.append(float(value))
-                d = g[0] - g[1]
-                if np.isfinite(d):
-                    self.trail.append((x, d))
-                if a < x < b and not np.isnan(d):
-                    points.append((x, d, min(g), tuple(g)))
+        # (on Python floats: inf - inf, both off the flanks, is NaN without a warning)
+        for j, x in enumerate(self.xs):
+            g = []
+            for pair in (0, 1):
+                value = got.get(("ho", pair, j))
+                if value is None:
+                    value = self.interpolated(pair, x)
+                elif math.isfinite(value):
+                    self.samples[pair].append((x, float(value)))
+                g.append(float(value))
+            d = g[0] - g[1]
+            if math.isfinite(d):
+                self.trail.append((x, d))
+            if a < x < b and d == d:  # (not NaN)
+                points.append((x, d, min(g), tuple(g)))
         points.append((b, d_b, low_b, self.end_lags[1]))
         for (x0, d0, l0, e0), (x1, d1, l1, e1) in zip(points[:-1], points[1:], strict=True):
             if d0 <= 0.0 < d1 or d1 == 0.0:
