@@ -609,11 +609,13 @@ class ContactEngine:
         _kernels.clearance_at(constants, points, *self.cell_tables(generated), delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None, known=()):
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
         on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
         also :meth:`near` of those rows in the same refinement: ``(sample, near)``. The node
-        fields, then the minima in compiled calls (:mod:`gearopt.contact.minima`)."""
+        fields, then the minima in compiled calls (:mod:`gearopt.contact.minima`). ``known``:
+        ``(rows, sample, its rows)`` triples, rows whose node fields an earlier sample holds
+        (:meth:`known_fields`)."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         n = len(phi)
         m = 0 if near is None else np.size(near[1])
@@ -627,18 +629,24 @@ class ContactEngine:
         rows = row_constants(self._row_maker(), side_all, phi_all, angle_all)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
         gear, pinion, counts = self.kernel_tables
-        _kernels.node_fields(
-            rows,
-            side_all,
-            counts,
-            self.node_index,
-            self.node_xy,
-            self.node_z,
-            self.node_nxy,
-            self.node_nz,
-            gear,
-            out,
-        )
+        new = self.known_fields(out, known)
+        # the node fields of the other rows (a row's depend on it alone)
+        part = out if new is None else np.empty((3, len(new), out.shape[2]))
+        if part.shape[1]:
+            _kernels.node_fields(
+                rows if new is None else tuple(np.take(a, new, axis=-1) for a in rows),
+                side_all if new is None else side_all[new],
+                counts,
+                self.node_index,
+                self.node_xy,
+                self.node_z,
+                self.node_nxy,
+                self.node_nz,
+                gear,
+                part,
+            )
+        if new is not None:
+            out[:, new] = part
         point = np.empty((3, n))
         refined = np.empty(n, bool)
         refined[:] = refine
@@ -678,6 +686,21 @@ class ContactEngine:
             return sample
         k = len(origin)
         return sample, (best[k:], s[k:], h[k:], flags[k:])
+
+    @staticmethod
+    def known_fields(out, known):
+        """Copy the node fields of rows an earlier sample holds (``known``: ``(rows, sample,
+        its rows)`` triples) into ``out`` (``(3, n, nodes)``); the rows still to evaluate
+        (None: all of them)."""
+        if not known:
+            return None
+        todo = np.ones(out.shape[1], bool)
+        for rows, sample, at in known:
+            for k, name in enumerate(("clearance_rad", "normal_factor_mm", "radius_mm")):
+                source = getattr(sample, name)
+                out[k, rows] = source.reshape(len(source), -1)[at]
+            todo[rows] = False
+        return np.flatnonzero(todo)
 
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the

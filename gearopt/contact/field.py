@@ -267,14 +267,16 @@ class JointField:
             fields[0].joints[key] = joint
         return joint
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None):
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None, known=()):
         """As :meth:`ClearanceField.sample`, row k on field ``side[k]``. With ``near`` =
         ``(side, phi_rad, face_mm, profile_mm)``, also :meth:`minimum_near` of those rows in
-        the same refinement (the same results, fewer calls): returns ``(sample, near)``."""
+        the same refinement (the same results, fewer calls): returns ``(sample, near)``.
+        ``known``: rows whose node fields an earlier sample of this joint field holds (the same
+        field, pinion angle and gear angle), taken from it rather than evaluated again, as
+        ``(rows, earlier sample, its rows)`` triples (the results are the same to the bit)."""
         side = np.asarray(side, np.intp)
-        if near is None:
-            return self._engine.sample(side, phi_rad, gear_angle_rad, refine)
-        return self._engine.sample(side, phi_rad, gear_angle_rad, refine, self._near_rows(near))
+        near = None if near is None else self._near_rows(near)
+        return self._engine.sample(side, phi_rad, gear_angle_rad, refine, near, known)
 
     def clearance_at_grid(
         self, side, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0, generated=False

@@ -220,6 +220,9 @@ class MeshCycle:
         self.sides: list[SideCycle] = []
         #: each side's keys and window ends (:meth:`side_ends`), by index, for the last sample
         self.ends: dict[int, tuple] = {}
+        #: the window samples and the samples of the rows beyond the windows so far (their
+        #: node fields serve a window sampled again: :meth:`known_rows`)
+        self.sampled: list[tuple[NDArray, FieldSample]] = []
 
     def run(self) -> list[ToothContact]:
         """Every side's TCA."""
@@ -277,8 +280,10 @@ class MeshCycle:
             start += len(first) + 2 * len(EXTEND)
             rows_side.append(np.full(len(first) + 2 * len(EXTEND), k, np.intp))
         side_rows = np.concatenate(rows_side)
+        phi = self.sense[side_rows] * np.concatenate(rows_u)
         self.ends = {}
-        main = self.joint.sample(side_rows, self.sense[side_rows] * np.concatenate(rows_u))
+        main = self.joint.sample(side_rows, phi, known=self.known_rows(side_rows, phi))
+        self.sampled.append((side_rows, main))
         self.sides = [
             SideCycle(
                 k,
@@ -295,6 +300,28 @@ class MeshCycle:
             for k, (u, ids, inv, start, count) in enumerate(windows)
         ]
         self.classify()
+
+    def known_rows(self, side_rows: NDArray, phi: NDArray) -> list[tuple]:
+        """The rows (side ``side_rows[r]``, pinion angle ``phi[r]``) of a window sample whose
+        node fields an earlier sample of :attr:`sampled` holds, as
+        :meth:`gearopt.contact.JointField.sample` takes them (``known``): a window sampled
+        again (re-centred or widened) evaluates only its new rows' node fields."""
+        where: dict[tuple, tuple[int, int]] = {}
+        for h, (sides, earlier) in enumerate(self.sampled):
+            keys = zip(sides.tolist(), earlier.phi_rad.tolist(), strict=True)
+            for r, key in enumerate(keys):
+                where.setdefault(key, (h, r))
+        found: dict[int, tuple[list, list]] = {}
+        for r, key in enumerate(zip(side_rows.tolist(), phi.tolist(), strict=True)):
+            at = where.get(key)
+            if at is not None:
+                rows, earlier_rows = found.setdefault(at[0], ([], []))
+                rows.append(r)
+                earlier_rows.append(at[1])
+        return [
+            (np.array(rows, np.intp), self.sampled[h][1], np.array(at, np.intp))
+            for h, (rows, at) in found.items()
+        ]
 
     def classify(self) -> None:
         """Tell the point contacts among the sides whose lag is flat over their interior
@@ -473,7 +500,11 @@ class MeshCycle:
                 sample.edge[row],
             )
         start += len(probes)
-        return sample_rows(sample, slice(start, None)) if beyond else None
+        if not beyond:
+            return None
+        more = sample_rows(sample, slice(start, None))
+        self.sampled.append((f_side[start:], more))
+        return more
 
     def contacts(self, parts) -> list[ToothContact]:
         """The ToothContacts of the sides' parts (:meth:`SideCycle.assemble`), every side's
