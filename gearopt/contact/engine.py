@@ -28,6 +28,9 @@ from gearopt.flank import hermite_cells
 __all__ = ["ContactEngine", "EngineRows", "node_tables", "remembered_tables"]
 
 _HEAP = {"kept": False}
+#: the least rows of a sample whose node fields are remembered and recalled
+#: (:meth:`ContactEngine.recall`): a mesh cycle's window, not its few extra rows
+RECALL_ROWS = 32
 #: the flank-only tables of the last few fields and engines (:func:`remembered_tables`)
 _REMEMBERED: list[tuple[str, tuple, object]] = []
 
@@ -298,6 +301,10 @@ class ContactEngine:
         self.tol_rad = np.array([f.edge_tolerance_um * 1e-3 for f in fields]) / scale
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         self.tolerances = np.stack([self.tol_rad, self.tol_um])
+        #: whether samples recall node fields (:meth:`recall`), and the last large sample's
+        #: rows (by side, pinion angle, gear angle) and node fields
+        self.recalling = False
+        self.last_sample: tuple[dict, np.ndarray] | None = None
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -609,13 +616,13 @@ class ContactEngine:
         _kernels.clearance_at(constants, points, *self.cell_tables(generated), delta, valid)
         return delta.reshape(shape), valid.reshape(shape)
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None, known=()):
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, refine=True, near=None):
         """The clearance field at the nodes for rows (side, phi, gear angle), minima refined
         on the rows ``refine`` selects; with ``near`` = ``(side, phi, s, h)`` (gear angle 0),
         also :meth:`near` of those rows in the same refinement: ``(sample, near)``. The node
-        fields, then the minima in compiled calls (:mod:`gearopt.contact.minima`). ``known``:
-        ``(rows, sample, its rows)`` triples, rows whose node fields an earlier sample holds
-        (:meth:`known_fields`)."""
+        fields (a row's depend on it alone: those of a large sample's rows that the last large
+        sample holds are taken from it, :meth:`recall`), then the minima in compiled calls
+        (:mod:`gearopt.contact.minima`)."""
         phi = np.atleast_1d(np.asarray(phi_rad, float))
         n = len(phi)
         m = 0 if near is None else np.size(near[1])
@@ -629,8 +636,7 @@ class ContactEngine:
         rows = row_constants(self._row_maker(), side_all, phi_all, angle_all)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
         gear, pinion, counts = self.kernel_tables
-        new = self.known_fields(out, known)
-        # the node fields of the other rows (a row's depend on it alone)
+        new = self.recall(side_all[:n], phi, angle_all[:n], out)
         part = out if new is None else np.empty((3, len(new), out.shape[2]))
         if part.shape[1]:
             _kernels.node_fields(
@@ -687,20 +693,25 @@ class ContactEngine:
         k = len(origin)
         return sample, (best[k:], s[k:], h[k:], flags[k:])
 
-    @staticmethod
-    def known_fields(out, known):
-        """Copy the node fields of rows an earlier sample holds (``known``: ``(rows, sample,
-        its rows)`` triples) into ``out`` (``(3, n, nodes)``); the rows still to evaluate
-        (None: all of them)."""
+    def recall(self, side, phi, angle, out):
+        """While :attr:`recalling` (a mesh cycle's run), the node fields of a sample of at
+        least :data:`RECALL_ROWS` rows (its window, sampled again where it is re-centred or
+        widened): those of its rows (side, pinion angle, gear angle) that the last such sample
+        holds are copied into ``out`` (``(3, n, nodes)``), and this sample is remembered in its
+        place. Returns the rows still to evaluate (None: all of them)."""
+        if not self.recalling or len(phi) < RECALL_ROWS:
+            return None
+        keys = list(zip(side.tolist(), phi.tolist(), angle.tolist(), strict=True))
+        last, self.last_sample = self.last_sample, ({key: r for r, key in enumerate(keys)}, out)
+        if last is None:
+            return None
+        where, fields = last
+        at = [where.get(key, -1) for key in keys]
+        known = [r for r, a in enumerate(at) if a >= 0]
         if not known:
             return None
-        todo = np.ones(out.shape[1], bool)
-        for rows, sample, at in known:
-            for k, name in enumerate(("clearance_rad", "normal_factor_mm", "radius_mm")):
-                source = getattr(sample, name)
-                out[k, rows] = source.reshape(len(source), -1)[at]
-            todo[rows] = False
-        return np.flatnonzero(todo)
+        out[:, known] = fields[:, [at[r] for r in known]]
+        return np.flatnonzero(np.array(at) < 0)
 
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the

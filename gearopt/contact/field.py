@@ -35,6 +35,8 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -267,16 +269,27 @@ class JointField:
             fields[0].joints[key] = joint
         return joint
 
-    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None, known=()):
+    def sample(self, side, phi_rad, gear_angle_rad=0.0, *, refine=True, near=None):
         """As :meth:`ClearanceField.sample`, row k on field ``side[k]``. With ``near`` =
         ``(side, phi_rad, face_mm, profile_mm)``, also :meth:`minimum_near` of those rows in
-        the same refinement (the same results, fewer calls): returns ``(sample, near)``.
-        ``known``: rows whose node fields an earlier sample of this joint field holds (the same
-        field, pinion angle and gear angle), taken from it rather than evaluated again, as
-        ``(rows, earlier sample, its rows)`` triples (the results are the same to the bit)."""
+        the same refinement (the same results, fewer calls): returns ``(sample, near)``."""
         side = np.asarray(side, np.intp)
-        near = None if near is None else self._near_rows(near)
-        return self._engine.sample(side, phi_rad, gear_angle_rad, refine, near, known)
+        if near is None:
+            return self._engine.sample(side, phi_rad, gear_angle_rad, refine)
+        return self._engine.sample(side, phi_rad, gear_angle_rad, refine, self._near_rows(near))
+
+    @contextmanager
+    def recalling(self):
+        """A context in which a sample of many rows (a mesh cycle's window) takes the node
+        fields of the rows that the last such sample holds rather than evaluating them again
+        (a row's node fields depend on it alone: the same results, to the bit;
+        :meth:`gearopt.contact.engine.ContactEngine.recall`); nothing is kept after it."""
+        engine = self._engine
+        engine.recalling, engine.last_sample = True, None
+        try:
+            yield self
+        finally:
+            engine.recalling, engine.last_sample = False, None
 
     def clearance_at_grid(
         self, side, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0, generated=False

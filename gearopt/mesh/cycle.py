@@ -220,12 +220,15 @@ class MeshCycle:
         self.sides: list[SideCycle] = []
         #: each side's keys and window ends (:meth:`side_ends`), by index, for the last sample
         self.ends: dict[int, tuple] = {}
-        #: the window samples and the samples of the rows beyond the windows so far (their
-        #: node fields serve a window sampled again: :meth:`known_rows`)
-        self.sampled: list[tuple[NDArray, FieldSample]] = []
 
     def run(self) -> list[ToothContact]:
-        """Every side's TCA."""
+        """Every side's TCA (a window sampled again takes the node fields of the rows sampled
+        before: :meth:`gearopt.contact.JointField.recalling`)."""
+        with self.joint.recalling():
+            return self.cycle()
+
+    def cycle(self) -> list[ToothContact]:
+        """:meth:`run`'s rounds."""
         n_sides = len(self.fields)
         # the contact intervals' ends (bisection on the edge flag, its candidate points
         # evaluated at once), the first hand-over evaluations and, where the hand-over is
@@ -282,8 +285,7 @@ class MeshCycle:
         side_rows = np.concatenate(rows_side)
         phi = self.sense[side_rows] * np.concatenate(rows_u)
         self.ends = {}
-        main = self.joint.sample(side_rows, phi, known=self.known_rows(side_rows, phi))
-        self.sampled.append((side_rows, main))
+        main = self.joint.sample(side_rows, phi)
         self.sides = [
             SideCycle(
                 k,
@@ -300,28 +302,6 @@ class MeshCycle:
             for k, (u, ids, inv, start, count) in enumerate(windows)
         ]
         self.classify()
-
-    def known_rows(self, side_rows: NDArray, phi: NDArray) -> list[tuple]:
-        """The rows (side ``side_rows[r]``, pinion angle ``phi[r]``) of a window sample whose
-        node fields an earlier sample of :attr:`sampled` holds, as
-        :meth:`gearopt.contact.JointField.sample` takes them (``known``): a window sampled
-        again (re-centred or widened) evaluates only its new rows' node fields."""
-        where: dict[tuple, tuple[int, int]] = {}
-        for h, (sides, earlier) in enumerate(self.sampled):
-            keys = zip(sides.tolist(), earlier.phi_rad.tolist(), strict=True)
-            for r, key in enumerate(keys):
-                where.setdefault(key, (h, r))
-        found: dict[int, tuple[list, list]] = {}
-        for r, key in enumerate(zip(side_rows.tolist(), phi.tolist(), strict=True)):
-            at = where.get(key)
-            if at is not None:
-                rows, earlier_rows = found.setdefault(at[0], ([], []))
-                rows.append(r)
-                earlier_rows.append(at[1])
-        return [
-            (np.array(rows, np.intp), self.sampled[h][1], np.array(at, np.intp))
-            for h, (rows, at) in found.items()
-        ]
 
     def classify(self) -> None:
         """Tell the point contacts among the sides whose lag is flat over their interior
@@ -500,11 +480,7 @@ class MeshCycle:
                 sample.edge[row],
             )
         start += len(probes)
-        if not beyond:
-            return None
-        more = sample_rows(sample, slice(start, None))
-        self.sampled.append((f_side[start:], more))
-        return more
+        return sample_rows(sample, slice(start, None)) if beyond else None
 
     def contacts(self, parts) -> list[ToothContact]:
         """The ToothContacts of the sides' parts (:meth:`SideCycle.assemble`), every side's

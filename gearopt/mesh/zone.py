@@ -48,7 +48,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import JointField, zone_kernels
-from gearopt.contact import kernels as contact_kernels
 from gearopt.mesh import kernels
 
 __all__ = [
@@ -156,17 +155,11 @@ class Zones:
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
         """``(clearance_rad, valid)`` of rows ``r`` ``(K,)`` at grid points ``(K, M)`` (valid up
-        to the pinion's generated boundary): :meth:`gearopt.contact.JointField.clearance_at_grid`
-        row by row, in one compiled call on the rows' constants (:meth:`tables`)."""
-        constants, pinion, gear, _ = self.tables()
-        r = np.asarray(r, np.intp)
-        shape = np.broadcast_shapes(np.shape(s), np.shape(h), (len(r), 1))
-        points = np.empty((2,) + shape)
-        points[0], points[1] = s, h
-        delta, valid = np.empty(shape), np.empty(shape, bool)
-        rows = tuple(np.take(a, r, axis=-1) for a in constants)
-        contact_kernels.clearance_at(rows, points, pinion, gear, delta, valid)
-        return delta, valid
+        to the pinion's generated boundary)."""
+        rows = self.rows
+        return self.joint.clearance_at_grid(
+            rows.side[r][:, None], s, h, rows.phi_rad[r][:, None], generated=True
+        )
 
     def factor(self, r, s, h) -> NDArray:
         """The node factor of rows ``r`` ``(K,)`` interpolated bilinearly at ``(K, M)``."""
