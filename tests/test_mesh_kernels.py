@@ -1,8 +1,9 @@
 """The mesh cycle's compiled steps (:mod:`gearopt.mesh.kernels`) against the Python they replaced
 (kept here as their reference): the hand-over guess's crossing against the cubics in Newton's
 form and the Illinois method on Python floats, on the same four samples a pair; the contact
-interval's run against the run search on numpy arrays; both to the last bit, compiled and as
-plain Python.
+interval's run against the run search on numpy arrays; the zones' node factors continued below
+the generated boundary against the numpy steps they replaced; all to the last bit, compiled and
+as plain Python.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from gearopt.mesh.handover import newton_form, newton_value
 
 VARIANTS = [kernels.crossing_root, getattr(kernels.crossing_root, "py_func", None)]
 RUNS = [kernels.interior_run, getattr(kernels.interior_run, "py_func", None)]
+EXTENDS = [kernels.extend_factors, getattr(kernels.extend_factors, "py_func", None)]
 
 
 def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):
@@ -108,3 +110,37 @@ def test_interior_run_is_the_run_search(run):
         assert (lo, hi) == want[:2]
         if lo >= 0:
             assert spread == want[2]
+
+
+def numpy_extended(factor_mm):
+    """The node factors with the node below each column's lowest generated node continued
+    linearly from the two above it, by numpy array steps (a copy)."""
+    f = np.array(factor_mm, float)
+    n_p = f.shape[-1]
+    gen = f > 0.0
+    low = np.argmax(gen, axis=-1)
+    r, i = np.nonzero((low >= 1) & (low + 1 < n_p) & gen.any(axis=-1))
+    j = low[r, i]
+    above = f[r, i, j + 1]
+    f[r, i, j - 1] = np.where(above > 0.0, 2.0 * f[r, i, j] - above, f[r, i, j])
+    return f
+
+
+@pytest.mark.parametrize("extend", [f for f in EXTENDS if f is not None])
+def test_extend_factors_is_the_numpy_steps(extend):
+    rng = np.random.default_rng(19)
+    changed = 0
+    for _ in range(50):
+        rows, n_f, n_p = (int(k) for k in rng.integers(1, 9, 3))
+        f = rng.uniform(10.0, 60.0, (rows, n_f, n_p))
+        # generated from a random lowest node up (none, all, or the top one alone), some
+        # nodes above it off the flank too
+        low = rng.integers(0, n_p + 1, (rows, n_f))
+        f[np.arange(n_p)[None, None, :] < low[..., None]] = 0.0
+        f[rng.random(f.shape) < 0.1] = 0.0
+        want = numpy_extended(f)
+        got = f.copy()
+        extend(got)
+        assert np.array_equal(got, want)
+        changed += int(np.sum(got != f))
+    assert changed > 100  # nodes continued, not only copies
