@@ -317,8 +317,8 @@ class HandOver:
         # the inverse interpolants through the bracket's ends and one, then two more points:
         # the second's root, guarded as far as the two roots differ
         secant = a - d_a * w / (d_b - d_a)
-        roots = [inverse_root(self.bracket[:4], self.trail, count) for count in (1, 2)]
-        roots = [secant] + [x for x in roots if x is not None and a < x < b]
+        roots = kernels.inverse_roots(*map(float, (a, b, d_a, d_b)), np.array(self.trail, float))
+        roots = [secant] + [x for x in roots if a < x < b]  # (NaN: none)
         x = roots[-1]
         error = abs(x - roots[-2]) if len(roots) > 1 else 0.005 * w
         guard = max(2.0 * error, 0.25 * TOLERANCE_RAD) * (10.0 if retry else 1.0)
@@ -344,11 +344,7 @@ class HandOver:
 
     def interpolated(self, pair: int, x: float) -> float:
         """The lag of ``pair`` at ``x``: the parabola through its three nearest samples."""
-        samples = self.samples[pair]
-        far = np.abs(np.array([s[0] for s in samples]) - x)
-        near = [samples[k] for k in np.argsort(far, kind="stable")[:3].tolist()]
-        z, c = newton_form([s[0] for s in near], [s[1] for s in near])
-        return newton_value(z, c, x)
+        return kernels.nearest_parabola(np.array(self.samples[pair], float), float(x))
 
     def flat_requests(self, x, pitch: float) -> list[Request]:
         """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from
@@ -431,22 +427,14 @@ def newton_value(z: list, c: list, x: float) -> float:
 
 def inverse_root(bracket, trail, count: int) -> float | None:
     """The root of the inverse interpolant (x as a polynomial of D) through the bracket's ends
-    ``(a, b, d_a, d_b)`` and the ``count`` points of ``trail`` (``(x, d)`` rows) nearest the
-    bracket outside its ends, or None (too few such points, or D's values not distinct)."""
-    a, b, d_a, d_b = bracket
+    ``(a, b, d_a, d_b)`` and the ``count`` (1 or 2) points of ``trail`` (``(x, d)`` rows)
+    nearest the bracket outside its ends, or None (too few such points, or D's values not
+    distinct): :func:`gearopt.mesh.kernels.inverse_roots`."""
+    a, b, d_a, d_b = (float(v) for v in bracket)
     if not trail:
         return None
-    x, d = (np.array(column, float) for column in zip(*trail, strict=True))
-    keep = np.flatnonzero((x != a) & (x != b))
-    far = np.minimum(np.abs(x[keep] - a), np.abs(x[keep] - b))
-    others = keep[np.argsort(far, kind="stable")[:count]]  # (the first of equals first)
-    if len(others) < count:
-        return None
-    d = [d_a, d_b] + d[others].tolist()
-    if len(set(d)) < len(d):
-        return None
-    z, c = newton_form(d, [a, b] + x[others].tolist())
-    return newton_value(z, c, 0.0)
+    root = kernels.inverse_roots(a, b, d_a, d_b, np.array(trail, float))[count - 1]
+    return None if math.isnan(root) else root
 
 
 def parabola(xa: float, xb: float, ya: float, y0: float, yb: float):
