@@ -471,14 +471,22 @@ class MeshCycle:
             count = 3 if side.near_extras else 6
             side.take_extras(sample_rows(sample, slice(start, start + count)))
             start += count
-        for k, (side, _, tag) in enumerate(probes):  # filed like the requests' answers
-            row = first_probe + k
-            side.answers[tag] = (
-                sample.minimum_rad[row],
-                sample.contact_face_mm[row],
-                sample.contact_profile_mm[row],
-                sample.edge[row],
+        if probes:  # filed like the requests' answers
+            at = slice(first_probe, first_probe + len(probes))
+            answers = zip(
+                *(
+                    a[at].tolist()
+                    for a in (
+                        sample.minimum_rad,
+                        sample.contact_face_mm,
+                        sample.contact_profile_mm,
+                        sample.edge,
+                    )
+                ),
+                strict=True,
             )
+            for (side, _, tag), answer in zip(probes, answers, strict=True):
+                side.answers[tag] = answer
         start += len(probes)
         return sample_rows(sample, slice(start, None)) if beyond else None
 
