@@ -109,6 +109,7 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
 
 
 def _dot(a, b) -> float:
+    """``a . b`` of two 3-vectors, the products summed in order."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
@@ -118,6 +119,7 @@ def _minus(a, k: float, b) -> tuple[float, float, float]:
 
 
 def _unit(x: float, y: float, z: float) -> tuple[float, float, float]:
+    """``(x, y, z)`` over its length (``numpy.linalg.norm``'s: the root of the dot product)."""
     norm = math.sqrt(x * x + y * y + z * z)
     return (x / norm, y / norm, z / norm)
 
@@ -169,4 +171,5 @@ def _tangents(jet: FlankJet, s: float, h: float):
 
 
 def _cross(a, b) -> tuple[float, float, float]:
+    """``a x b`` of two 3-vectors (:func:`gearopt.flank_jet.cross`'s arithmetic)."""
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
