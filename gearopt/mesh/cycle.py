@@ -329,17 +329,16 @@ class MeshCycle:
             lag_rad=np.array([x.minimum_rad[r] for x, r in samples]),
             factor_mm=np.stack([getattr(x, kind)[r] for x, r in samples]),
         )
-        pinion = self.fields[0].pinion
         contact = np.array([[x.contact_face_mm[r], x.contact_profile_mm[r]] for x, r in samples])
-        zones = Zones(
-            self.joint,
-            pinion.face_mm,
-            pinion.profile_mm,
-            rows,
-            self.compound_um * 1e-3,
-            owned=True,  # (the factors stacked for them)
+        return self.zones(rows), contact
+
+    def zones(self, rows: ZoneRows) -> Zones:
+        """The zones of ``rows`` (:class:`gearopt.mesh.zone.Zones`), their node factors a copy
+        made for them (extended in place)."""
+        pinion = self.fields[0].pinion
+        return Zones(
+            self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3, owned=True
         )
-        return zones, contact
 
     def beyond_requests(self) -> list[tuple[int, float]]:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the
@@ -516,14 +515,7 @@ class MeshCycle:
             ),
             factor_mm=_gathered_factors(lines, counts),
         )
-        zones = Zones(
-            self.joint,
-            pinion.face_mm,
-            pinion.profile_mm,
-            rows,
-            self.compound_um * 1e-3,
-            owned=True,  # (the factors gathered for them)
-        )
+        zones = self.zones(rows)
         first = np.cumsum([0] + [3 + n for n in counts])[:-1]
         mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])
