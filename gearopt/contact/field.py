@@ -36,6 +36,7 @@ contact). Separations for the pattern: the angular clearance above the minimum t
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 
 import numpy as np
 from numpy.typing import NDArray
@@ -304,6 +305,19 @@ class JointField:
         if near is None:
             return self._engine.sample(side, phi_rad, gear_angle_rad, refine)
         return self._engine.sample(side, phi_rad, gear_angle_rad, refine, self._near_rows(near))
+
+    @contextmanager
+    def recalling(self):
+        """A context in which a sample of many rows (a mesh cycle's window) takes the node
+        fields of the rows that the last such sample holds rather than evaluating them again
+        (a row's node fields depend on it alone: the same results, to the bit;
+        :meth:`gearopt.contact.engine.ContactEngine.recall`); nothing is kept after it."""
+        engine = self._engine
+        engine.recalling, engine.last_sample = True, None
+        try:
+            yield self
+        finally:
+            engine.recalling, engine.last_sample = False, None
 
     def clearance_at_grid(
         self, side, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0, generated=False

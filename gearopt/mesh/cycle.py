@@ -222,7 +222,13 @@ class MeshCycle:
         self.ends: dict[int, tuple] = {}
 
     def run(self) -> list[ToothContact]:
-        """Every side's TCA."""
+        """Every side's TCA (a window sampled again takes the node fields of the rows sampled
+        before: :meth:`gearopt.contact.JointField.recalling`)."""
+        with self.joint.recalling():
+            return self.cycle()
+
+    def cycle(self) -> list[ToothContact]:
+        """:meth:`run`'s rounds."""
         n_sides = len(self.fields)
         # the contact intervals' ends (bisection on the edge flag, its candidate points
         # evaluated at once), the first hand-over evaluations and, where the hand-over is
@@ -265,20 +271,21 @@ class MeshCycle:
         ends of that range (a contact still inside the flanks there would cut the contact
         interval short), all sides in one call; the sides start anew on it."""
         t, p1, step = self.t, self.pitch, self.step
-        windows, rows_side, rows_u = [], [], []
+        windows, rows_side, rows_u, start = [], [], [], 0
         for k in range(len(self.fields)):
             ids = np.round((centres[k] - t) / p1)[:, None] + self.windows[k][None, :]
             u = t[:, None] + ids * p1  # (n, pairs): each pair's base-pair relative rotation
             key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
             _, first, inv = np.unique(key, return_index=True, return_inverse=True)
             uu = u.ravel()[first]
-            ext = np.concatenate([uu.min() - step * EXTEND, uu.max() + step * EXTEND])
-            windows.append((u, ids, inv, len(rows_u), len(first)))
-            rows_side += [k] * (len(first) + len(ext))
-            rows_u += list(uu) + list(ext)
-        side_rows = np.array(rows_side, np.intp)
+            rows_u += [uu, uu.min() - step * EXTEND, uu.max() + step * EXTEND]
+            windows.append((u, ids, inv, start, len(first)))
+            start += len(first) + 2 * len(EXTEND)
+            rows_side.append(np.full(len(first) + 2 * len(EXTEND), k, np.intp))
+        side_rows = np.concatenate(rows_side)
+        phi = self.sense[side_rows] * np.concatenate(rows_u)
         self.ends = {}
-        main = self.joint.sample(side_rows, self.sense[side_rows] * np.array(rows_u))
+        main = self.joint.sample(side_rows, phi)
         self.sides = [
             SideCycle(
                 k,
@@ -322,10 +329,16 @@ class MeshCycle:
             lag_rad=np.array([x.minimum_rad[r] for x, r in samples]),
             factor_mm=np.stack([getattr(x, kind)[r] for x, r in samples]),
         )
-        pinion = self.fields[0].pinion
         contact = np.array([[x.contact_face_mm[r], x.contact_profile_mm[r]] for x, r in samples])
-        zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
-        return zones, contact
+        return self.zones(rows), contact
+
+    def zones(self, rows: ZoneRows) -> Zones:
+        """The zones of ``rows`` (:class:`gearopt.mesh.zone.Zones`), their node factors a copy
+        made for them (extended in place)."""
+        pinion = self.fields[0].pinion
+        return Zones(
+            self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3, owned=True
+        )
 
     def beyond_requests(self) -> list[tuple[int, float]]:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the
@@ -429,12 +442,14 @@ class MeshCycle:
         f_refine += [True] * (len(probes) + len(beyond))
         n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for side in self.sides:
-            for request in side.take_requests():
-                n_side.append(side.index)
-                n_v.append(request.v)
-                n_s.append(request.face)
-                n_h.append(request.profile)
-                owners.append((side, request.tag))
+            requests = side.take_requests()
+            if requests:
+                v, face, profile, tags = zip(*requests, strict=True)
+                n_side += [side.index] * len(requests)
+                n_v += v
+                n_s += face
+                n_h += profile
+                owners += [(side, tag) for tag in tags]
         f_side = np.array(f_side, np.intp)
         f_phi = sense[f_side] * np.array(f_v)
         f_refine = np.array(f_refine, bool)
@@ -455,14 +470,22 @@ class MeshCycle:
             count = 3 if side.near_extras else 6
             side.take_extras(sample_rows(sample, slice(start, start + count)))
             start += count
-        for k, (side, _, tag) in enumerate(probes):  # filed like the requests' answers
-            row = first_probe + k
-            side.answers[tag] = (
-                sample.minimum_rad[row],
-                sample.contact_face_mm[row],
-                sample.contact_profile_mm[row],
-                sample.edge[row],
+        if probes:  # filed like the requests' answers
+            at = slice(first_probe, first_probe + len(probes))
+            answers = zip(
+                *(
+                    a[at].tolist()
+                    for a in (
+                        sample.minimum_rad,
+                        sample.contact_face_mm,
+                        sample.contact_profile_mm,
+                        sample.edge,
+                    )
+                ),
+                strict=True,
             )
+            for (side, _, tag), answer in zip(probes, answers, strict=True):
+                side.answers[tag] = answer
         start += len(probes)
         return sample_rows(sample, slice(start, None)) if beyond else None
 
@@ -492,7 +515,7 @@ class MeshCycle:
             ),
             factor_mm=_gathered_factors(lines, counts),
         )
-        zones = Zones(self.joint, pinion.face_mm, pinion.profile_mm, rows, self.compound_um * 1e-3)
+        zones = self.zones(rows)
         first = np.cumsum([0] + [3 + n for n in counts])[:-1]
         mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gearopt.contact import ClearanceField, FieldSample
-from gearopt.flank_jet import FlankJet, cross
+from gearopt.flank_jet import FlankJet
 
 __all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
 
@@ -91,23 +91,37 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
     float
         The angle in degrees, range (-90, 90].
     """
-    n = np.asarray(normal, float)
-    n = n / np.linalg.norm(n)
+    # (on Python floats: the products summed in order, as numpy's dot of 3-vectors)
+    n = _unit(*(float(a) for a in normal))
     theta = math.atan2(point[1], point[0])
-    e_r = np.array([math.cos(theta), math.sin(theta), 0.0])
-    e_z = np.array([0.0, 0.0, 1.0])
-    along = math.sin(root_angle_rad) * e_r + math.cos(root_angle_rad) * e_z
-    up = math.cos(root_angle_rad) * e_r - math.sin(root_angle_rad) * e_z
-    along = along - (along @ n) * n
-    along /= np.linalg.norm(along)
-    up = up - (up @ n) * n - (up @ along) * along
-    up /= np.linalg.norm(up)
-    t = np.asarray(tangent, float)
-    t = t - (t @ n) * n
-    if t @ along < 0.0:
-        t = -t
-    angle = math.degrees(math.atan2(t @ up, t @ along))
+    c_r, s_r = math.cos(theta), math.sin(theta)
+    sin_g, cos_g = math.sin(root_angle_rad), math.cos(root_angle_rad)
+    along = (sin_g * c_r + cos_g * 0.0, sin_g * s_r + cos_g * 0.0, sin_g * 0.0 + cos_g * 1.0)
+    up = (cos_g * c_r - sin_g * 0.0, cos_g * s_r - sin_g * 0.0, cos_g * 0.0 - sin_g * 1.0)
+    along = _unit(*_minus(along, _dot(along, n), n))
+    up = _unit(*_minus(_minus(up, _dot(up, n), n), _dot(up, along), along))
+    t = tuple(float(a) for a in tangent)
+    t = _minus(t, _dot(t, n), n)
+    if _dot(t, along) < 0.0:
+        t = (-t[0], -t[1], -t[2])
+    angle = math.degrees(math.atan2(_dot(t, up), _dot(t, along)))
     return 90.0 if angle <= -90.0 + 1e-12 else angle
+
+
+def _dot(a, b) -> float:
+    """``a . b`` of two 3-vectors, the products summed in order."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _minus(a, k: float, b) -> tuple[float, float, float]:
+    """``a - k b``."""
+    return (a[0] - k * b[0], a[1] - k * b[1], a[2] - k * b[2])
+
+
+def _unit(x: float, y: float, z: float) -> tuple[float, float, float]:
+    """``(x, y, z)`` over its length (``numpy.linalg.norm``'s: the root of the dot product)."""
+    norm = math.sqrt(x * x + y * y + z * z)
+    return (x / norm, y / norm, z / norm)
 
 
 def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -> float:
@@ -137,7 +151,25 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
     mid = 0.5 * (points[0] + points[1])
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
-    _, p_s, p_h, *_ = FlankJet(field.gear).surface(float(s2), float(h2), 0.0)
+    p_s, p_h = _tangents(FlankJet(field.gear), float(s2), float(h2))
     return path_angle(
-        points[1] - points[0], cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+        points[1] - points[0], _cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
     )
+
+
+def _tangents(jet: FlankJet, s: float, h: float):
+    """The flank's tangents ``(p_s, p_h)`` at ``(s, h)`` (:meth:`FlankJet.surface`'s, its
+    vector arithmetic on Python floats, component by component)."""
+    theta, t_s, t_h, *_ = jet.polar(s, h)
+    sg, cg = jet.sg, jet.cg
+    big_r = s * sg + h * cg
+    ca, sa = math.cos(theta + 0.0), math.sin(theta + 0.0)
+    r_s, r_h = big_r * t_s, big_r * t_h
+    p_s = (sg * ca + r_s * -sa + cg * 0.0, sg * sa + r_s * ca + cg * 0.0, sg * 0.0 + r_s * 0.0 + cg)
+    p_h = (cg * ca + r_h * -sa - sg * 0.0, cg * sa + r_h * ca - sg * 0.0, cg * 0.0 + r_h * 0.0 - sg)
+    return p_s, p_h
+
+
+def _cross(a, b) -> tuple[float, float, float]:
+    """``a x b`` of two 3-vectors (:func:`gearopt.flank_jet.cross`'s arithmetic)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])

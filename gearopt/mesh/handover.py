@@ -264,21 +264,21 @@ class HandOver:
         self.steps += 1
         a, b, d_a, d_b, low_a, low_b = self.bracket
         points = [(a, d_a, low_a, self.end_lags[0])]
-        with np.errstate(invalid="ignore"):  # inf - inf: both off the flanks
-            for j, x in enumerate(self.xs):
-                g = []
-                for pair in (0, 1):
-                    value = got.get(("ho", pair, j))
-                    if value is None:
-                        value = self.interpolated(pair, x)
-                    elif np.isfinite(value):
-                        self.samples[pair].append((x, float(value)))
-                    g.append(float(value))
-                d = g[0] - g[1]
-                if np.isfinite(d):
-                    self.trail.append((x, d))
-                if a < x < b and not np.isnan(d):
-                    points.append((x, d, min(g), tuple(g)))
+        # (on Python floats: inf - inf, both off the flanks, is NaN without a warning)
+        for j, x in enumerate(self.xs):
+            g = []
+            for pair in (0, 1):
+                value = got.get(("ho", pair, j))
+                if value is None:
+                    value = self.interpolated(pair, x)
+                elif math.isfinite(value):
+                    self.samples[pair].append((x, float(value)))
+                g.append(float(value))
+            d = g[0] - g[1]
+            if math.isfinite(d):
+                self.trail.append((x, d))
+            if a < x < b and d == d:  # (not NaN)
+                points.append((x, d, min(g), tuple(g)))
         points.append((b, d_b, low_b, self.end_lags[1]))
         for (x0, d0, l0, e0), (x1, d1, l1, e1) in zip(points[:-1], points[1:], strict=True):
             if d0 <= 0.0 < d1 or d1 == 0.0:
@@ -317,8 +317,8 @@ class HandOver:
         # the inverse interpolants through the bracket's ends and one, then two more points:
         # the second's root, guarded as far as the two roots differ
         secant = a - d_a * w / (d_b - d_a)
-        roots = [inverse_root(self.bracket[:4], self.trail, count) for count in (1, 2)]
-        roots = [secant] + [x for x in roots if x is not None and a < x < b]
+        roots = kernels.inverse_roots(*map(float, (a, b, d_a, d_b)), np.array(self.trail, float))
+        roots = [secant] + [x for x in roots if a < x < b]  # (NaN: none)
         x = roots[-1]
         error = abs(x - roots[-2]) if len(roots) > 1 else 0.005 * w
         guard = max(2.0 * error, 0.25 * TOLERANCE_RAD) * (10.0 if retry else 1.0)
@@ -344,9 +344,7 @@ class HandOver:
 
     def interpolated(self, pair: int, x: float) -> float:
         """The lag of ``pair`` at ``x``: the parabola through its three nearest samples."""
-        near = sorted(self.samples[pair], key=lambda s: abs(s[0] - x))[:3]
-        z, c = newton_form([s[0] for s in near], [s[1] for s in near])
-        return newton_value(z, c, x)
+        return kernels.nearest_parabola(np.array(self.samples[pair], float), float(x))
 
     def flat_requests(self, x, pitch: float) -> list[Request]:
         """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from
@@ -429,20 +427,14 @@ def newton_value(z: list, c: list, x: float) -> float:
 
 def inverse_root(bracket, trail, count: int) -> float | None:
     """The root of the inverse interpolant (x as a polynomial of D) through the bracket's ends
-    ``(a, b, d_a, d_b)`` and the ``count`` points of ``trail`` (``(x, d)`` rows) nearest the
-    bracket outside its ends, or None (too few such points, or D's values not distinct)."""
-    a, b, d_a, d_b = bracket
-    others = sorted(
-        ((x, d) for x, d in trail if x != a and x != b),
-        key=lambda p: min(abs(p[0] - a), abs(p[0] - b)),
-    )[:count]
-    if len(others) < count:
+    ``(a, b, d_a, d_b)`` and the ``count`` (1 or 2) points of ``trail`` (``(x, d)`` rows)
+    nearest the bracket outside its ends, or None (too few such points, or D's values not
+    distinct): :func:`gearopt.mesh.kernels.inverse_roots`."""
+    a, b, d_a, d_b = (float(v) for v in bracket)
+    if not trail:
         return None
-    d = [d_a, d_b] + [p[1] for p in others]
-    if len(set(d)) < len(d):
-        return None
-    z, c = newton_form(d, [a, b] + [p[0] for p in others])
-    return newton_value(z, c, 0.0)
+    root = kernels.inverse_roots(a, b, d_a, d_b, np.array(trail, float))[count - 1]
+    return None if math.isnan(root) else root
 
 
 def parabola(xa: float, xb: float, ya: float, y0: float, yb: float):

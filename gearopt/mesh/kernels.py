@@ -5,7 +5,10 @@ temporary of every position's nodes at each step (:func:`gearopt.mesh.pattern.se
 :func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and two steps of
 a side's mesh cycle on its few dozen samples, where numpy's per-call overhead outweighs the
 work: the contact interval's run of interior samples (:func:`interior_run`) and the crossing
-of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`).
+of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`), and its
+iteration's interpolants on the samples so far (:func:`nearest_parabola`,
+:func:`inverse_roots`); and the zones' node factors continued below the generated boundary
+(:func:`extend_factors`).
 """
 
 from __future__ import annotations
@@ -16,7 +19,16 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "crossing_root", "interior_run", "pattern_fields", "warm"]
+__all__ = [
+    "ENABLED",
+    "crossing_root",
+    "extend_factors",
+    "interior_run",
+    "inverse_roots",
+    "nearest_parabola",
+    "pattern_fields",
+    "warm",
+]
 
 
 @compiled
@@ -215,6 +227,98 @@ def crossing_root(v, lag, edge, near, centres, step, half):
     return b
 
 
+@compiled
+def extend_factors(f):
+    """Node factors ``f`` ``(R, n_f, n_p)`` (0 off the generated nodes; in place): in each face
+    column whose lowest generated node (the first factor above 0) has a node below it and one
+    above it, the node below continued linearly from that node and the one above, where the one
+    above is generated, else given that node's factor
+    (:func:`gearopt.mesh.zone.extended_factors`)."""
+    rows, n_f, n_p = f.shape
+    for r in range(rows):
+        for i in range(n_f):
+            low = -1
+            for j in range(n_p):
+                if f[r, i, j] > 0.0:
+                    low = j
+                    break
+            if low >= 1 and low + 1 < n_p:
+                above = f[r, i, low + 1]
+                f[r, i, low - 1] = 2.0 * f[r, i, low] - above if above > 0.0 else f[r, i, low]
+
+
+@compiled
+def _newton_at(z, c, m, x):
+    """The polynomial through the points ``(z[:m], c[:m])`` at ``x``: divided differences (in
+    ``c``) and nested multiplication, as :func:`gearopt.mesh.handover.newton_form` and
+    :func:`~gearopt.mesh.handover.newton_value` on Python floats."""
+    for j in range(1, m):
+        for i in range(m - 1, j - 1, -1):
+            c[i] = (c[i] - c[i - 1]) / (z[i] - z[i - j])
+    value = c[m - 1]
+    for i in range(m - 2, -1, -1):
+        value = value * (x - z[i]) + c[i]
+    return value
+
+
+@compiled
+def _insert(key, i, keys, rows, m):
+    """Insert row ``i`` with ``key`` into the ``m`` least ``keys`` so far (ascending, the first
+    of equals first: a stable sort's order), keeping at most ``len(keys)``; the new count."""
+    size = keys.shape[0]
+    if m == size and not key < keys[size - 1]:
+        return m
+    c = m if m < size else size - 1
+    while c > 0 and key < keys[c - 1]:
+        keys[c], rows[c] = keys[c - 1], rows[c - 1]
+        c -= 1
+    keys[c], rows[c] = key, i
+    return m + 1 if m < size else m
+
+
+@compiled
+def nearest_parabola(samples, x):
+    """The lag of a hand-over's pair at ``x``: the parabola through the three of its samples
+    ``(x, lag)`` (rows of ``samples``) nearest ``x`` (the first of equals first)
+    (:meth:`gearopt.mesh.handover.HandOver.interpolated`)."""
+    keys, rows = np.empty(3), np.empty(3, np.intp)
+    m = 0
+    for i in range(samples.shape[0]):
+        m = _insert(abs(samples[i, 0] - x), i, keys, rows, m)
+    z, c = np.empty(m), np.empty(m)
+    for k in range(m):
+        z[k], c[k] = samples[rows[k], 0], samples[rows[k], 1]
+    return _newton_at(z, c, m, x)
+
+
+@compiled
+def inverse_roots(a, b, d_a, d_b, trail):
+    """The roots of the inverse interpolants (x as a polynomial of D) through a bracket's ends
+    ``(a, d_a)``, ``(b, d_b)`` and the one, then the two points of ``trail`` (rows ``(x, D)``)
+    nearest the bracket (by the lesser distance to its ends; the first of equals first; none
+    at an end): ``(root, root)``, NaN where too few points or D's values not distinct
+    (:func:`gearopt.mesh.handover.inverse_root`)."""
+    keys, rows = np.empty(2), np.empty(2, np.intp)
+    m = 0
+    for i in range(trail.shape[0]):
+        x = trail[i, 0]
+        if x != a and x != b:
+            m = _insert(min(abs(x - a), abs(x - b)), i, keys, rows, m)
+    roots = np.full(2, math.nan)
+    for count in range(1, m + 1):
+        z, c = np.empty(2 + count), np.empty(2 + count)
+        z[0], z[1], c[0], c[1] = d_a, d_b, a, b
+        for k in range(count):
+            z[2 + k], c[2 + k] = trail[rows[k], 1], trail[rows[k], 0]
+        distinct = True
+        for p in range(2 + count):
+            for q in range(p):
+                distinct = distinct and z[p] != z[q]
+        if distinct:
+            roots[count - 1] = _newton_at(z, c, 2 + count, 0.0)
+    return roots[0], roots[1]
+
+
 def warm() -> None:
     """Compile the kernels, or load them from the disk cache (as
     :func:`gearopt.contact.kernel_warmup.warm`); nothing without them."""
@@ -225,5 +329,8 @@ def warm() -> None:
         one, one, index, np.zeros(1), index, 1.0, np.zeros(1), np.zeros(1), one.copy(), np.empty(3)
     )
     interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
+    extend_factors(np.zeros((1, 1, 3)))
+    nearest_parabola(np.arange(6.0).reshape(3, 2), 0.5)
+    inverse_roots(0.0, 1.0, -1.0, 1.0, np.arange(6.0).reshape(3, 2))
     four = np.arange(4.0)
     crossing_root(four, four, four > 9.0, np.zeros((2, 4), np.intp), np.zeros(2), 1.0, 1.0)

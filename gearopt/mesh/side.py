@@ -6,6 +6,8 @@ Definitions: :mod:`gearopt.mesh`.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -208,11 +210,13 @@ class SideCycle:
         self.end_face, self.end_profile = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
         self.interval = (float(self.end_inside[0]), float(self.end_inside[1]))
         parts = 2**BISECTIONS
-        for e in np.flatnonzero(self.end_open):
-            a, b = self.end_inside[e], self.end_outside[e]
-            s, h = self.end_face[e], self.end_profile[e]
-            for j in range(1, parts):
-                self.requests.append(Request(a + (b - a) * j / parts, s, h, ("ci", e, j)))
+        inside, outside = self.end_inside.tolist(), self.end_outside.tolist()
+        faces, profiles = self.end_face.tolist(), self.end_profile.tolist()
+        for e in np.flatnonzero(self.end_open).tolist():
+            a, b, s, h = inside[e], outside[e], faces[e], profiles[e]
+            self.requests += [
+                Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
+            ]
 
     def interval_finish(self) -> None:
         """Bisect each open bracket on the answers of its candidate points, then move it to the
@@ -228,7 +232,7 @@ class SideCycle:
             for _ in range(BISECTIONS):
                 m = (ja + jb) // 2
                 value, s1, h1, edge = self.answers[("ci", e, m)]
-                if np.isfinite(value) and not edge:
+                if math.isfinite(value) and not edge:
                     ja = m
                     self.end_face[e], self.end_profile[e] = s1, h1
                 else:
@@ -287,10 +291,10 @@ class SideCycle:
             col_i = [[c for c, x in enumerate(row) if x == leave - 1] for row in rows]
             if any(not c for c in col_l + col_i):
                 continue
-            with np.errstate(invalid="ignore"):  # inf - inf where a pair is off the flanks
-                d_lo = g[k, col_l[0][0]] - g[k, col_i[0][0]]
-                d_hi = g[k + 1, col_l[1][0]] - g[k + 1, col_i[1][0]]
-            finite = np.isfinite(d_lo) and np.isfinite(d_hi)
+            # (Python floats: inf - inf, where a pair is off the flanks, is NaN without a warning)
+            d_lo = float(g[k, col_l[0][0]]) - float(g[k, col_i[0][0]])
+            d_hi = float(g[k + 1, col_l[1][0]]) - float(g[k + 1, col_i[1][0]])
+            finite = math.isfinite(d_lo) and math.isfinite(d_hi)
             if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
                 lo, hi = t[k] + leave * pitch, t[k + 1] + leave * pitch
                 cs, ch = self.cs, self.ch

@@ -48,6 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import JointField, zone_kernels
+from gearopt.mesh import kernels
 
 __all__ = [
     "NEAR",
@@ -134,10 +135,18 @@ class Zones:
         The rows.
     compound_mm
         The marking compound.
+    owned
+        True where ``rows.factor_mm`` is a C-contiguous copy made for these zones: it is
+        extended in place (:func:`extended_factors`) rather than copied.
     """
 
-    def __init__(self, joint: JointField, face_mm, profile_mm, rows: ZoneRows, compound_mm):
-        rows = replace(rows, factor_mm=extended_factors(rows.factor_mm))
+    def __init__(
+        self, joint: JointField, face_mm, profile_mm, rows: ZoneRows, compound_mm, *, owned=False
+    ):
+        if owned:  # the caller's copy, extended in place
+            kernels.extend_factors(rows.factor_mm)
+        else:
+            rows = replace(rows, factor_mm=extended_factors(rows.factor_mm))
         self.joint, self.rows, self.compound_mm = joint, rows, float(compound_mm)
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
@@ -571,14 +580,8 @@ def extended_factors(factor_mm: NDArray) -> NDArray:
     runs then mixes no zero in (which shrank the separation toward the boundary by up to a
     cell's share: a pattern reaching the boundary on a coarse grid that ends above it on a
     fine one)."""
-    f = np.array(factor_mm, float)
-    n_p = f.shape[-1]
-    gen = f > 0.0
-    low = np.argmax(gen, axis=-1)
-    r, i = np.nonzero((low >= 1) & (low + 1 < n_p) & gen.any(axis=-1))
-    j = low[r, i]
-    above = f[r, i, j + 1]
-    f[r, i, j - 1] = np.where(above > 0.0, 2.0 * f[r, i, j] - above, f[r, i, j])
+    f = np.array(factor_mm, float, order="C")
+    kernels.extend_factors(f)  # (one compiled pass: :func:`gearopt.mesh.kernels.extend_factors`)
     return f
 
 
