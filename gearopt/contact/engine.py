@@ -20,6 +20,7 @@ import numpy as np
 from gearopt.contact import kernels as _kernels
 from gearopt.contact.boundary import boundary_cells
 from gearopt.contact.minima import minima_pick, minima_starts
+from gearopt.contact.recall import NodeFieldRecall
 from gearopt.contact.rows import row_constants
 from gearopt.contact.samples import FieldSample
 from gearopt.errors import GearoptError
@@ -28,9 +29,6 @@ from gearopt.flank import hermite_cells
 __all__ = ["ContactEngine", "EngineRows", "node_tables", "remembered_tables"]
 
 _HEAP = {"kept": False}
-#: the least rows of a sample whose node fields are remembered and recalled
-#: (:meth:`ContactEngine.recall`): a mesh cycle's window, not its few extra rows
-RECALL_ROWS = 32
 #: the flank-only tables of the last few fields and engines (:func:`remembered_tables`)
 _REMEMBERED: list[tuple[str, tuple, object]] = []
 
@@ -312,10 +310,8 @@ class ContactEngine:
         self.tol_um = np.array([f.edge_tolerance_um for f in fields])
         self.tolerances = np.empty((2, len(fields)))
         self.tolerances[0], self.tolerances[1] = self.tol_rad, self.tol_um
-        #: whether samples recall node fields (:meth:`recall`), and the last large sample's
-        #: rows (by side, pinion angle, gear angle) and node fields
-        self.recalling = False
-        self.last_sample: tuple[dict, np.ndarray] | None = None
+        #: the node fields a mesh cycle's window samples recall (off outside its runs)
+        self.recalled = NodeFieldRecall()
 
     def _linear_maps(self, fields) -> None:
         """The affine maps of the evaluations, folded into a few tables.
@@ -646,7 +642,7 @@ class ContactEngine:
         rows = row_constants(self._row_maker(), side_all, phi_all, angle_all)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
         gear, pinion, counts = self.kernel_tables
-        new = self.recall(side_all[:n], phi, angle_all[:n], out)
+        new = self.recalled.fill(side_all[:n], phi, angle_all[:n], out)
         part = out if new is None else np.empty((3, len(new), out.shape[2]))
         if part.shape[1]:
             _kernels.node_fields(
@@ -702,26 +698,6 @@ class ContactEngine:
             return sample
         k = len(origin)
         return sample, (best[k:], s[k:], h[k:], flags[k:])
-
-    def recall(self, side, phi, angle, out):
-        """While :attr:`recalling` (a mesh cycle's run), the node fields of a sample of at
-        least :data:`RECALL_ROWS` rows (its window, sampled again where it is re-centred or
-        widened): those of its rows (side, pinion angle, gear angle) that the last such sample
-        holds are copied into ``out`` (``(3, n, nodes)``), and this sample is remembered in its
-        place. Returns the rows still to evaluate (None: all of them)."""
-        if not self.recalling or len(phi) < RECALL_ROWS:
-            return None
-        keys = list(zip(side.tolist(), phi.tolist(), angle.tolist(), strict=True))
-        last, self.last_sample = self.last_sample, ({key: r for r, key in enumerate(keys)}, out)
-        if last is None:
-            return None
-        where, fields = last
-        at = [where.get(key, -1) for key in keys]
-        known = [r for r, a in enumerate(at) if a >= 0]
-        if not known:
-            return None
-        out[:, known] = fields[:, [at[r] for r in known]]
-        return np.flatnonzero(np.array(at) < 0)
 
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):
         """Where the tangency point leaves the flanks near pinion angle ``phi_rad`` (the

@@ -311,13 +311,13 @@ class JointField:
         """A context in which a sample of many rows (a mesh cycle's window) takes the node
         fields of the rows that the last such sample holds rather than evaluating them again
         (a row's node fields depend on it alone: the same results, to the bit;
-        :meth:`gearopt.contact.engine.ContactEngine.recall`); nothing is kept after it."""
-        engine = self._engine
-        engine.recalling, engine.last_sample = True, None
+        :mod:`gearopt.contact.recall`); nothing is kept after it."""
+        recalled = self._engine.recalled
+        recalled.switch(True)
         try:
             yield self
         finally:
-            engine.recalling, engine.last_sample = False, None
+            recalled.switch(False)
 
     def clearance_at_grid(
         self, side, face_mm, profile_mm, phi_rad, gear_angle_rad=0.0, generated=False
