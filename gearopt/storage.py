@@ -37,6 +37,7 @@ __all__ = [
     "held_reads",
     "masked_url",
     "rdb_storage",
+    "release",
     "storage_error",
     "storage_tag",
     "study_exists",
@@ -306,6 +307,14 @@ def fast_sqlite(engine: sa.Engine) -> None:
         cursor.close()
 
     engine.dispose()  # connections made before the listener get the pragmas when remade
+
+
+def release(rdb: optuna.storages.RDBStorage) -> None:
+    """Close the storage's database connections (it opens new ones when used again): a run's
+    end, so that SQLite folds its write-ahead log into the database file there and then rather
+    than whenever the interpreter collects the engine."""
+    rdb.remove_session()
+    rdb.engine.dispose()
 
 
 def held_reads(view: WorkerStorage | None):
