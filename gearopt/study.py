@@ -82,6 +82,7 @@ from gearopt.storage import (
     fast_sqlite,
     held_reads,
     masked_url,
+    one_writer,
     rdb_storage,
     release,
     storage_error,
@@ -537,6 +538,8 @@ class Coordinator:
         self.opened = _open(
             self.spec, self.url, stream, worker=self.role is not None, previous=previous
         )
+        if self.role is not None and self.role.writes:  # the run's workers write in turn
+            one_writer(self.opened.storage.engine, self.role.writes)
         self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
         self.recover(starting=True)
         self.markers = trial_markers(self.pid) if self.role is None else ""  # (a worker: none)

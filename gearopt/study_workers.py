@@ -81,6 +81,8 @@ class WorkerRole:
     owner: str  # the supervisor's id: the ``coordinator`` of the workers' gearopt rows
     previous: int = 0  # the study's trials when the run opened it (the samplers' seeds)
     lock: Any = None  # a multiprocessing Lock: one worker at a time asks Optuna for a trial
+    #: the run's lock file for the workers' database writes (:func:`gearopt.storage.one_writer`)
+    writes: str = ""
 
     @contextlib.contextmanager
     def asking(self):
@@ -199,6 +201,7 @@ class Supervisor:
             owner=c.me,
             previous=c.opened.previous,
             lock=self.lock,
+            writes=os.path.join(c.markers, "writes.lock") if c.markers else "",
         )
         limit = c.limit
         process = self.context.Process(
