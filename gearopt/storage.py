@@ -407,6 +407,11 @@ class WorkerStorage(optuna.storages.BaseStorage):
                     k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
                 }
 
+    def refresh(self) -> None:
+        """The hold's next read of the study goes to the database again: for a read that must
+        count the trials other processes created since the hold's first one."""
+        self.read.clear()
+
     def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
         trial = self.own[trial_id]
         if trial is None:

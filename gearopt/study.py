@@ -365,7 +365,10 @@ class Coordinator:
 
     def ahead(self, number: int) -> int:
         """COMPLETE and RUNNING trials numbered before ``number`` (every coordinator's): the
-        trials that come first when several coordinators ask for the last places at once."""
+        trials that come first when several coordinators ask for the last places at once;
+        read from the database, not a worker's hold (the trials created since it count)."""
+        if self.opened.view is not None:
+            self.opened.view.refresh()
         states = (TrialState.COMPLETE, TrialState.RUNNING)
         return sum(t.number < number for t in self.study.get_trials(deepcopy=False, states=states))
 
