@@ -18,6 +18,11 @@ import sqlite3
 import time
 from pathlib import Path
 
+try:
+    import fcntl
+except ImportError:  # (Windows: no file locks of this kind; SQLite's own waits remain)
+    fcntl = None
+
 import optuna
 import sqlalchemy as sa
 import sqlalchemy.exc
@@ -36,7 +41,9 @@ __all__ = [
     "fast_sqlite",
     "held_reads",
     "masked_url",
+    "one_writer",
     "rdb_storage",
+    "release",
     "storage_error",
     "storage_tag",
     "study_exists",
@@ -308,6 +315,50 @@ def fast_sqlite(engine: sa.Engine) -> None:
     engine.dispose()  # connections made before the listener get the pragmas when remade
 
 
+#: the statements that make a SQLite transaction a write transaction
+_WRITES = ("INSERT", "UPDATE", "DELETE", "REPLAC")
+
+
+def one_writer(engine: sa.Engine, lock_path: str) -> None:
+    """SQLite: the engine's write transactions in this process hold an exclusive lock on the
+    file ``lock_path`` (``flock``) from their first write until their connection goes back to
+    the pool. The supervised workers of a run share one such file, so a worker that wants to
+    write while another writes waits on the lock and wakes when the other has committed, rather
+    than in SQLite's busy handler, which sleeps 1, 2, 5, 10, ... ms between its tries: about a
+    tenth of each worker's time in a 2-job run of the example study went to those sleeps. The
+    lock goes with a process that dies. Nothing for other dialects, nor where there is no
+    ``fcntl`` (Windows)."""
+    if engine.dialect.name != "sqlite" or fcntl is None:
+        return
+    lock = os.open(lock_path, os.O_RDWR | os.O_CREAT, 0o600)
+    holders: set[int] = set()  # the pool records (their ids) in a write transaction
+
+    @sa.event.listens_for(engine, "before_cursor_execute")
+    def _take(connection, cursor, statement, parameters, context, executemany):
+        record = id(connection.info)
+        if record not in holders and statement.lstrip()[:6].upper() in _WRITES:
+            if not holders:
+                fcntl.flock(lock, fcntl.LOCK_EX)
+            holders.add(record)
+
+    def _drop(dbapi_connection, record, *_) -> None:
+        if id(record.info) in holders:
+            holders.discard(id(record.info))
+            if not holders:
+                fcntl.flock(lock, fcntl.LOCK_UN)
+
+    for event in ("checkin", "invalidate", "close"):
+        sa.event.listen(engine, event, _drop)
+
+
+def release(rdb: optuna.storages.RDBStorage) -> None:
+    """Close the storage's database connections (it opens new ones when used again): a run's
+    end, so that SQLite folds its write-ahead log into the database file there and then rather
+    than whenever the interpreter collects the engine."""
+    rdb.remove_session()
+    rdb.engine.dispose()
+
+
 def held_reads(view: WorkerStorage | None):
     """``view``'s :meth:`WorkerStorage.hold`, or nothing (None: not a supervised worker)."""
     return view.hold() if view is not None else contextlib.nullcontext()
@@ -355,6 +406,11 @@ class WorkerStorage(optuna.storages.BaseStorage):
                 self.own = {
                     k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
                 }
+
+    def refresh(self) -> None:
+        """The hold's next read of the study goes to the database again: for a read that must
+        count the trials other processes created since the hold's first one."""
+        self.read.clear()
 
     def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
         trial = self.own[trial_id]

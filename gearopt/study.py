@@ -39,10 +39,8 @@ import concurrent.futures as cf
 import contextlib
 import os
 import shutil
-import signal
 import socket
 import sys
-import threading
 import time
 import uuid
 import warnings
@@ -73,6 +71,7 @@ from gearopt.recovery import (
 )
 from gearopt.results import ResultsStore, artifact_dir, upload_figures
 from gearopt.samplers import sampler_for
+from gearopt.stops import held_stops
 from gearopt.storage import (
     WorkerStorage,
     check_integrity,
@@ -83,13 +82,17 @@ from gearopt.storage import (
     fast_sqlite,
     held_reads,
     masked_url,
+    one_writer,
     rdb_storage,
+    release,
     storage_error,
 )
 from gearopt.study_workers import supervise
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 from gearopt.warmup import warm_kernels
+
+_held_stops = held_stops  # (its former name here)
 
 __all__ = [
     "MARKERS_PREFIX",
@@ -362,7 +365,10 @@ class Coordinator:
 
     def ahead(self, number: int) -> int:
         """COMPLETE and RUNNING trials numbered before ``number`` (every coordinator's): the
-        trials that come first when several coordinators ask for the last places at once."""
+        trials that come first when several coordinators ask for the last places at once;
+        read from the database, not a worker's hold (the trials created since it count)."""
+        if self.opened.view is not None:
+            self.opened.view.refresh()
         states = (TrialState.COMPLETE, TrialState.RUNNING)
         return sum(t.number < number for t in self.study.get_trials(deepcopy=False, states=states))
 
@@ -407,7 +413,7 @@ class Coordinator:
     def ask(self) -> bool:
         """Ask a trial, suggest its parameters and send it; False when the study's places
         are taken."""
-        with _held_stops(), held_reads(self.opened.view):  # asked and in hand at once
+        with held_stops(), held_reads(self.opened.view):  # asked and in hand at once
             asking = self.role.asking() if self.role is not None else contextlib.nullcontext()
             with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
                 warnings.simplefilter("ignore", UserWarning)
@@ -442,7 +448,7 @@ class Coordinator:
                 self.role.give()
 
     def tell(self, number: int, outcome: TrialOutcome) -> None:
-        with _held_stops(), held_reads(self.opened.view):  # out of hand and told at once
+        with held_stops(), held_reads(self.opened.view):  # out of hand and told at once
             self._tell(number, outcome)
 
     def _tell(self, number: int, outcome: TrialOutcome) -> None:
@@ -508,7 +514,7 @@ class Coordinator:
     def refill(self, free: int) -> None:
         if self.suspects:
             if not self.pending:
-                with _held_stops():
+                with held_stops():
                     hand = self.suspects.pop(0)
                     self.alone.add(hand.trial.number)
                     self.submit(hand)
@@ -516,7 +522,7 @@ class Coordinator:
         # busy workers: the pending trials not finished (finished ones are told after this)
         busy = sum(not h.future.done() for h in self.pending.values())
         while self.held and busy < self.jobs:
-            with _held_stops():
+            with held_stops():
                 self.submit(self.held.pop(0))
             busy += 1
         if self.batch and self.pending and not self.held:
@@ -535,6 +541,8 @@ class Coordinator:
         self.opened = _open(
             self.spec, self.url, stream, worker=self.role is not None, previous=previous
         )
+        if self.role is not None and self.role.writes:  # the run's workers write in turn
+            one_writer(self.opened.storage.engine, self.role.writes)
         self.opened.results.heartbeat(self.me, self.spec.name, self.host, self.pid)
         self.recover(starting=True)
         self.markers = trial_markers(self.pid) if self.role is None else ""  # (a worker: none)
@@ -565,6 +573,7 @@ class Coordinator:
         complete, _ = self.counts()
         best = pick_best(self.study, self.spec) if self.role is None else None
         path = save_design(self.spec, best, self.url) if (save_best and best is not None) else None
+        release(self.opened.storage)  # (closed now, not at the interpreter's exit)
         return RunSummary(
             study=self.spec.name,
             storage=masked_url(self.url),
@@ -659,7 +668,7 @@ class Coordinator:
             if exc is None:
                 self.tell(number, future.result())
             elif isinstance(exc, Resubmit):
-                with _held_stops():
+                with held_stops():
                     self.held.append(self.pending.pop(number))
             elif broken_pool(exc):
                 broken = True
@@ -669,7 +678,7 @@ class Coordinator:
                 outcome = TrialOutcome(number=number, error=f"{type(exc).__name__}: {exc}")
                 self.tell(number, outcome)
         if broken:
-            with _held_stops():
+            with held_stops():
                 self.worker_died()
 
 
@@ -722,45 +731,6 @@ def run_study(
         scheduler=scheduler,
     )
     return coordinator.run(save_best=save_best)
-
-
-_STOPS = (signal.SIGINT, signal.SIGTERM)
-
-
-def _swap_handlers(handlers: dict) -> dict:
-    """Set the stop signals' handlers at once (both blocked meanwhile where signals can be
-    masked: a stop between the two swaps is delivered after them, to the new handler);
-    returns the previous ones (None, a handler set outside Python, as the default)."""
-    masked = hasattr(signal, "pthread_sigmask")
-    if masked:
-        mask = signal.pthread_sigmask(signal.SIG_BLOCK, _STOPS)
-    try:
-        previous = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
-    finally:
-        if masked:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-    return {sig: signal.SIG_DFL if h is None else h for sig, h in previous.items()}
-
-
-@contextlib.contextmanager
-def _held_stops():
-    """SIGINT and SIGTERM (a polite stop: Ctrl-C, a scheduler) held back while a trial changes
-    hands (asked and put in hand, or taken out of hand and told), then raised again for the
-    handlers they had: a stop then finds every trial of this coordinator either in hand (put
-    back in the queue) or finished, never RUNNING and forgotten. (Handlers, masked only while
-    they are swapped: worker processes started meanwhile must not inherit blocked signals.)
-    Off the main thread, where handlers cannot be set, nothing is held."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    previous = _swap_handlers({sig: lambda signum, _: caught.append(signum) for sig in _STOPS})
-    try:
-        yield
-    finally:
-        _swap_handlers(previous)
-        if caught:
-            signal.raise_signal(caught[0])
 
 
 def _progress(progress: bool, total: int, spec: StudySpec):

@@ -27,6 +27,7 @@ keeps the heartbeats of the workers' longer trials and watches them:
 from __future__ import annotations
 
 import contextlib
+import gc
 import multiprocessing as mp
 import multiprocessing.connection as mpc
 import os
@@ -81,6 +82,8 @@ class WorkerRole:
     owner: str  # the supervisor's id: the ``coordinator`` of the workers' gearopt rows
     previous: int = 0  # the study's trials when the run opened it (the samplers' seeds)
     lock: Any = None  # a multiprocessing Lock: one worker at a time asks Optuna for a trial
+    #: the run's lock file for the workers' database writes (:func:`gearopt.storage.one_writer`)
+    writes: str = ""
 
     @contextlib.contextmanager
     def asking(self):
@@ -117,6 +120,10 @@ class WorkerRole:
 def _worker(kind, spec: StudySpec, trials: int, url: str, role: WorkerRole, limit: int | None):
     """A worker process: one coordinator (``kind``: the supervisor's class, given rather than
     imported) on :class:`~gearopt.pools.InlineCalls`."""
+    # what it inherited (modules, kernels) left out of its garbage collections, which would
+    # otherwise go through it all and write to every page of it, shared with the supervisor
+    # until written (Python's advice for a process forked without exec)
+    gc.freeze()
     signal.signal(signal.SIGTERM, _interrupt)
     parent = os.getppid()
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
@@ -199,6 +206,7 @@ class Supervisor:
             owner=c.me,
             previous=c.opened.previous,
             lock=self.lock,
+            writes=os.path.join(c.markers, "writes.lock") if c.markers else "",
         )
         limit = c.limit
         process = self.context.Process(

@@ -119,6 +119,7 @@ LAYERS = (
             "gearopt.recovery",
             "gearopt.samplers",
             "gearopt.best",
+            "gearopt.stops",
             "gearopt.study_workers",
             "gearopt.study",
             "gearopt.export",

@@ -592,6 +592,8 @@ def test_example_study_runs_and_fills_the_dashboard_tables(tmp_path):
         timeout=600,
     )
     assert run.returncode == 0, run.stderr
+    # the run closed its connections itself: SQLite folded its write-ahead log into the file
+    assert sorted(p.name for p in tmp_path.glob("*.db*")) == ["cyclo_palloid_contact.db"]
     report = json.loads(run.stdout)
     assert report["complete"] == 4
     engine = sa.create_engine(f"sqlite:///{tmp_path / 'cyclo_palloid_contact.db'}")

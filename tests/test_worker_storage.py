@@ -5,11 +5,14 @@ suggests on Optuna's own cached storage."""
 
 from __future__ import annotations
 
+import os
+
 import optuna
+import pytest
 import sqlalchemy as sa
 from optuna.trial import TrialState
 
-from gearopt.storage import WorkerStorage
+from gearopt.storage import WorkerStorage, fast_sqlite, one_writer
 
 
 def _sampler() -> optuna.samplers.TPESampler:
@@ -85,3 +88,48 @@ def test_a_workers_holds_read_the_study_once_and_see_what_the_database_holds(tmp
     assert [t[1:] for t in held] == [t[1:] for t in plain]
     assert sum(t[1] == TrialState.COMPLETE for t in held) == 8
     rdb.engine.dispose()
+
+
+def _locked_elsewhere(path) -> bool:
+    """Whether another open file (another process's, as the kernel sees it) holds ``path``'s
+    exclusive ``flock``."""
+    fcntl = pytest.importorskip("fcntl")
+    fd = os.open(path, os.O_RDWR | os.O_CREAT)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def test_one_writer_holds_the_lock_from_the_first_write_to_the_connections_return(tmp_path):
+    """A write transaction of an engine under :func:`gearopt.storage.one_writer` holds the run's
+    lock file from its first INSERT, UPDATE or DELETE until its connection goes back to the
+    pool (after the commit), so the workers of a run write in turn; reads take no lock."""
+    pytest.importorskip("fcntl")
+    url = f"sqlite:///{tmp_path / 'w.db'}"
+    lock = tmp_path / "writes.lock"
+    engine = sa.create_engine(url)
+    fast_sqlite(engine)
+    one_writer(engine, str(lock))
+    with engine.begin() as con:
+        con.execute(sa.text("CREATE TABLE t (x INTEGER)"))
+    assert not _locked_elsewhere(lock)  # (no write statement: no lock)
+    with engine.connect() as con:
+        con.execute(sa.text("SELECT count(*) FROM t")).scalar()
+        assert not _locked_elsewhere(lock)  # a read takes none
+        con.execute(sa.text("INSERT INTO t VALUES (1)"))
+        assert _locked_elsewhere(lock)
+        con.execute(sa.text("UPDATE t SET x = 2"))
+        con.commit()
+        assert _locked_elsewhere(lock)  # until the connection is back in the pool
+    assert not _locked_elsewhere(lock)
+    with pytest.raises(sa.exc.IntegrityError), engine.begin() as con:
+        con.execute(sa.text("CREATE UNIQUE INDEX u ON t (x)"))
+        con.execute(sa.text("INSERT INTO t VALUES (2)"))  # a failed write gives it back too
+    assert not _locked_elsewhere(lock)
+    with engine.connect() as con:
+        assert con.execute(sa.text("SELECT x FROM t")).scalars().all() == [2]
+    engine.dispose()

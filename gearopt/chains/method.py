@@ -32,7 +32,6 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from gearopt.chains.machine import Machine
 from gearopt.chains.model import Element
@@ -281,11 +280,15 @@ class ChainResult:
 
     def table(self):
         """Per-element table (pandas DataFrame indexed by element), like Tables 3 and 7."""
+        import pandas as pd  # (loaded when a table is asked for: the CLI starts without it)
+
         rows = [vars(r) for r in self.elements]
         return pd.DataFrame(rows).set_index("element")
 
     def mesh_table(self):
         """Per-mesh ratios (pandas DataFrame), like Tables 4 and 8."""
+        import pandas as pd
+
         return pd.DataFrame([vars(r) for r in self.meshes])
 
     def as_dict(self, *, elements: bool = True) -> dict[str, Any]:

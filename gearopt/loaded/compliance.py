@@ -67,7 +67,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import LinAlgError, cholesky, solve_triangular
 from scipy.sparse import coo_matrix, csc_matrix
-from skfem import Basis, ElementHex2, MeshHex
 
 from gearopt.blank import Blank
 from gearopt.errors import GearoptError
@@ -174,8 +173,10 @@ class SolidModel:
         return self.stiffness.shape[0]
 
 
-def _hex_mesh(corners_mm: NDArray) -> MeshHex:
+def _hex_mesh(corners_mm: NDArray):
     """scikit-fem MeshHex of a structured ``(n1 + 1, n2 + 1, n3 + 1, 3)`` corner array."""
+    from skfem import MeshHex  # (scikit-fem loaded by a loaded contact only, not at start-up)
+
     n1, n2, n3 = (d - 1 for d in corners_mm.shape[:3])
     index = np.arange((n1 + 1) * (n2 + 1) * (n3 + 1)).reshape(n1 + 1, n2 + 1, n3 + 1)
     t = np.stack([index[a : a + n1, b : b + n2, c : c + n3].ravel() for a, b, c in _CORNERS])
@@ -187,6 +188,8 @@ def _structured_dofs(shape: tuple[int, int, int]) -> NDArray:
     """Node number of each Hex2 node ``[a, b, c]`` of a structured mesh: scikit-fem numbers
     the nodes by topology only, so a mesh in index space (corners at integers, midpoints at
     half-integers) gives the numbers for any geometry of the same connectivity."""
+    from skfem import Basis, ElementHex2
+
     n1, n2, n3 = shape
     grid = np.stack(np.meshgrid(*(np.arange(n + 1.0) for n in shape), indexing="ij"), axis=-1)
     basis = Basis(_hex_mesh(grid), ElementHex2(), intorder=1)
@@ -219,6 +222,8 @@ def solid_model(corners_mm: NDArray, material: Material) -> SolidModel:
     shape = tuple(int(d) - 1 for d in corners_mm.shape[:3])
     if corners_mm.ndim != 4 or corners_mm.shape[3] != 3 or min(shape) < 1:
         raise GearoptError("corners_mm", corners_mm.shape, "must be (n1 + 1, n2 + 1, n3 + 1, 3)")
+    from skfem import Basis, ElementHex2
+
     basis = Basis(_hex_mesh(corners_mm), ElementHex2(), intorder=_INTORDER)
     # (elements, 3 directions, 27 functions, quadrature points)
     grad = np.stack([basis.basis[k][0].grad for k in range(basis.Nbfun)], axis=1)

@@ -43,7 +43,6 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from gearopt import hookimpl
 from gearopt.chains import WorkGear, evaluate_machine, load_machine, select_change_gears
@@ -271,6 +270,8 @@ def _chain_text(name: str, out: dict[str, Any]) -> str:
         "max_rotation_deg": "max_deg",
         "min_rotation_deg": "min_deg",
     }
+    import pandas as pd  # (only here: the CLI loads every plugin at start-up)
+
     frame = pd.DataFrame(out["elements"]).set_index("element")[list(columns)]
     frame = frame.rename(columns=columns)
     lines.append(frame.to_string(float_format=lambda v: f"{v:.4f}"))
