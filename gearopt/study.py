@@ -92,8 +92,6 @@ from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 from gearopt.warmup import warm_kernels
 
-_held_stops = held_stops  # (its former name here)
-
 __all__ = [
     "MARKERS_PREFIX",
     "MAX_ATTEMPTS",

@@ -780,7 +780,7 @@ def test_a_stop_during_a_hand_over_waits_for_it():
     # a SIGTERM (or Ctrl-C) while a trial changes hands -- asked and not yet in hand, or out of
     # hand and not yet told -- would leave it RUNNING and forgotten: it is held back to the end
     # of the hand-over and then stops the coordinator as it would have
-    from gearopt.study import _held_stops
+    from gearopt.stops import held_stops
 
     def stop(signum, frame):
         raise KeyboardInterrupt
@@ -789,7 +789,7 @@ def test_a_stop_during_a_hand_over_waits_for_it():
     previous = signal.signal(signal.SIGTERM, stop)
     try:
         with pytest.raises(KeyboardInterrupt):
-            with _held_stops():
+            with held_stops():
                 os.kill(os.getpid(), signal.SIGTERM)
                 time.sleep(0.05)
                 steps.append("handed over")
