@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from gearopt.contact.boundary import BELOW_MM, REACH_MM, ROWS_ABOVE, STEP_MM
-from gearopt.flank import hermite_coefficients, polar_gradient
+from gearopt.contact.boundary import BELOW_MM, REACH_MM, ROWS_ABOVE, STEP_MM, exact_polar
+from gearopt.flank import hermite_coefficients
 
 __all__ = ["boundary_cells", "extend_down"]
 
@@ -54,14 +54,7 @@ def boundary_cells(pinion):
     geo = pinion.surface.geometry_at(s_pts, t_pts)
     point, normal = geo["point"], geo["normal"]
     near = pinion.polar_angle_local(s_pts, t_pts)
-    th = np.arctan2(point[:, 1], point[:, 0]) - near
-    th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
-    g_s, g_h = polar_gradient(
-        th, normal, np.hypot(point[:, 0], point[:, 1]), pinion.pitch_angle_deg
-    )
-    if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
-        g_s = g_s + g_h * pinion.taper.dheight_dface(t_pts)
-        g_h = g_h * pinion.taper.dheight_dprofile(s_pts)
+    th, g_s, g_h = exact_polar(pinion, point, normal, near, s_pts, t_pts)
     block = [a[cols] for a in (theta, d_s, d_h)]
     for a, value in zip(block, (th, g_s, g_h), strict=True):
         a[exact] = value

@@ -47,7 +47,7 @@ from gearopt.contact.boundary_kernels import fine_corners, fine_layout, local_th
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells, hermite_coefficients, polar_gradient
 
-__all__ = ["BELOW_MM", "STEP_MM", "boundary_cells", "band_theta"]
+__all__ = ["BELOW_MM", "STEP_MM", "boundary_cells", "band_theta", "exact_polar"]
 
 #: the fine cells' height along the profile at most (mm)
 STEP_MM = 0.1
@@ -115,14 +115,7 @@ def _made(pinion):
         s_pts,
         t_pts,
     )
-    th = np.arctan2(point[:, 1], point[:, 0]) - near
-    th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
-    g_s, g_h = polar_gradient(
-        th, normal, np.hypot(point[:, 0], point[:, 1]), pinion.pitch_angle_deg
-    )
-    if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
-        g_s = g_s + g_h * pinion.taper.dheight_dface(t_pts)
-        g_h = g_h * pinion.taper.dheight_dprofile(s_pts)
+    th, g_s, g_h = exact_polar(pinion, point, normal, near, s_pts, t_pts)
     corners = fine_corners(
         len(face),
         cols,
@@ -135,6 +128,22 @@ def _made(pinion):
     )
     coef = hermite_coefficients(*corners, np.diff(face), np.full(exact.shape[1] - 1, step))
     return band, coef
+
+
+def exact_polar(pinion, point, normal, near, s_pts, t_pts):
+    """The polar angle and its grid gradient ``(theta, d_s, d_h)`` of exact surface points
+    ``point`` (normals ``normal``) at grid coordinates ``(s_pts, t_pts)``: the angle on the
+    branch nearest ``near`` (the flank's own interpolant there), the gradient to grid
+    coordinates by the chain rule where the depth tapers."""
+    th = np.arctan2(point[:, 1], point[:, 0]) - near
+    th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
+    g_s, g_h = polar_gradient(
+        th, normal, np.hypot(point[:, 0], point[:, 1]), pinion.pitch_angle_deg
+    )
+    if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
+        g_s = g_s + g_h * pinion.taper.dheight_dface(t_pts)
+        g_h = g_h * pinion.taper.dheight_dprofile(s_pts)
+    return th, g_s, g_h
 
 
 def band_theta(coef, band, band_coef, cell, u, v):
