@@ -319,13 +319,16 @@ def _run_one(target: str) -> None:
     for part in qualname.split("."):
         function = getattr(function, part)
     ms, info = function()
-    print(json.dumps({"ms": ms, "info": info}))
+    print(json.dumps({"ms": float(ms), "cpu_ms": getattr(ms, "cpu_ms", None), "info": info}))
 
 
 def run_benchmarks(names: Iterable[str] | None = None, *, repeats: int = 5) -> dict[str, dict]:
     """Run benchmarks, each ``repeats`` times in fresh one-thread processes; report medians.
 
-    Returns ``{name: {"median_ms", "runs_ms", "info"}}``.
+    Returns ``{name: {"median_ms", "runs_ms", "median_cpu_ms", "runs_cpu_ms", "info"}}``: the
+    wall times and the process CPU times of the timed calls (:class:`gearopt.commands.CallTime`;
+    the CPU ones None for a benchmark that times itself without
+    :func:`gearopt.commands.time_call_ms`).
     """
     known = all_benchmarks()
     names = list(names or known)
@@ -334,7 +337,7 @@ def run_benchmarks(names: Iterable[str] | None = None, *, repeats: int = 5) -> d
     for name in names:
         if name not in known:
             raise GearoptError("benchmark", name, f"unknown; known: {sorted(known)}")
-        runs, info = [], {}
+        runs, cpu, info = [], [], {}
         for _ in range(repeats):
             out = subprocess.run(
                 [sys.executable, "-m", "gearopt.bench", known[name].target],
@@ -345,8 +348,16 @@ def run_benchmarks(names: Iterable[str] | None = None, *, repeats: int = 5) -> d
             )
             record = json.loads(out.stdout.strip().splitlines()[-1])
             runs.append(record["ms"])
+            cpu.append(record.get("cpu_ms"))
             info = record["info"]
-        results[name] = {"median_ms": statistics.median(runs), "runs_ms": runs, "info": info}
+        timed = None not in cpu
+        results[name] = {
+            "median_ms": statistics.median(runs),
+            "runs_ms": runs,
+            "median_cpu_ms": statistics.median(cpu) if timed else None,
+            "runs_cpu_ms": cpu if timed else None,
+            "info": info,
+        }
     return results
 
 

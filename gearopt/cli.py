@@ -350,15 +350,22 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         out[name] = result["median_ms"]
         out.update(result["info"])
     out["runs_ms"] = {name: result["runs_ms"] for name, result in results.items()}
+    out["cpu_ms"] = {name: result["median_cpu_ms"] for name, result in results.items()}
+    out["runs_cpu_ms"] = {name: result["runs_cpu_ms"] for name, result in results.items()}
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
     rows = [
-        (name, f"{r['median_ms']:.4f}", ", ".join(f"{k}={v}" for k, v in r["info"].items()))
+        (
+            name,
+            f"{r['median_ms']:.4f}",
+            "-" if r["median_cpu_ms"] is None else f"{r['median_cpu_ms']:.4f}",
+            ", ".join(f"{k}={v}" for k, v in r["info"].items()),
+        )
         for name, r in results.items()
     ]
-    print(f"medians over {args.repeats} fresh processes, 1 thread (BLAS/OpenMP)")
-    print(_table(rows, ("benchmark", "median", "conditions")))
+    print(f"medians over {args.repeats} fresh processes, 1 thread (BLAS/OpenMP); ms per call")
+    print(_table(rows, ("benchmark", "wall", "cpu", "conditions")))
     return 0
 
 

@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 
 from gearopt.errors import PluginError
 
-__all__ = ["BaseCommand", "Benchmark", "text_table", "time_call_ms"]
+__all__ = ["BaseCommand", "Benchmark", "CallTime", "text_table", "time_call_ms"]
 
 
 class BaseCommand(abc.ABC):
@@ -106,12 +106,27 @@ class Benchmark:
         return f"{self.function.__module__}:{self.function.__qualname__}"
 
 
-def time_call_ms(func: Callable[[], object], *, number: int = 1) -> float:
-    """Wall time of ``number`` calls of ``func`` divided by ``number``, in milliseconds."""
-    start = time.perf_counter()
+class CallTime(float):
+    """A call's wall time in milliseconds (the float itself), with the process's CPU time of
+    the same calls beside it as :attr:`cpu_ms`: on a shared machine the wall time takes in
+    other processes' load, the CPU time does not."""
+
+    cpu_ms: float
+
+    def __new__(cls, wall_ms: float, *, cpu_ms: float) -> CallTime:
+        time_ = super().__new__(cls, wall_ms)
+        time_.cpu_ms = float(cpu_ms)
+        return time_
+
+
+def time_call_ms(func: Callable[[], object], *, number: int = 1) -> CallTime:
+    """Wall time of ``number`` calls of ``func`` divided by ``number``, in milliseconds, with
+    the process's CPU time per call beside it (:class:`CallTime`)."""
+    start, start_cpu = time.perf_counter(), time.process_time()
     for _ in range(number):
         func()
-    return (time.perf_counter() - start) * 1e3 / number
+    cpu_ms = (time.process_time() - start_cpu) * 1e3 / number
+    return CallTime((time.perf_counter() - start) * 1e3 / number, cpu_ms=cpu_ms)
 
 
 def _is_number(cell: str) -> bool:

@@ -171,10 +171,13 @@ def gearopt_benchmarks() -> list[Benchmark]:
         ``Benchmark(name=..., function=..., description=...)``: ``name`` is the key of the
         median time in ``gearopt bench --json`` (``"change_gears_ms"``); ``function`` is a
         module-level function ``() -> (milliseconds, info)`` that warms up, times its kernel
-        with :func:`gearopt.commands.time_call_ms` and returns JSON-ready facts to print beside
-        the time (keys prefixed with its subject, as they share one JSON object with every
-        other benchmark's). ``gearopt bench`` runs each repeat in a fresh one-thread process
-        that imports ``function`` by its module and qualified name, so it must be importable
+        with :func:`gearopt.commands.time_call_ms` (return its
+        :class:`~gearopt.commands.CallTime` as it is: it carries the CPU time, which ``gearopt
+        bench`` prints beside the wall time and reports as ``cpu_ms``; a plain float gives
+        none) and returns JSON-ready facts to print beside the time (keys prefixed with its
+        subject, as they share one JSON object with every other benchmark's). ``gearopt
+        bench`` runs each repeat in a fresh one-thread process that imports ``function`` by
+        its module and qualified name, so it must be importable
         without the plugin manager.
 
     Notes

@@ -5,10 +5,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 
 import pytest
 
 from gearopt.cli import main
+from gearopt.commands import time_call_ms
 
 from .conftest import STUDIES
 
@@ -77,6 +79,17 @@ def test_bench_json_reports_medians(capsys):
     assert main(["bench", "--json", "--repeats", "1", "basic_settings_ms"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["threads"] == 1 and out["basic_settings_ms"] > 0.0
+    assert out["cpu_ms"]["basic_settings_ms"] > 0.0
+    assert len(out["runs_cpu_ms"]["basic_settings_ms"]) == 1
+
+
+def test_timed_calls_carry_cpu_time_apart_from_wall_time():
+    # a call that waits (sleeps) takes wall time but next to no CPU time of the process
+    timed = time_call_ms(lambda: time.sleep(0.02), number=2)
+    assert timed >= 20.0 and timed.cpu_ms < 10.0
+    # one that computes on one thread takes CPU time, never more than the wall time it spans
+    busy = time_call_ms(lambda: sum(i * i for i in range(200_000)), number=2)
+    assert 0.0 < busy.cpu_ms <= 1.01 * float(busy) + 0.1
 
 
 def test_bench_reports_the_tca_with_its_kernels(capsys):
