@@ -60,6 +60,20 @@ class Backlash:
         }
 
 
+def _unique_rows(rows: NDArray) -> tuple:
+    """:func:`numpy.unique` of the rows of a non-negative integer array (``axis=0``,
+    ``return_index``, ``return_inverse``): the same results, each row read as one integer
+    whose digits (base: the largest entry plus one) are its entries, first most significant
+    (so the rows' order is kept), where that integer fits; its general set-up otherwise."""
+    base = int(rows.max()) + 1 if rows.size else 1
+    if base ** rows.shape[1] >= 2**62:
+        return np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    key = np.zeros(rows.shape[0], np.int64)
+    for column in rows.T:
+        key = key * base + column
+    return np.unique(key, return_index=True, return_inverse=True)
+
+
 def backlash(
     drive: ClearanceField,
     coast: ClearanceField,
@@ -104,7 +118,7 @@ def backlash(
     gear_angle = -drive.gear_sense * lag
     # positions a pitch apart put the same relative rotations on their pairs (the same keys
     # in the same order): the same drive lag, the same coast configuration, sampled once
-    _, once, again = np.unique(inv.reshape(u.shape), axis=0, return_index=True, return_inverse=True)
+    _, once, again = _unique_rows(inv.reshape(u.shape))
     phi = drive.sense * u[once]
     c = coast.sample(phi.ravel(), np.repeat(gear_angle[once], pairs)).minimum_rad
     rotational = c.reshape(phi.shape).min(axis=1)[again.ravel()]

@@ -113,6 +113,15 @@ def _solved_settings(design: Design, member: str):
     return found
 
 
+def _settings_of(design: Design, member: str):
+    """One member's basic settings (its additional slope angle solved from the thickness where
+    it is ``"auto"``)."""
+    spec = design.machine.member(member)
+    if spec.is_auto:
+        return _solved_settings(design, member)
+    return member_settings(design, member, spec.additional_slope_angle_deg)
+
+
 # --- parsing -------------------------------------------------------------------------------------
 
 
@@ -220,13 +229,7 @@ class CycloPalloid(BaseMachineModel):
         return CycloPalloidMachine(blade_groups=nb, blade_module_mm=mb, **members)
 
     def basic_settings(self, design: Design) -> MachineSettings:
-        settings = {}
-        for member in MEMBERS:
-            spec = design.machine.member(member)
-            if spec.is_auto:
-                settings[member] = _solved_settings(design, member)
-            else:
-                settings[member] = member_settings(design, member, spec.additional_slope_angle_deg)
+        settings = {member: _settings_of(design, member) for member in MEMBERS}
         notes = []
         if not design.compensation.is_zero:
             notes.append(
@@ -268,7 +271,7 @@ class CycloPalloid(BaseMachineModel):
         m_b the mean normal module, so that m_gb = N_b / N)."""
         for flank in flanks:
             check_member_and_flank(member, flank)
-        settings = self.basic_settings(design).member(member)
+        settings = _settings_of(design, member)  # (the other member's not needed)
         systems = blade_systems(design, member, settings, tool_pass=tool_pass)
         return generate_flanks(
             design.blank,
