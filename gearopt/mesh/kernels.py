@@ -32,20 +32,27 @@ __all__ = [
 
 
 @compiled
-def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profile, sep, out):
-    """The pattern's node fields of a side's positions.
+def pattern_fields(
+    clearance, factor, minimum, inv, lag, carrying, g_min, compound, face, profile, sep, out, held
+):
+    """The pattern's node fields of a side's positions, their TE and the pairs whose zones the
+    pattern measures (:meth:`gearopt.mesh.side.SideCycle.assemble`).
 
     Parameters
     ----------
     clearance, factor
         ``(R, N)`` the window sample's node clearances and node factors (normal or
         circumferential; N = n_f * n_p nodes, profile fastest).
+    minimum
+        ``(R,)`` the window sample's lags (least clearances; +inf off the flanks).
     inv
         ``(n * pairs,)`` the sample's row of each position's pair (position-major).
     lag
         ``(n,)`` the carrying pair's lag at each position.
     carrying
         ``(n,)`` the carrying pair's column.
+    g_min
+        The least lag (the TE's zero).
     compound
         The marking compound (mm).
     face, profile
@@ -54,26 +61,48 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
         ``(n * pairs, N)`` out: separations (um) at the carrying lag, +inf off the flanks
         (:func:`gearopt.mesh.pattern.separation_mm` times 1e3).
     out
-        ``(N + 2 n,)`` out: the pattern field (the least separation over the positions and
-        pairs, um), then the carrying zones' centroids (mm), face then profile
-        (:func:`gearopt.mesh.pattern.centroids`).
+        ``(N + (3 + pairs) n,)`` out: the pattern field (the least separation over the
+        positions and pairs, um); the carrying zones' centroids (mm), face then profile
+        (:func:`gearopt.mesh.pattern.centroids`); the TE (arcsec, ``(g_min - lag)``); the
+        pairs' TE, pair-major (``(pairs, n)``).
+    held
+        ``(n * pairs,)`` out: first the entries whose zones reach within five compounds (their
+        lag above the carrying one times the row's largest node factor; held or about to be).
+
+    Returns
+    -------
+    int
+        How many entries ``held`` lists.
     """
     n = lag.shape[0]
     pairs = inv.shape[0] // n
     n_p = profile.shape[0]
     size = clearance.shape[1]
+    arcsec = 180.0 * 3600.0 / math.pi
+    limit = 5.0 * compound
+    count = 0
     for g in range(size):
         out[g] = math.inf
     for k in range(inv.shape[0]):
         row = inv[k]
         ref = lag[k // pairs]
+        largest = -math.inf  # (numpy's max: a NaN wins)
         for g in range(size):
-            v = (clearance[row, g] - ref) * factor[row, g]
+            f = factor[row, g]
+            if largest == largest and (f > largest or f != f):
+                largest = f
+            v = (clearance[row, g] - ref) * f
             if v != v:  # (inf - inf: nothing on the flanks; inf * 0: off them)
                 v = math.inf
             sep[k, g] = v
             if v < out[g]:
                 out[g] = v
+        above = minimum[row] - ref
+        if not math.isfinite(above):
+            above = math.inf
+        if above * largest < limit:
+            held[count] = k
+            count += 1
     for i in range(n):
         k = i * pairs + carrying[i]
         total = ws = wh = 0.0
@@ -94,11 +123,15 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
         else:  # no zone: its least-separated node
             out[size + i] = face[at // n_p]
             out[size + n + i] = profile[at % n_p]
+        out[size + 2 * n + i] = (g_min - lag[i]) * arcsec
+        for p in range(pairs):
+            out[size + (3 + p) * n + i] = (g_min - minimum[inv[i * pairs + p]]) * arcsec
     for k in range(inv.shape[0]):  # mm to um (after the centroids, which take mm)
         for g in range(size):
             sep[k, g] *= 1e3
     for g in range(size):
         out[g] *= 1e3
+    return count
 
 
 @compiled
@@ -326,7 +359,19 @@ def warm() -> None:
         return
     one, index = np.zeros((1, 1)), np.zeros(1, np.intp)
     pattern_fields(
-        one, one, index, np.zeros(1), index, 1.0, np.zeros(1), np.zeros(1), one.copy(), np.empty(3)
+        one,
+        one,
+        np.zeros(1),
+        index,
+        np.zeros(1),
+        index,
+        0.0,
+        1.0,
+        np.zeros(1),
+        np.zeros(1),
+        one.copy(),
+        np.empty(5),
+        index.copy(),
     )
     interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
     extend_factors(np.zeros((1, 1, 3)))

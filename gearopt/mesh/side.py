@@ -535,19 +535,20 @@ class SideCycle:
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
         rows = np.arange(positions)
-        g, lag, carrying = self.g, self.lag, self.carrying
+        lag, carrying = self.lag, self.carrying
         g_hand = self.g_hand
         if g_hand is None:
             g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
         g_min = float(min(ex.minimum_rad[2], lag.min()))
         if self.g_peak is not None:
             g_min = min(g_min, self.g_peak)
-        te = (g_min - lag) * ARCSEC
-        pair_te = ((g_min - g) * ARCSEC).T
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
 
         # separations at the contact gear angle of each position (same lag for every pair),
-        # the pattern (um) and the path (separation_mm, centroids: one compiled pass)
+        # the pattern (um), the path (separation_mm, centroids), the TE and the zones to
+        # measure (gearopt.mesh.zone, every side's at once: M's position and its neighbours',
+        # and the pairs whose zones reach within five compounds, held or about to be: the
+        # neighbours through which the motion is refined) in one compiled pass
         compound_mm = compound_um * 1e-3
         kind = "normal_factor_mm" if separation == "normal" else "radius_mm"
         node_factor = getattr(self.sample, kind)
@@ -555,42 +556,38 @@ class SideCycle:
         profile = field.pinion.profile_mm - frame.root_mm
         size = face.size * profile.size
         sep_um = np.empty((positions * pairs, size))
-        out = np.empty(size + 2 * positions)
-        kernels.pattern_fields(
+        out = np.empty(size + (3 + pairs) * positions)
+        held = np.empty(positions * pairs, np.intp)
+        count = kernels.pattern_fields(
             np.ascontiguousarray(self.sample.clearance_rad).reshape(-1, size),
             np.ascontiguousarray(node_factor).reshape(-1, size),
+            self.sample.minimum_rad,
             self.inv,
             lag,
             carrying,
+            g_min,
             compound_mm,
             face,
             profile,
             sep_um,
             out,
+            held,
         )
         pattern = out[:size].reshape(field.pinion.shape)
-        path_s, path_h = out[size : size + positions], out[size + positions :]
-
-        # the zones measured on the refined field (gearopt.mesh.zone, every side's at once):
-        # M's position and its neighbours', and the pairs whose zones make the pattern
-        flat_g = g.ravel()
-        with np.errstate(invalid="ignore"):  # inf - inf off the flanks
-            above = flat_g - np.repeat(lag, pairs)
-        largest = node_factor.reshape(len(node_factor), -1).max(axis=1)[self.inv]
-        reach = np.where(np.isfinite(above), above, np.inf) * largest
-        # the pairs whose zones reach within five compounds (held or about to be: the
-        # neighbours through which the motion is refined)
-        held = np.flatnonzero(reach < 5.0 * compound_mm)
+        path_s, path_h, te = out[size : size + 3 * positions].reshape(3, positions)
+        pair_te = out[size + 3 * positions :].reshape(pairs, positions)
+        held = held[:count]
+        position = held // pairs
         lines = dict(
             mean_phi_rad=ex.phi_rad[3:6],
             mean_lag_rad=ex.minimum_rad[3:6],
             mean_factor_mm=getattr(ex, kind)[3:6],
             mean_contact_mm=columns(ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]),
             pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
-            pattern_lag_rad=np.repeat(lag, pairs)[held],
+            pattern_lag_rad=lag[position],
             pattern_factor_rows=(node_factor, self.inv[held]),
             pattern_contact_mm=columns(self.cs.ravel()[held], self.ch.ravel()[held]),
-            pattern_position=held // pairs,
+            pattern_position=position,
             pattern_pair=self.ids.ravel()[held],
             interval=self.interval,
         )
