@@ -27,6 +27,7 @@ __all__ = [
     "inverse_roots",
     "nearest_parabola",
     "pattern_fields",
+    "side_start",
     "warm",
 ]
 
@@ -132,6 +133,124 @@ def pattern_fields(
     for g in range(size):
         out[g] *= 1e3
     return count
+
+
+@compiled
+def side_start(minimum, edge, face, profile, inv, ids, t, pitch, step, tiny, g, edge_all, cs, ch):
+    """A side's start on the window's sample (:class:`gearopt.mesh.side.SideCycle`): its
+    pairs' lags, edge flags and contact points at each position, the carrying pair (the least
+    lag), the TE maximum's guess (its relative rotation: the parabola through the least lag of
+    the carrying pair and its neighbours on the same pair) and the hand-over's bracket
+    (:meth:`~gearopt.mesh.side.SideCycle.start_handover`).
+
+    Parameters
+    ----------
+    minimum, edge, face, profile
+        ``(R,)`` the sample's lags (+inf off the flanks), edge flags and contact points.
+    inv
+        ``(n * pairs,)`` the sample's row of each position's pair (position-major).
+    ids
+        ``(n, pairs)`` the pairs' ids.
+    t
+        ``(n,)`` the positions.
+    pitch, step
+        The angular pitch and the position step.
+    tiny
+        The least rise of the lag difference over a bracket (rad).
+    g, edge_all, cs, ch
+        ``(n, pairs)`` out: the pairs' lags, edge flags and contact points.
+
+    Returns
+    -------
+    tuple
+        ``(carrying, lag, pair_id, touching, v_peak, spread, spread_finite, bracket, d_lo,
+        d_hi)``: the carrying pair's column, lag and id at each position; False where a
+        position has no pair touching inside the flanks; the peak's guess; the carrying lag's
+        range (numpy's, a NaN wins) and its finite values' range (0 without); ``(k, leaving
+        column at k, at k + 1, incoming column at k, at k + 1)``, ``k`` -1 without a bracket;
+        the lag differences (leaving minus incoming) at its ends.
+    """
+    n, pairs = ids.shape
+    carrying = np.empty(n, np.intp)
+    lag = np.empty(n)
+    pair_id = np.empty(n, ids.dtype)
+    touching = True
+    for i in range(n):
+        best = 0
+        finite = False
+        for p in range(pairs):
+            row = inv[i * pairs + p]
+            v = minimum[row]
+            g[i, p] = v
+            edge_all[i, p] = edge[row]
+            cs[i, p] = face[row]
+            ch[i, p] = profile[row]
+            finite = finite or math.isfinite(v)
+            # (numpy's argmin: the first least, or the first NaN)
+            if g[i, best] == g[i, best] and (v < g[i, best] or v != v):
+                best = p
+        touching = touching and finite
+        carrying[i] = best
+        lag[i] = g[i, best]
+        pair_id[i] = ids[i, best]
+    # the peak: the least lag on the carrying pair of the least lag, and the parabola through
+    # its neighbours on the same pair
+    least = 0  # (numpy's argmin, as above)
+    for i in range(n):
+        if lag[least] == lag[least] and (lag[i] < lag[least] or lag[i] != lag[i]):
+            least = i
+    kk = -1
+    for i in range(n):
+        if pair_id[i] == pair_id[least] and (
+            kk < 0 or (lag[kk] == lag[kk] and (lag[i] < lag[kk] or lag[i] != lag[i]))
+        ):
+            kk = i
+    v_peak = t[kk] + pair_id[kk] * pitch
+    if 0 < kk < n - 1 and pair_id[kk - 1] == pair_id[kk] and pair_id[kk] == pair_id[kk + 1]:
+        gm, g0, gp = lag[kk - 1], lag[kk], lag[kk + 1]
+        curv = gm - 2.0 * g0 + gp
+        if curv > 0.0:
+            z = 0.5 * (gm - gp) / curv
+            if z < -1.0:
+                z = -1.0
+            elif z > 1.0:
+                z = 1.0
+            v_peak += z * step
+    high, low = -math.inf, math.inf
+    high_f, low_f = -math.inf, math.inf
+    nan = False
+    for i in range(n):
+        v = lag[i]
+        nan = nan or v != v
+        high, low = max(high, v), min(low, v)
+        if math.isfinite(v):
+            high_f, low_f = max(high_f, v), min(low_f, v)
+    spread = math.nan if nan else high - low
+    spread_finite = high_f - low_f if low_f <= high_f else 0.0
+    # the hand-over: the first forward switch of the carrying pair (the next, one id lower,
+    # takes over) whose two pairs' lag difference changes sign
+    bracket = (-1, 0, 0, 0, 0)
+    d_lo = d_hi = 0.0
+    for k in range(n - 1):
+        if pair_id[k + 1] - pair_id[k] != -1:
+            continue
+        leave = pair_id[k]
+        cols = [-1, -1, -1, -1]  # leaving at k, k + 1; incoming at k, k + 1
+        for j in range(2):
+            for p in range(pairs):
+                if ids[k + j, p] == leave and cols[j] < 0:
+                    cols[j] = p
+                if ids[k + j, p] == leave - 1 and cols[2 + j] < 0:
+                    cols[2 + j] = p
+        if min(cols[0], cols[1], cols[2], cols[3]) < 0:
+            continue
+        lo = g[k, cols[0]] - g[k, cols[2]]
+        hi = g[k + 1, cols[1]] - g[k + 1, cols[3]]
+        if math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi and hi - lo > tiny:
+            bracket = (k, cols[0], cols[1], cols[2], cols[3])
+            d_lo, d_hi = lo, hi
+            break
+    return carrying, lag, pair_id, touching, v_peak, spread, spread_finite, bracket, d_lo, d_hi
 
 
 @compiled
@@ -374,6 +493,23 @@ def warm() -> None:
         index.copy(),
     )
     interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
+    two, ids = np.zeros(2), np.zeros((2, 1))
+    side_start(
+        two,
+        two > 1.0,
+        two,
+        two,
+        np.arange(2),
+        ids,
+        two,
+        1.0,
+        1.0,
+        1e-9,
+        two.reshape(2, 1).copy(),
+        ids > 1.0,
+        two.reshape(2, 1).copy(),
+        two.reshape(2, 1).copy(),
+    )
     extend_factors(np.zeros((1, 1, 3)))
     nearest_parabola(np.arange(6.0).reshape(3, 2), 0.5)
     inverse_roots(0.0, 1.0, -1.0, 1.0, np.arange(6.0).reshape(3, 2))
