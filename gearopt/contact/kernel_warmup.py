@@ -79,6 +79,9 @@ def warm() -> None:
     rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)
     zone_kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     zone_kernels.separations(rows, pinion, gear, zone, pair_row, np.zeros((1, 2)), out)
+    zone_kernels.ring_clearances(
+        rows, pinion, gear, pair_row, out, out.copy(), np.zeros((1, 2)), np.empty((1, 2))
+    )
     none = np.full(1, -1, ip)
     zone_kernels.swept_exits(
         rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out

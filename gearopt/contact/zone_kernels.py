@@ -20,7 +20,7 @@ import numpy as np
 from gearopt.contact.kernels import gap_of, pinion_at
 from gearopt.jit import compiled
 
-__all__ = ["separations", "swept_exits", "union_exits"]
+__all__ = ["ring_clearances", "separations", "swept_exits", "union_exits"]
 
 
 @compiled(inline=True)
@@ -282,3 +282,21 @@ def separations(rows, pinion, gear, zone, r, points, out):
         point = pinion_at(s, t, pinion, offsets[row])
         at = _zone_at(s, t, grid)
         out[k] = _separation_of(rows, row, point, at, gear, cells, lag, factor)
+
+
+@compiled
+def ring_clearances(rows, pinion, gear, r, face, profile, ring, delta):
+    """The clearance of rows ``r`` ``(K,)`` at points ``(face[k], profile[k])`` and on the
+    ring about each, ``ring`` ``(M, 2)`` offsets, into ``delta`` ``(K, 1 + M)`` (the point
+    first; the smooth extension beyond the flanks, as
+    :meth:`gearopt.contact.JointField.clearance_at_grid`'s): the samples of
+    :meth:`gearopt.mesh.zone.Zones.quadratic`, on the tables the zones' other kernels take."""
+    cells, offsets = pinion[14], rows[5]
+    for k in range(r.shape[0]):
+        row = r[k]
+        for j in range(delta.shape[1]):
+            s, t = face[k], profile[k]
+            if j > 0:
+                s, t = s + ring[j - 1, 0], t + ring[j - 1, 1]
+            point = pinion_at(s, t, pinion, offsets[row])
+            delta[k, j] = gap_of(rows, row, point, gear, cells)[0]

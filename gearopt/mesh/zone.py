@@ -196,10 +196,16 @@ class Zones:
         """``(K, 5)`` the clearance's local quadratic form about points ``(face_mm,
         profile_mm)`` of rows ``r``: ``(g_s, g_h, H_ss, H_sh, H_hh)`` (rad per mm, per mm^2),
         fitted on a ring of radius :data:`RING_MM` (least squares)."""
-        face_mm, profile_mm = np.asarray(face_mm, float), np.asarray(profile_mm, float)
-        s = np.concatenate([face_mm[:, None], face_mm[:, None] + _RING[:, 0]], 1)
-        h = np.concatenate([profile_mm[:, None], profile_mm[:, None] + _RING[:, 1]], 1)
-        delta, _ = self.clearance(np.asarray(r, np.intp), s, h)
+        face_mm = np.ascontiguousarray(face_mm, float)
+        delta = np.empty((len(face_mm), 1 + len(_RING)))
+        zone_kernels.ring_clearances(
+            *self.tables()[:3],
+            np.asarray(r, np.intp),
+            face_mm,
+            np.ascontiguousarray(profile_mm, float),
+            _RING,
+            delta,
+        )
         return (delta[:, 1:] - delta[:, :1]) @ _RING_FIT.T
 
     def axes(self, r, face_mm, profile_mm) -> NDArray:
