@@ -377,16 +377,18 @@ class Zones:
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays = len(origins)
-        prev, nxt = _neighbours(ray, np.asarray(key), np.asarray(position))
-        starts = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
-        if np.any(np.diff(ray) < 0) or len(starts) != k_rays:
+        prev, nxt, start = np.empty_like(ray), np.empty_like(ray), np.empty(len(ray) + 2, np.intp)
+        found, ordered = zone_kernels.swept_pairs(
+            ray, np.asarray(key, np.int64), np.asarray(position, np.int64), prev, nxt, start
+        )
+        if not ordered or found != k_rays:
             raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
         fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
         tau = self.to_edge(origins, directions)[:, None] * fractions
         out = np.empty(k_rays)
         zone_kernels.swept_exits(
             *self.tables(),
-            np.r_[starts, len(ray)],
+            start[: found + 1],
             r,
             prev,
             nxt,
@@ -589,21 +591,3 @@ def extended_factors(factor_mm: NDArray) -> NDArray:
     f = np.array(factor_mm, float, order="C")
     kernels.extend_factors(f)  # (one compiled pass: :func:`gearopt.mesh.kernels.extend_factors`)
     return f
-
-
-def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
-    """The rows of the same ray and tooth pair at the previous and next positions (-1
-    without)."""
-    ray, key, position = (np.asarray(a, np.int64) for a in (ray, key, position))
-    if len(ray):  # one stable sort of one code in the order (ray, key, position): lexsort's
-        k0, p0 = key.min(), position.min()
-        code = (ray * (key.max() - k0 + 1) + (key - k0)) * (position.max() - p0 + 1)
-        order = np.argsort(code + (position - p0), kind="stable")
-    else:
-        order = np.zeros(0, np.intp)
-    same = (np.diff(ray[order]) == 0) & (np.diff(key[order]) == 0)
-    step = same & (np.diff(position[order]) == 1)
-    prev, nxt = np.full(len(ray), -1, np.intp), np.full(len(ray), -1, np.intp)
-    prev[order[1:][step]] = order[:-1][step]
-    nxt[order[:-1][step]] = order[1:][step]
-    return prev, nxt
