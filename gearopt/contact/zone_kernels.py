@@ -20,7 +20,14 @@ import numpy as np
 from gearopt.contact.kernels import gap_of, pinion_at
 from gearopt.jit import compiled
 
-__all__ = ["ring_clearances", "separations", "swept_exits", "swept_pairs", "union_exits"]
+__all__ = [
+    "ray_samples",
+    "ring_clearances",
+    "separations",
+    "swept_exits",
+    "swept_pairs",
+    "union_exits",
+]
 
 
 @compiled(inline=True)
@@ -340,3 +347,34 @@ def swept_pairs(ray, key, position, prev, nxt, start):
             ordered = False
     start[count] = n
     return count, ordered
+
+
+@compiled
+def ray_samples(rays, box, reach, spread, even, geometric, tau):
+    """The samples of rays ``rays`` ``(K, 4)`` (origin, direction) into ``tau`` ``(K, m)``:
+    ray k scanned to the grid's edge (the box ``(low face, low profile, high face, high
+    profile)``; :meth:`gearopt.mesh.zone.Zones.to_edge`) or ``reach[k]`` if nearer, at the
+    fractions ``even`` where ``spread[k]``, else ``geometric`` (each ``(m,)``). NaN
+    propagates as numpy's minimum and maximum."""
+    for k in range(rays.shape[0]):
+        ends = [math.inf, math.inf]
+        for a in range(2):
+            o, d = rays[k, a], rays[k, 2 + a]
+            if d > 0.0:
+                ends[a] = (box[2 + a] - o) / d
+            elif d < 0.0:
+                ends[a] = (box[a] - o) / d
+        e0, e1 = ends[0], ends[1]
+        if e0 != e0 or e1 != e1:
+            edge = math.nan
+        else:  # (numpy's maximum with 0: a zero of either sign is +0)
+            edge = min(e0, e1)
+            edge = edge if edge > 0.0 else 0.0
+        far = reach[k]
+        if far != far or edge != edge:
+            far = math.nan
+        else:
+            far = min(far, edge)
+        fractions = even if spread[k] else geometric
+        for j in range(tau.shape[1]):
+            tau[k, j] = far * fractions[j]

@@ -151,6 +151,9 @@ class Zones:
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
         self.last = (len(face_mm) - 2, len(profile_mm) - 2)
+        low = np.array([self.face0, self.profile0])
+        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
+        self.box = np.concatenate([low, high])  # the grid's edges (:meth:`to_edge`)
         self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
@@ -333,18 +336,14 @@ class Zones:
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         order = np.argsort(ray, kind="stable")
-        start = np.searchsorted(ray[order], np.arange(len(origins) + 1))
-        tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
-        out = np.empty(len(origins))
-        zone_kernels.union_exits(
-            *self.tables(),
-            start,
-            r[order],
-            self.rays(origins, directions),
-            tau,
-            _ZOOM_FRACTIONS,
-            out,
-        )
+        k_rays = len(origins)
+        start = np.searchsorted(ray[order], np.arange(k_rays + 1))
+        rays = self.rays(origins, directions)
+        reach = np.ascontiguousarray(np.broadcast_to(np.asarray(reach, float), (k_rays,)))
+        tau = np.empty((k_rays, len(SCAN)))  # (to the grid's edge or the reach: to_edge's)
+        zone_kernels.ray_samples(rays, self.box, reach, np.ones(k_rays, bool), SCAN, SCAN, tau)
+        out = np.empty(k_rays)
+        zone_kernels.union_exits(*self.tables(), start, r[order], rays, tau, _ZOOM_FRACTIONS, out)
         return out
 
     def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
@@ -383,8 +382,17 @@ class Zones:
         )
         if not ordered or found != k_rays:
             raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
-        fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
-        tau = self.to_edge(origins, directions)[:, None] * fractions
+        rays = self.rays(origins, directions)
+        tau = np.empty((k_rays, len(SPREAD)))  # (to the grid's edge: to_edge's)
+        zone_kernels.ray_samples(
+            rays,
+            self.box,
+            np.full(k_rays, np.inf),
+            np.ascontiguousarray(spread, bool),
+            SPREAD,
+            NEAR,
+            tau,
+        )
         out = np.empty(k_rays)
         zone_kernels.swept_exits(
             *self.tables(),
@@ -392,7 +400,7 @@ class Zones:
             r,
             prev,
             nxt,
-            self.rays(origins, directions),
+            rays,
             tau,
             _ZOOM_FRACTIONS,
             out,
@@ -551,8 +559,7 @@ class Zones:
     def to_edge(self, origins, directions) -> NDArray:
         """``(K,)`` how far rays run from their origins to the grid's edge (off it nothing is
         on the flanks)."""
-        low = np.array([self.face0, self.profile0])
-        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
+        low, high = self.box[:2], self.box[2:]
         with np.errstate(divide="ignore", invalid="ignore"):
             ends = np.where(directions > 0.0, (high - origins) / directions, np.inf)
             ends = np.where(directions < 0.0, (low - origins) / directions, ends)
