@@ -1,14 +1,17 @@
 """Compiled kernels of the mesh cycle's pattern at the nodes (numba; plain Python without it, as
-:mod:`gearopt.contact.kernels`): the separations of every position's pairs, the pattern field
-and the carrying zones' centroids in one pass over the node fields, where numpy makes a
-temporary of every position's nodes at each step (:func:`gearopt.mesh.pattern.separation_mm`,
-:func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and two steps of
+:mod:`gearopt.contact.kernels`): the separations of every position's pairs, the pattern field,
+the carrying zones' centroids, the TE and the pairs whose zones the pattern measures in one
+pass over the node fields (:func:`pattern_fields`), where numpy makes a temporary of every
+position's nodes at each step (:func:`gearopt.mesh.pattern.separation_mm`,
+:func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and the steps of
 a side's mesh cycle on its few dozen samples, where numpy's per-call overhead outweighs the
-work: the contact interval's run of interior samples (:func:`interior_run`) and the crossing
-of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`), and its
-iteration's interpolants on the samples so far (:func:`nearest_parabola`,
-:func:`inverse_roots`); and the zones' node factors continued below the generated boundary
-(:func:`extend_factors`).
+work: its window's distinct rotations (:func:`window_rows`), its start on the window's sample
+(:func:`side_start`), the contact interval's run of interior samples (:func:`interior_run`)
+and the crossing of two pairs' interpolated lags, the hand-over's first guess
+(:func:`crossing_root`), and its iteration's interpolants on the samples so far
+(:func:`nearest_parabola`, :func:`inverse_roots`); and the zones' node factors continued below
+the generated boundary (:func:`extend_factors`). Each does numpy's arithmetic in numpy's
+order: the results are the same to the bit.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ __all__ = [
     "nearest_parabola",
     "pattern_fields",
     "side_start",
+    "window_rows",
     "warm",
 ]
 
@@ -251,6 +255,63 @@ def side_start(minimum, edge, face, profile, inv, ids, t, pitch, step, tiny, g, 
             d_lo, d_hi = lo, hi
             break
     return carrying, lag, pair_id, touching, v_peak, spread, spread_finite, bracket, d_lo, d_hi
+
+
+@compiled
+def _rint(x):
+    """``x`` rounded to the nearest integer, halves to even (numpy's ``round``)."""
+    r = math.floor(x)
+    rest = x - r  # (exact)
+    if rest > 0.5 or (rest == 0.5 and r % 2.0 != 0.0):
+        r += 1.0
+    return r
+
+
+@compiled
+def window_rows(t, centre, window, pitch, ids, u, first, inv):
+    """A side's window of pairs about its mesh centre and its distinct relative rotations
+    (:meth:`gearopt.mesh.cycle.MeshCycle.main_sample`).
+
+    Parameters
+    ----------
+    t
+        ``(n,)`` the positions.
+    centre
+        The mesh centre (a relative rotation).
+    window
+        ``(pairs,)`` the window's pair offsets.
+    pitch
+        The angular pitch.
+    ids, u
+        ``(n, pairs)`` out: the pairs' ids (the nearest whole pitches from the centre plus the
+        offsets) and their relative rotations ``t + ids * pitch``.
+    first, inv
+        ``(n * pairs,)`` out: the first entry of ``u`` (flat) of each distinct rotation (to a
+        billionth of a pitch), in increasing order; the distinct rotation of each entry
+        (numpy's ``unique`` with ``return_index`` and ``return_inverse``).
+
+    Returns
+    -------
+    int
+        How many distinct rotations ``first`` lists.
+    """
+    n, pairs = ids.shape
+    key = np.empty(n * pairs, np.int64)
+    for i in range(n):
+        base = _rint((centre - t[i]) / pitch)
+        for j in range(pairs):
+            ids[i, j] = base + window[j]
+            u[i, j] = t[i] + ids[i, j] * pitch
+            key[i * pairs + j] = np.int64(_rint(u[i, j] / pitch * 1e9))
+    order = np.argsort(key, kind="mergesort")
+    count = 0
+    for m in range(key.shape[0]):
+        k = order[m]
+        if m == 0 or key[k] != key[order[m - 1]]:
+            first[count] = k
+            count += 1
+        inv[k] = count - 1
+    return count
 
 
 @compiled
@@ -493,6 +554,15 @@ def warm() -> None:
         index.copy(),
     )
     interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
+    window_rows(
+        np.zeros(2),
+        0.0,
+        np.arange(1),
+        1.0,
+        np.empty((2, 1)),
+        np.empty((2, 1)),
+        *np.empty((2, 2), np.intp),
+    )
     two, ids = np.zeros(2), np.zeros((2, 1))
     side_start(
         two,
