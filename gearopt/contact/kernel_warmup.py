@@ -84,7 +84,6 @@ def warm() -> None:
         rows, pinion, gear, pair_row, out, out.copy(), np.zeros((1, 2)), np.empty((1, 2))
     )
     none = np.full(1, -1, ip)
-    zone_kernels.swept_pairs(side, side, side, none.copy(), none.copy(), np.zeros(3, ip))
     zone_kernels.swept_exits(
         rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out
     )

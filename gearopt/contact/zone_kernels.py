@@ -25,7 +25,6 @@ __all__ = [
     "ring_clearances",
     "separations",
     "swept_exits",
-    "swept_pairs",
     "union_exits",
 ]
 
@@ -307,46 +306,6 @@ def ring_clearances(rows, pinion, gear, r, face, profile, ring, delta):
                 s, t = s + ring[j - 1, 0], t + ring[j - 1, 1]
             point = pinion_at(s, t, pinion, offsets[row])
             delta[k, j] = gap_of(rows, row, point, gear, cells)[0]
-
-
-@compiled
-def swept_pairs(ray, key, position, prev, nxt, start):
-    """The pairs of :func:`swept_exits` from the rays' lists ``(P,)`` (ray, tooth pair,
-    position; each ray's pairs together, the rays in order): each pair's neighbours over the
-    motion, the rows of the same ray and tooth pair at the previous and next positions (-1
-    without), into ``prev`` and ``nxt``; the first pair of each ray into ``start``
-    ``(P + 2,)``, then ``P`` (without pairs, one ray of none: ``0, 0``).
-
-    Returns
-    -------
-    tuple
-        ``(rays, ordered)``: how many rays ``start`` lists (``start[rays]`` is ``P``), and
-        False where a ray's pairs are not together in the order of the rays.
-    """
-    n = ray.shape[0]
-    if n == 0:
-        start[0] = start[1] = 0
-        return 1, True
-    # one stable sort of one code in the order (ray, key, position): lexsort's
-    k0, p0 = key.min(), position.min()
-    span_k, span_p = key.max() - k0 + 1, position.max() - p0 + 1
-    code = (ray * span_k + (key - k0)) * span_p + (position - p0)
-    order = np.argsort(code, kind="mergesort")
-    for i in range(n):
-        prev[i] = nxt[i] = -1
-    for i in range(1, n):
-        a, b = order[i - 1], order[i]
-        if ray[a] == ray[b] and key[a] == key[b] and position[b] - position[a] == 1:
-            prev[b], nxt[a] = a, b
-    count, ordered = 0, True
-    for i in range(n):
-        if i == 0 or ray[i] != ray[i - 1]:
-            start[count] = i
-            count += 1
-        if i > 0 and ray[i] < ray[i - 1]:
-            ordered = False
-    start[count] = n
-    return count, ordered
 
 
 @compiled

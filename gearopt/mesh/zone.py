@@ -377,7 +377,7 @@ class Zones:
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays = len(origins)
         prev, nxt, start = np.empty_like(ray), np.empty_like(ray), np.empty(len(ray) + 2, np.intp)
-        found, ordered = zone_kernels.swept_pairs(
+        found, ordered = kernels.swept_pairs(
             ray, np.asarray(key, np.int64), np.asarray(position, np.int64), prev, nxt, start
         )
         if not ordered or found != k_rays:
