@@ -316,14 +316,15 @@ def ray_samples(rays, box, reach, spread, even, geometric, tau):
     fractions ``even`` where ``spread[k]``, else ``geometric`` (each ``(m,)``). NaN
     propagates as numpy's minimum and maximum."""
     for k in range(rays.shape[0]):
-        ends = [math.inf, math.inf]
-        for a in range(2):
-            o, d = rays[k, a], rays[k, 2 + a]
-            if d > 0.0:
-                ends[a] = (box[2 + a] - o) / d
-            elif d < 0.0:
-                ends[a] = (box[a] - o) / d
-        e0, e1 = ends[0], ends[1]
+        e0 = e1 = math.inf
+        if rays[k, 2] > 0.0:
+            e0 = (box[2] - rays[k, 0]) / rays[k, 2]
+        elif rays[k, 2] < 0.0:
+            e0 = (box[0] - rays[k, 0]) / rays[k, 2]
+        if rays[k, 3] > 0.0:
+            e1 = (box[3] - rays[k, 1]) / rays[k, 3]
+        elif rays[k, 3] < 0.0:
+            e1 = (box[1] - rays[k, 1]) / rays[k, 3]
         if e0 != e0 or e1 != e1:
             edge = math.nan
         else:  # (numpy's maximum with 0: a zero of either sign is +0)
