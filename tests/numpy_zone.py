@@ -1,9 +1,10 @@
 """The zones' scans in whole-array numpy (:meth:`gearopt.mesh.zone.Zones.exits`,
-:meth:`~gearopt.mesh.zone.Zones.pattern_exits` and
-:meth:`~gearopt.mesh.zone.Zones.point_separations` before their compiled kernels,
-:func:`gearopt.contact.zone_kernels.union_exits`,
-:func:`~gearopt.contact.zone_kernels.swept_exits` and
-:func:`~gearopt.contact.zone_kernels.separations`):
+:meth:`~gearopt.mesh.zone.Zones.pattern_exits`,
+:meth:`~gearopt.mesh.zone.Zones.point_separations` and :meth:`~gearopt.mesh.zone.Zones.quadratic`
+before their compiled kernels, :func:`gearopt.contact.zone_kernels.union_exits`,
+:func:`~gearopt.contact.zone_kernels.swept_exits`,
+:func:`~gearopt.contact.zone_kernels.separations` and
+:func:`~gearopt.contact.zone_kernels.ring_clearances`):
 every sample of every ray evaluated through :meth:`gearopt.mesh.zone.Zones.along` (the
 engine's point clearance, itself the numpy reference under :func:`tests.numpy_engine.install`).
 Kept for the kernels' parity test; production code never imports this module.
@@ -14,14 +15,31 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt.mesh.zone import NEAR, SCAN, SPREAD, ZOOM, Zones
+from gearopt.mesh.zone import NEAR, RING_MM, SCAN, SPREAD, ZOOM, Zones
 
 #: the methods of :class:`gearopt.mesh.zone.Zones` this module replaces
 METHODS = {
     "exits": "zone_exits",
     "pattern_exits": "zone_pattern_exits",
     "point_separations": "zone_point_separations",
+    "quadratic": "zone_quadratic",
 }
+
+#: the ring of :meth:`gearopt.mesh.zone.Zones.quadratic` and its least-squares fit (as there)
+RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+RING = RING_MM * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
+RING_FIT = np.linalg.pinv(
+    np.stack(
+        [
+            RING[:, 0],
+            RING[:, 1],
+            0.5 * RING[:, 0] ** 2,
+            RING[:, 0] * RING[:, 1],
+            0.5 * RING[:, 1] ** 2,
+        ],
+        axis=1,
+    )
+)
 
 
 def install(monkeypatch) -> None:
@@ -35,6 +53,16 @@ def zone_point_separations(self, r, points) -> NDArray:
     separation` (the engine's point clearance)."""
     points = np.asarray(points, float).reshape(-1, 2)
     return self.separation(np.asarray(r, np.intp), points[:, :1], points[:, 1:])[:, 0]
+
+
+def zone_quadratic(self, r, face_mm, profile_mm) -> NDArray:
+    """:meth:`gearopt.mesh.zone.Zones.quadratic` by :meth:`~gearopt.mesh.zone.Zones.clearance`
+    (the engine's point clearance) on the ring about each point."""
+    face_mm, profile_mm = np.asarray(face_mm, float), np.asarray(profile_mm, float)
+    s = np.concatenate([face_mm[:, None], face_mm[:, None] + RING[:, 0]], 1)
+    h = np.concatenate([profile_mm[:, None], profile_mm[:, None] + RING[:, 1]], 1)
+    delta, _ = self.clearance(np.asarray(r, np.intp), s, h)
+    return (delta[:, 1:] - delta[:, :1]) @ RING_FIT.T
 
 
 def zone_exits(self, ray, r, origins, directions, reach) -> NDArray:
@@ -124,7 +152,7 @@ def zone_pattern_exits(self, ray, r, key, position, origins, directions, spread)
     ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
     origins, directions = np.asarray(origins, float), np.asarray(directions, float)
     k_rays, c = len(origins), self.compound_mm
-    prev, nxt = _neighbours(ray, np.asarray(key), np.asarray(position))
+    prev, nxt = neighbours(ray, np.asarray(key), np.asarray(position))
     starts = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
     if np.any(np.diff(ray) < 0) or len(starts) != k_rays:
         raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
@@ -207,7 +235,7 @@ def _swept(f, prev, nxt) -> NDArray:
     return out
 
 
-def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
+def neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
     """The rows of the same ray and tooth pair at the previous and next positions (-1
     without)."""
     order = np.lexsort((position, key, ray))

@@ -3,8 +3,10 @@
 form and the Illinois method on Python floats, on the same four samples a pair; the contact
 interval's run against the run search on numpy arrays; the hand-over iteration's interpolants
 (the parabola through the nearest samples, the inverse interpolants' roots) against the sorted
-picks on Python floats; the zones' node factors continued below the generated boundary against
-the numpy steps they replaced; all to the last bit, compiled and as plain Python.
+picks on Python floats; the zones' node factors continued below the generated boundary, a
+side's window and its start (carrying pair, TE peak guess, hand-over bracket) and the swept
+pairs' neighbours against the numpy steps they replaced; all to the last bit, compiled and as
+plain Python.
 """
 
 from __future__ import annotations
@@ -18,11 +20,16 @@ import pytest
 from gearopt.mesh import kernels
 from gearopt.mesh.handover import newton_form, newton_value
 
+from .numpy_zone import neighbours
+
 VARIANTS = [kernels.crossing_root, getattr(kernels.crossing_root, "py_func", None)]
 RUNS = [kernels.interior_run, getattr(kernels.interior_run, "py_func", None)]
 PARABOLAS = [kernels.nearest_parabola, getattr(kernels.nearest_parabola, "py_func", None)]
 ROOTS = [kernels.inverse_roots, getattr(kernels.inverse_roots, "py_func", None)]
 EXTENDS = [kernels.extend_factors, getattr(kernels.extend_factors, "py_func", None)]
+WINDOWS = [kernels.window_rows, getattr(kernels.window_rows, "py_func", None)]
+SWEPT = [kernels.swept_pairs, getattr(kernels.swept_pairs, "py_func", None)]
+STARTS = [kernels.side_start, getattr(kernels.side_start, "py_func", None)]
 
 
 def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):
@@ -202,3 +209,114 @@ def test_inverse_roots_are_the_sorted_picks(roots):
             assert got[count - 1] == want or (math.isnan(got[count - 1]) and math.isnan(want))
             found += not math.isnan(want)
     assert found > 200  # roots found, not only refusals
+
+
+@pytest.mark.parametrize("rows", [f for f in WINDOWS if f is not None])
+def test_window_rows_are_numpy_round_and_unique(rows):
+    rng = np.random.default_rng(23)
+    for trial in range(300):
+        n, pitch = int(rng.integers(2, 30)), 2.0 * math.pi / int(rng.integers(5, 40))
+        t = np.linspace(-pitch, pitch, n)
+        window = np.arange(int(rng.integers(1, 6)))
+        window -= (len(window) - 1) // 2 + int(trial % 4 == 0)
+        centre = 0.0 if trial % 3 == 0 else float(rng.uniform(-2.0, 2.0) * pitch)
+        ids = np.round((centre - t) / pitch)[:, None] + window[None, :]
+        u = t[:, None] + ids * pitch
+        key = np.round(u.ravel() / pitch * 1e9).astype(np.int64)
+        _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+        got_ids, got_u = np.empty(ids.shape), np.empty(ids.shape)
+        got_first, got_inv = np.empty(u.size, np.intp), np.empty(u.size, np.intp)
+        count = rows(t, centre, window, pitch, got_ids, got_u, got_first, got_inv)
+        assert np.array_equal(got_ids.view(np.int64), ids.view(np.int64))
+        assert np.array_equal(got_u.view(np.int64), u.view(np.int64))
+        assert count == len(first) and np.array_equal(got_first[:count], first)
+        assert np.array_equal(got_inv, inv.ravel())
+
+
+@pytest.mark.parametrize("pairs", [f for f in SWEPT if f is not None])
+def test_swept_pairs_are_the_numpy_neighbours(pairs):
+    rng = np.random.default_rng(29)
+    linked = 0
+    for _ in range(300):
+        n = int(rng.integers(0, 200))
+        ray = np.sort(rng.integers(0, 9, n)).astype(np.intp)
+        key, position = rng.integers(-3, 3, n), rng.integers(0, 6, n)
+        prev, nxt = neighbours(ray, key, position)
+        got_prev, got_nxt, start = (
+            np.empty(n, np.intp),
+            np.empty(n, np.intp),
+            np.empty(n + 2, np.intp),
+        )
+        count, ordered = pairs(ray, key, position, got_prev, got_nxt, start)
+        first = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
+        assert ordered and np.array_equal(got_prev, prev) and np.array_equal(got_nxt, nxt)
+        assert count == len(first) and np.array_equal(start[:count], first)
+        linked += int((prev >= 0).sum())
+    assert linked > 1000  # neighbours found, not only -1
+
+
+def python_start(minimum, inv, ids, t, pitch, step):
+    """A side's carrying pair, TE peak guess and hand-over bracket by the numpy and Python
+    steps :func:`gearopt.mesh.kernels.side_start` replaced."""
+    g = minimum[inv].reshape(ids.shape)
+    rows = np.arange(len(t))
+    carrying = np.argmin(g, axis=1)
+    lag, pair_id = g[rows, carrying], ids[rows, carrying]
+    act = np.flatnonzero(pair_id == pair_id[np.argmin(lag)])
+    kk = act[np.argmin(lag[act])]
+    v_peak = t[kk] + pair_id[kk] * pitch
+    if 0 < kk < len(t) - 1 and pair_id[kk - 1] == pair_id[kk] == pair_id[kk + 1]:
+        gm, g0, gp = lag[kk - 1], lag[kk], lag[kk + 1]
+        if gm - 2.0 * g0 + gp > 0.0:
+            v_peak += float(np.clip(0.5 * (gm - gp) / (gm - 2.0 * g0 + gp), -1.0, 1.0)) * step
+    bracket = None
+    for k in [k for k in range(len(t) - 1) if pair_id[k + 1] - pair_id[k] == -1]:
+        cols = [
+            [c for c, x in enumerate(ids[k + j].tolist()) if x == pair_id[k] - m]
+            for m in (0, 1)
+            for j in (0, 1)
+        ]
+        if not all(cols):
+            continue
+        d_lo = float(g[k, cols[0][0]]) - float(g[k, cols[2][0]])
+        d_hi = float(g[k + 1, cols[1][0]]) - float(g[k + 1, cols[3][0]])
+        if math.isfinite(d_lo) and math.isfinite(d_hi) and d_lo <= 0.0 <= d_hi and d_hi > d_lo:
+            bracket = ((k, *(c[0] for c in cols)), d_lo, d_hi)
+            break
+    return g, carrying, lag, pair_id, float(v_peak), bracket
+
+
+@pytest.mark.parametrize("start", [f for f in STARTS if f is not None])
+def test_side_start_is_the_numpy_steps(start):
+    rng = np.random.default_rng(31)
+    brackets = 0
+    for _ in range(300):
+        n, pairs, pitch = int(rng.integers(3, 25)), int(rng.integers(1, 5)), 0.3
+        t = np.linspace(-pitch, pitch, n)
+        ids = np.round(-t / pitch)[:, None] + (np.arange(pairs) - (pairs - 1) // 2)[None, :]
+        u = t[:, None] + ids * pitch
+        minimum = (u.ravel() - 0.05) ** 2 + rng.normal(0.0, 1e-4, u.size)
+        minimum[rng.random(u.size) < 0.1] = np.inf
+        minimum[np.arange(n) * pairs + rng.integers(0, pairs, n)] = rng.random(n)  # one touches
+        inv = np.arange(u.size)
+        out = [np.empty(ids.shape) for _ in range(4)]
+        out[1] = np.empty(ids.shape, bool)
+        edge = rng.random(u.size) < 0.2
+        carrying, lag, pair_id, touching, v_peak, _, _, bracket, d_lo, d_hi = start(
+            minimum, edge, minimum + 1.0, minimum + 2.0, inv, ids, t, pitch, t[1] - t[0], 0.0, *out
+        )
+        g, want_carrying, want_lag, want_id, want_peak, want_bracket = python_start(
+            minimum, inv, ids, t, pitch, t[1] - t[0]
+        )
+        assert (
+            touching and np.array_equal(out[0], g) and np.array_equal(out[1], edge.reshape(g.shape))
+        )
+        assert np.array_equal(out[2], g + 1.0) and np.array_equal(carrying, want_carrying)
+        assert np.array_equal(lag, want_lag) and np.array_equal(pair_id, want_id)
+        assert v_peak == want_peak
+        if want_bracket is None:
+            assert bracket[0] == -1
+        else:
+            assert (tuple(bracket), d_lo, d_hi) == want_bracket
+            brackets += 1
+    assert brackets > 30  # hand-overs bracketed, not only refusals

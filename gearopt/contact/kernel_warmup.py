@@ -77,8 +77,12 @@ def warm() -> None:
     zone = (np.zeros(1), np.zeros((1, 2, 2)), 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0)
     start, pair_row, tau = np.array([0, 1], ip), np.zeros(1, ip), np.zeros((1, 2))
     rays, zoom, out = np.zeros((1, 4)), np.linspace(0.0, 1.0, 3), np.empty(1)
+    zone_kernels.ray_samples(rays, np.zeros(4), out, np.ones(1, np.bool_), zoom, zoom, tau)
     zone_kernels.union_exits(rows, pinion, gear, zone, start, pair_row, rays, tau, zoom, out)
     zone_kernels.separations(rows, pinion, gear, zone, pair_row, np.zeros((1, 2)), out)
+    zone_kernels.ring_clearances(
+        rows, pinion, gear, pair_row, out, out.copy(), np.zeros((1, 2)), np.empty((1, 2))
+    )
     none = np.full(1, -1, ip)
     zone_kernels.swept_exits(
         rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out

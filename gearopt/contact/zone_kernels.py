@@ -20,7 +20,13 @@ import numpy as np
 from gearopt.contact.kernels import gap_of, pinion_at
 from gearopt.jit import compiled
 
-__all__ = ["separations", "swept_exits", "union_exits"]
+__all__ = [
+    "ray_samples",
+    "ring_clearances",
+    "separations",
+    "swept_exits",
+    "union_exits",
+]
 
 
 @compiled(inline=True)
@@ -282,3 +288,53 @@ def separations(rows, pinion, gear, zone, r, points, out):
         point = pinion_at(s, t, pinion, offsets[row])
         at = _zone_at(s, t, grid)
         out[k] = _separation_of(rows, row, point, at, gear, cells, lag, factor)
+
+
+@compiled
+def ring_clearances(rows, pinion, gear, r, face, profile, ring, delta):
+    """The clearance of rows ``r`` ``(K,)`` at points ``(face[k], profile[k])`` and on the
+    ring about each, ``ring`` ``(M, 2)`` offsets, into ``delta`` ``(K, 1 + M)`` (the point
+    first; the smooth extension beyond the flanks, as
+    :meth:`gearopt.contact.JointField.clearance_at_grid`'s): the samples of
+    :meth:`gearopt.mesh.zone.Zones.quadratic`, on the tables the zones' other kernels take."""
+    cells, offsets = pinion[14], rows[5]
+    for k in range(r.shape[0]):
+        row = r[k]
+        for j in range(delta.shape[1]):
+            s, t = face[k], profile[k]
+            if j > 0:
+                s, t = s + ring[j - 1, 0], t + ring[j - 1, 1]
+            point = pinion_at(s, t, pinion, offsets[row])
+            delta[k, j] = gap_of(rows, row, point, gear, cells)[0]
+
+
+@compiled
+def ray_samples(rays, box, reach, spread, even, geometric, tau):
+    """The samples of rays ``rays`` ``(K, 4)`` (origin, direction) into ``tau`` ``(K, m)``:
+    ray k scanned to the grid's edge (the box ``(low face, low profile, high face, high
+    profile)``; :meth:`gearopt.mesh.zone.Zones.to_edge`) or ``reach[k]`` if nearer, at the
+    fractions ``even`` where ``spread[k]``, else ``geometric`` (each ``(m,)``). NaN
+    propagates as numpy's minimum and maximum."""
+    for k in range(rays.shape[0]):
+        e0 = e1 = math.inf
+        if rays[k, 2] > 0.0:
+            e0 = (box[2] - rays[k, 0]) / rays[k, 2]
+        elif rays[k, 2] < 0.0:
+            e0 = (box[0] - rays[k, 0]) / rays[k, 2]
+        if rays[k, 3] > 0.0:
+            e1 = (box[3] - rays[k, 1]) / rays[k, 3]
+        elif rays[k, 3] < 0.0:
+            e1 = (box[1] - rays[k, 1]) / rays[k, 3]
+        if e0 != e0 or e1 != e1:
+            edge = math.nan
+        else:  # (numpy's maximum with 0: a zero of either sign is +0)
+            edge = min(e0, e1)
+            edge = edge if edge > 0.0 else 0.0
+        far = reach[k]
+        if far != far or edge != edge:
+            far = math.nan
+        else:
+            far = min(far, edge)
+        fractions = even if spread[k] else geometric
+        for j in range(tau.shape[1]):
+            tau[k, j] = far * fractions[j]

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from gearopt.analysis_options import check_options
 from gearopt.contact import ClearanceField, FieldSample, JointField
+from gearopt.mesh import kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, as_list
 from gearopt.mesh.pattern import columns, sample_rows
 from gearopt.mesh.side import FLAT_ARCSEC, SideCycle
@@ -273,10 +274,15 @@ class MeshCycle:
         t, p1, step = self.t, self.pitch, self.step
         windows, rows_side, rows_u, start = [], [], [], 0
         for k in range(len(self.fields)):
-            ids = np.round((centres[k] - t) / p1)[:, None] + self.windows[k][None, :]
-            u = t[:, None] + ids * p1  # (n, pairs): each pair's base-pair relative rotation
-            key = np.round(u.ravel() / p1 * 1e9).astype(np.int64)
-            _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+            # (n, pairs): each pair's id and base-pair relative rotation; each distinct one's
+            # first entry and each entry's distinct one
+            shape = (len(t), len(self.windows[k]))
+            ids, u = np.empty(shape), np.empty(shape)
+            first, inv = np.empty(u.size, np.intp), np.empty(u.size, np.intp)
+            count = kernels.window_rows(
+                t, float(centres[k]), self.windows[k], p1, ids, u, first, inv
+            )
+            first = first[:count]
             uu = u.ravel()[first]
             rows_u += [uu, uu.min() - step * EXTEND, uu.max() + step * EXTEND]
             windows.append((u, ids, inv, start, len(first)))

@@ -147,13 +147,20 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     p = field.pinion.point_at(ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6])
     q = field.gear_frame_points(p, phi)
     turn = -field.ratio * phi + field.gear_offset_rad - field.gear_sense * ex.minimum_rad[4:6]
-    ct, st = np.cos(turn), np.sin(turn)
-    points = np.stack([ct * q[:, 0] + st * q[:, 1], -st * q[:, 0] + ct * q[:, 1], q[:, 2]], -1)
-    mid = 0.5 * (points[0] + points[1])
+    # (the two points turned by the gear's turn, on Python floats: numpy's arithmetic, in order)
+    cos, sin = np.cos(turn).tolist(), np.sin(turn).tolist()
+    a, b = (
+        (c * x + s * y, -s * x + c * y, z)
+        for c, s, (x, y, z) in zip(cos, sin, q.tolist(), strict=True)
+    )
+    mid = (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
     p_s, p_h = _tangents(FlankJet(field.gear), float(s2), float(h2))
     return path_angle(
-        points[1] - points[0], _cross(p_s, p_h), mid, math.radians(frame.gear_root_angle_deg)
+        (b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+        _cross(p_s, p_h),
+        mid,
+        math.radians(frame.gear_root_angle_deg),
     )
 
 

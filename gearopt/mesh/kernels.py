@@ -1,14 +1,18 @@
 """Compiled kernels of the mesh cycle's pattern at the nodes (numba; plain Python without it, as
-:mod:`gearopt.contact.kernels`): the separations of every position's pairs, the pattern field
-and the carrying zones' centroids in one pass over the node fields, where numpy makes a
-temporary of every position's nodes at each step (:func:`gearopt.mesh.pattern.separation_mm`,
-:func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and two steps of
+:mod:`gearopt.contact.kernels`): the separations of every position's pairs, the pattern field,
+the carrying zones' centroids, the TE and the pairs whose zones the pattern measures in one
+pass over the node fields (:func:`pattern_fields`), where numpy makes a temporary of every
+position's nodes at each step (:func:`gearopt.mesh.pattern.separation_mm`,
+:func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and the steps of
 a side's mesh cycle on its few dozen samples, where numpy's per-call overhead outweighs the
-work: the contact interval's run of interior samples (:func:`interior_run`) and the crossing
-of two pairs' interpolated lags, the hand-over's first guess (:func:`crossing_root`), and its
-iteration's interpolants on the samples so far (:func:`nearest_parabola`,
-:func:`inverse_roots`); and the zones' node factors continued below the generated boundary
-(:func:`extend_factors`).
+work: its window's distinct rotations (:func:`window_rows`), its start on the window's sample
+(:func:`side_start`), the contact interval's run of interior samples (:func:`interior_run`)
+and the crossing of two pairs' interpolated lags, the hand-over's first guess
+(:func:`crossing_root`), and its iteration's interpolants on the samples so far
+(:func:`nearest_parabola`, :func:`inverse_roots`); and the zones' node factors continued below
+the generated boundary (:func:`extend_factors`) and the neighbours over the motion of the pairs
+a zone's rays cross (:func:`swept_pairs`). Each does numpy's arithmetic in numpy's
+order: the results are the same to the bit.
 """
 
 from __future__ import annotations
@@ -27,25 +31,35 @@ __all__ = [
     "inverse_roots",
     "nearest_parabola",
     "pattern_fields",
+    "side_start",
+    "swept_pairs",
+    "window_rows",
     "warm",
 ]
 
 
 @compiled
-def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profile, sep, out):
-    """The pattern's node fields of a side's positions.
+def pattern_fields(
+    clearance, factor, minimum, inv, lag, carrying, g_min, compound, face, profile, sep, out, held
+):
+    """The pattern's node fields of a side's positions, their TE and the pairs whose zones the
+    pattern measures (:meth:`gearopt.mesh.side.SideCycle.assemble`).
 
     Parameters
     ----------
     clearance, factor
         ``(R, N)`` the window sample's node clearances and node factors (normal or
         circumferential; N = n_f * n_p nodes, profile fastest).
+    minimum
+        ``(R,)`` the window sample's lags (least clearances; +inf off the flanks).
     inv
         ``(n * pairs,)`` the sample's row of each position's pair (position-major).
     lag
         ``(n,)`` the carrying pair's lag at each position.
     carrying
         ``(n,)`` the carrying pair's column.
+    g_min
+        The least lag (the TE's zero).
     compound
         The marking compound (mm).
     face, profile
@@ -54,26 +68,48 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
         ``(n * pairs, N)`` out: separations (um) at the carrying lag, +inf off the flanks
         (:func:`gearopt.mesh.pattern.separation_mm` times 1e3).
     out
-        ``(N + 2 n,)`` out: the pattern field (the least separation over the positions and
-        pairs, um), then the carrying zones' centroids (mm), face then profile
-        (:func:`gearopt.mesh.pattern.centroids`).
+        ``(N + (3 + pairs) n,)`` out: the pattern field (the least separation over the
+        positions and pairs, um); the carrying zones' centroids (mm), face then profile
+        (:func:`gearopt.mesh.pattern.centroids`); the TE (arcsec, ``(g_min - lag)``); the
+        pairs' TE, pair-major (``(pairs, n)``).
+    held
+        ``(n * pairs,)`` out: first the entries whose zones reach within five compounds (their
+        lag above the carrying one times the row's largest node factor; held or about to be).
+
+    Returns
+    -------
+    int
+        How many entries ``held`` lists.
     """
     n = lag.shape[0]
     pairs = inv.shape[0] // n
     n_p = profile.shape[0]
     size = clearance.shape[1]
+    arcsec = 180.0 * 3600.0 / math.pi
+    limit = 5.0 * compound
+    count = 0
     for g in range(size):
         out[g] = math.inf
     for k in range(inv.shape[0]):
         row = inv[k]
         ref = lag[k // pairs]
+        largest = -math.inf  # (numpy's max: a NaN wins)
         for g in range(size):
-            v = (clearance[row, g] - ref) * factor[row, g]
+            f = factor[row, g]
+            if largest == largest and (f > largest or f != f):
+                largest = f
+            v = (clearance[row, g] - ref) * f
             if v != v:  # (inf - inf: nothing on the flanks; inf * 0: off them)
                 v = math.inf
             sep[k, g] = v
             if v < out[g]:
                 out[g] = v
+        above = minimum[row] - ref
+        if not math.isfinite(above):
+            above = math.inf
+        if above * largest < limit:
+            held[count] = k
+            count += 1
     for i in range(n):
         k = i * pairs + carrying[i]
         total = ws = wh = 0.0
@@ -94,11 +130,245 @@ def pattern_fields(clearance, factor, inv, lag, carrying, compound, face, profil
         else:  # no zone: its least-separated node
             out[size + i] = face[at // n_p]
             out[size + n + i] = profile[at % n_p]
+        out[size + 2 * n + i] = (g_min - lag[i]) * arcsec
+        for p in range(pairs):
+            out[size + (3 + p) * n + i] = (g_min - minimum[inv[i * pairs + p]]) * arcsec
     for k in range(inv.shape[0]):  # mm to um (after the centroids, which take mm)
         for g in range(size):
             sep[k, g] *= 1e3
     for g in range(size):
         out[g] *= 1e3
+    return count
+
+
+@compiled
+def side_start(minimum, edge, face, profile, inv, ids, t, pitch, step, tiny, g, edge_all, cs, ch):
+    """A side's start on the window's sample (:class:`gearopt.mesh.side.SideCycle`): its
+    pairs' lags, edge flags and contact points at each position, the carrying pair (the least
+    lag), the TE maximum's guess (its relative rotation: the parabola through the least lag of
+    the carrying pair and its neighbours on the same pair) and the hand-over's bracket
+    (:meth:`~gearopt.mesh.side.SideCycle.start_handover`).
+
+    Parameters
+    ----------
+    minimum, edge, face, profile
+        ``(R,)`` the sample's lags (+inf off the flanks), edge flags and contact points.
+    inv
+        ``(n * pairs,)`` the sample's row of each position's pair (position-major).
+    ids
+        ``(n, pairs)`` the pairs' ids.
+    t
+        ``(n,)`` the positions.
+    pitch, step
+        The angular pitch and the position step.
+    tiny
+        The least rise of the lag difference over a bracket (rad).
+    g, edge_all, cs, ch
+        ``(n, pairs)`` out: the pairs' lags, edge flags and contact points.
+
+    Returns
+    -------
+    tuple
+        ``(carrying, lag, pair_id, touching, v_peak, spread, spread_finite, bracket, d_lo,
+        d_hi)``: the carrying pair's column, lag and id at each position; False where a
+        position has no pair touching inside the flanks; the peak's guess; the carrying lag's
+        range (numpy's, a NaN wins) and its finite values' range (0 without); ``(k, leaving
+        column at k, at k + 1, incoming column at k, at k + 1)``, ``k`` -1 without a bracket;
+        the lag differences (leaving minus incoming) at its ends.
+    """
+    n, pairs = ids.shape
+    carrying = np.empty(n, np.intp)
+    lag = np.empty(n)
+    pair_id = np.empty(n, ids.dtype)
+    touching = True
+    for i in range(n):
+        best = 0
+        finite = False
+        for p in range(pairs):
+            row = inv[i * pairs + p]
+            v = minimum[row]
+            g[i, p] = v
+            edge_all[i, p] = edge[row]
+            cs[i, p] = face[row]
+            ch[i, p] = profile[row]
+            finite = finite or math.isfinite(v)
+            # (numpy's argmin: the first least, or the first NaN)
+            if g[i, best] == g[i, best] and (v < g[i, best] or v != v):
+                best = p
+        touching = touching and finite
+        carrying[i] = best
+        lag[i] = g[i, best]
+        pair_id[i] = ids[i, best]
+    # the peak: the least lag on the carrying pair of the least lag, and the parabola through
+    # its neighbours on the same pair
+    least = 0  # (numpy's argmin, as above)
+    for i in range(n):
+        if lag[least] == lag[least] and (lag[i] < lag[least] or lag[i] != lag[i]):
+            least = i
+    kk = -1
+    for i in range(n):
+        if pair_id[i] == pair_id[least] and (
+            kk < 0 or (lag[kk] == lag[kk] and (lag[i] < lag[kk] or lag[i] != lag[i]))
+        ):
+            kk = i
+    v_peak = t[kk] + pair_id[kk] * pitch
+    if 0 < kk < n - 1 and pair_id[kk - 1] == pair_id[kk] and pair_id[kk] == pair_id[kk + 1]:
+        gm, g0, gp = lag[kk - 1], lag[kk], lag[kk + 1]
+        curv = gm - 2.0 * g0 + gp
+        if curv > 0.0:
+            z = 0.5 * (gm - gp) / curv
+            if z < -1.0:
+                z = -1.0
+            elif z > 1.0:
+                z = 1.0
+            v_peak += z * step
+    high, low = -math.inf, math.inf
+    high_f, low_f = -math.inf, math.inf
+    nan = False
+    for i in range(n):
+        v = lag[i]
+        nan = nan or v != v
+        high, low = max(high, v), min(low, v)
+        if math.isfinite(v):
+            high_f, low_f = max(high_f, v), min(low_f, v)
+    spread = math.nan if nan else high - low
+    spread_finite = high_f - low_f if low_f <= high_f else 0.0
+    # the hand-over: the first forward switch of the carrying pair (the next, one id lower,
+    # takes over) whose two pairs' lag difference changes sign
+    bracket = (-1, 0, 0, 0, 0)
+    d_lo = d_hi = 0.0
+    for k in range(n - 1):
+        if pair_id[k + 1] - pair_id[k] != -1:
+            continue
+        leave = pair_id[k]
+        cols = [-1, -1, -1, -1]  # leaving at k, k + 1; incoming at k, k + 1
+        for j in range(2):
+            for p in range(pairs):
+                if ids[k + j, p] == leave and cols[j] < 0:
+                    cols[j] = p
+                if ids[k + j, p] == leave - 1 and cols[2 + j] < 0:
+                    cols[2 + j] = p
+        if min(cols[0], cols[1], cols[2], cols[3]) < 0:
+            continue
+        lo = g[k, cols[0]] - g[k, cols[2]]
+        hi = g[k + 1, cols[1]] - g[k + 1, cols[3]]
+        if math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi and hi - lo > tiny:
+            bracket = (k, cols[0], cols[1], cols[2], cols[3])
+            d_lo, d_hi = lo, hi
+            break
+    return carrying, lag, pair_id, touching, v_peak, spread, spread_finite, bracket, d_lo, d_hi
+
+
+@compiled
+def _rint(x):
+    """``x`` rounded to the nearest integer, halves to even (numpy's ``round``)."""
+    r = math.floor(x)
+    rest = x - r  # (exact)
+    if rest > 0.5 or (rest == 0.5 and r % 2.0 != 0.0):
+        r += 1.0
+    return r
+
+
+@compiled
+def _stable_order(key):
+    """The stable ascending order of ``key`` (numpy's ``argsort(kind="stable")``: a stable
+    sort's order is unique): insertion, for the few dozen to few thousand nearly ordered
+    keys here, which compiles in a fraction of numba's merge sort's time."""
+    order = np.arange(key.shape[0])
+    for i in range(1, key.shape[0]):
+        k = order[i]
+        j = i
+        while j > 0 and key[order[j - 1]] > key[k]:
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = k
+    return order
+
+
+@compiled
+def swept_pairs(ray, key, position, prev, nxt, start):
+    """The pairs of :func:`gearopt.contact.zone_kernels.swept_exits` from the rays' lists
+    ``(P,)`` (ray, tooth pair, position; each ray's pairs together, the rays in order): each
+    pair's neighbours over the motion, the rows of the same ray and tooth pair at the previous
+    and next positions (-1 without), into ``prev`` and ``nxt``; the first pair of each ray
+    into ``start`` ``(P + 2,)``, then ``P`` (without pairs, one ray of none: ``0, 0``).
+
+    Returns
+    -------
+    tuple
+        ``(rays, ordered)``: how many rays ``start`` lists (``start[rays]`` is ``P``), and
+        False where a ray's pairs are not together in the order of the rays.
+    """
+    n = ray.shape[0]
+    if n == 0:
+        start[0] = start[1] = 0
+        return 1, True
+    # one stable sort of one code in the order (ray, key, position): lexsort's
+    k0, p0 = key.min(), position.min()
+    span_k, span_p = key.max() - k0 + 1, position.max() - p0 + 1
+    order = _stable_order((ray * span_k + (key - k0)) * span_p + (position - p0))
+    for i in range(n):
+        prev[i] = nxt[i] = -1
+    for i in range(1, n):
+        a, b = order[i - 1], order[i]
+        if ray[a] == ray[b] and key[a] == key[b] and position[b] - position[a] == 1:
+            prev[b], nxt[a] = a, b
+    count, ordered = 0, True
+    for i in range(n):
+        if i == 0 or ray[i] != ray[i - 1]:
+            start[count] = i
+            count += 1
+        if i > 0 and ray[i] < ray[i - 1]:
+            ordered = False
+    start[count] = n
+    return count, ordered
+
+
+@compiled
+def window_rows(t, centre, window, pitch, ids, u, first, inv):
+    """A side's window of pairs about its mesh centre and its distinct relative rotations
+    (:meth:`gearopt.mesh.cycle.MeshCycle.main_sample`).
+
+    Parameters
+    ----------
+    t
+        ``(n,)`` the positions.
+    centre
+        The mesh centre (a relative rotation).
+    window
+        ``(pairs,)`` the window's pair offsets.
+    pitch
+        The angular pitch.
+    ids, u
+        ``(n, pairs)`` out: the pairs' ids (the nearest whole pitches from the centre plus the
+        offsets) and their relative rotations ``t + ids * pitch``.
+    first, inv
+        ``(n * pairs,)`` out: the first entry of ``u`` (flat) of each distinct rotation (to a
+        billionth of a pitch), in increasing order; the distinct rotation of each entry
+        (numpy's ``unique`` with ``return_index`` and ``return_inverse``).
+
+    Returns
+    -------
+    int
+        How many distinct rotations ``first`` lists.
+    """
+    n, pairs = ids.shape
+    key = np.empty(n * pairs, np.int64)
+    for i in range(n):
+        base = _rint((centre - t[i]) / pitch)
+        for j in range(pairs):
+            ids[i, j] = base + window[j]
+            u[i, j] = t[i] + ids[i, j] * pitch
+            key[i * pairs + j] = np.int64(_rint(u[i, j] / pitch * 1e9))
+    order = _stable_order(key)
+    count = 0
+    for m in range(key.shape[0]):
+        k = order[m]
+        if m == 0 or key[k] != key[order[m - 1]]:
+            first[count] = k
+            count += 1
+        inv[k] = count - 1
+    return count
 
 
 @compiled
@@ -326,9 +596,49 @@ def warm() -> None:
         return
     one, index = np.zeros((1, 1)), np.zeros(1, np.intp)
     pattern_fields(
-        one, one, index, np.zeros(1), index, 1.0, np.zeros(1), np.zeros(1), one.copy(), np.empty(3)
+        one,
+        one,
+        np.zeros(1),
+        index,
+        np.zeros(1),
+        index,
+        0.0,
+        1.0,
+        np.zeros(1),
+        np.zeros(1),
+        one.copy(),
+        np.empty(5),
+        index.copy(),
     )
     interior_run(np.arange(2), np.ones(2, np.bool_), np.zeros(2))
+    side, none = np.zeros(1, np.intp), np.full(1, -1, np.intp)
+    swept_pairs(side, side, side, none.copy(), none.copy(), np.zeros(3, np.intp))
+    window_rows(
+        np.zeros(2),
+        0.0,
+        np.arange(1),
+        1.0,
+        np.empty((2, 1)),
+        np.empty((2, 1)),
+        *np.empty((2, 2), np.intp),
+    )
+    two, ids = np.zeros(2), np.zeros((2, 1))
+    side_start(
+        two,
+        two > 1.0,
+        two,
+        two,
+        np.arange(2),
+        ids,
+        two,
+        1.0,
+        1.0,
+        1e-9,
+        two.reshape(2, 1).copy(),
+        ids > 1.0,
+        two.reshape(2, 1).copy(),
+        two.reshape(2, 1).copy(),
+    )
     extend_factors(np.zeros((1, 1, 3)))
     nearest_parabola(np.arange(6.0).reshape(3, 2), 0.5)
     inverse_roots(0.0, 1.0, -1.0, 1.0, np.arange(6.0).reshape(3, 2))

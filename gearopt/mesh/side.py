@@ -140,18 +140,39 @@ class SideCycle:
         self.u, self.ids, self.inv = u, ids, inv
         self.t, self.pitch, self.step = t, pitch, step
         shape = u.shape
-        self.g = sample.minimum_rad[inv].reshape(shape)
-        self.edge_all = sample.edge[inv].reshape(shape)
-        if not np.isfinite(self.g).any(axis=1).all():
+        self.g, self.cs, self.ch = np.empty(shape), np.empty(shape), np.empty(shape)
+        self.edge_all = np.empty(shape, bool)
+        (
+            self.carrying,
+            self.lag,
+            self.pair_id,
+            touching,
+            v_peak,
+            spread,
+            spread_finite,
+            bracket,
+            d_lo,
+            d_hi,
+        ) = kernels.side_start(
+            sample.minimum_rad,
+            sample.edge,
+            sample.contact_face_mm,
+            sample.contact_profile_mm,
+            inv,
+            ids,
+            t,
+            pitch,
+            step,
+            1e-9 / ARCSEC,
+            self.g,
+            self.edge_all,
+            self.cs,
+            self.ch,
+        )
+        if not touching:
             raise ContactError(
                 "tca", rule="at some positions no tooth pair touches inside the flanks"
             )
-        rows = np.arange(shape[0])
-        self.carrying = np.argmin(self.g, axis=1)
-        self.lag = self.g[rows, self.carrying]
-        self.pair_id = ids[rows, self.carrying]
-        self.cs = sample.contact_face_mm[inv].reshape(shape)
-        self.ch = sample.contact_profile_mm[inv].reshape(shape)
         self.requests: list[Request] = []
         self.probes: list[tuple[float, tuple]] = []
         self.answers: dict = {}
@@ -173,12 +194,11 @@ class SideCycle:
         self.ex_phi: NDArray | None = None
         self.ex: FieldSample | None = None
         self.start_interval()
-        self.start_handover()
+        self.start_handover(bracket, d_lo, d_hi, spread)
         self.g_peak: float | None = None
-        self.peak_at = self.peak_guess()
+        self.peak_at = float(v_peak)
         self.peak_lags: dict = {}
-        finite = self.lag[np.isfinite(self.lag)]
-        if finite.size and finite.max() - finite.min() >= FLAT_ARCSEC / ARCSEC:
+        if spread_finite >= FLAT_ARCSEC / ARCSEC:
             self.ask_peak([-1, 0, 1])  # a flat TE (line contact): its least lag is noise
 
     # -- the contact interval ---------------------------------------------------------------
@@ -274,44 +294,31 @@ class SideCycle:
 
     # -- the hand-over ----------------------------------------------------------------------
 
-    def start_handover(self) -> None:
-        """Find a forward switch of the carrying pair (the next pair, one id lower, takes over)
-        whose two pairs' lag difference changes sign: it brackets the hand-over
-        (:class:`~gearopt.mesh.handover.HandOver`); its first guess is the crossing of the two
+    def start_handover(self, bracket, d_lo: float, d_hi: float, spread: float) -> None:
+        """Start the hand-over's search on its bracket (:func:`gearopt.mesh.kernels.side_start`:
+        the first forward switch of the carrying pair, the next pair, one id lower, taking
+        over, whose two pairs' lag difference ``d_lo``, ``d_hi`` changes sign;
+        :class:`~gearopt.mesh.handover.HandOver`); its first guess is the crossing of the two
         pairs' interpolated lags (:meth:`crossing`) where there is one, else the iteration
-        starts. Without a bracket the TE is flat (line contact) and the cycle is centred on the
-        contact interval."""
-        g, ids, pair_id, t, pitch = self.g, self.ids, self.pair_id, self.t, self.pitch
-        n = len(t)
-        pid = pair_id.tolist()
-        for k in [k for k in range(n - 1) if pid[k + 1] - pid[k] == -1]:
-            leave = pair_id[k]
-            rows = ids[k : k + 2].tolist()
-            col_l = [[c for c, x in enumerate(row) if x == leave] for row in rows]
-            col_i = [[c for c, x in enumerate(row) if x == leave - 1] for row in rows]
-            if any(not c for c in col_l + col_i):
-                continue
-            # (Python floats: inf - inf, where a pair is off the flanks, is NaN without a warning)
-            d_lo = float(g[k, col_l[0][0]]) - float(g[k, col_i[0][0]])
-            d_hi = float(g[k + 1, col_l[1][0]]) - float(g[k + 1, col_i[1][0]])
-            finite = math.isfinite(d_lo) and math.isfinite(d_hi)
-            if finite and d_lo <= 0.0 <= d_hi and d_hi - d_lo > 1e-9 / ARCSEC:
-                lo, hi = t[k] + leave * pitch, t[k + 1] + leave * pitch
-                cs, ch = self.cs, self.ch
-                ends = [
-                    ((cs[k, c[0][0]], ch[k, c[0][0]]), (cs[k + 1, c[1][0]], ch[k + 1, c[1][0]]))
-                    for c in (col_l, col_i)
-                ]
-                # a line contact: the TE flat, or the lags differing by noise
-                spread = self.lag.max() - self.lag.min()
-                flat = min(spread, d_hi - d_lo) < FLAT_ARCSEC / ARCSEC
-                self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step, flat)
-                guess = self.crossing(lo, hi)
-                if guess is None:
-                    self.ask_iteration(self.ho.x0)
-                else:
-                    self.ask_fit(guess)
-                return
+        starts. Without a bracket (``bracket[0]`` -1) the TE is flat (line contact) and the
+        cycle is centred on the contact interval. ``spread``: the carrying lag's range."""
+        k, l0, l1, i0, i1 = bracket
+        if k < 0:
+            return
+        leave, t, pitch, cs, ch = self.pair_id[k], self.t, self.pitch, self.cs, self.ch
+        lo, hi = t[k] + leave * pitch, t[k + 1] + leave * pitch
+        ends = [
+            ((cs[k, c0], ch[k, c0]), (cs[k + 1, c1], ch[k + 1, c1]))
+            for c0, c1 in ((l0, l1), (i0, i1))
+        ]
+        # a line contact: the TE flat, or the lags differing by noise
+        flat = min(spread, d_hi - d_lo) < FLAT_ARCSEC / ARCSEC
+        self.ho = HandOver(lo, hi, d_lo, d_hi, ends, self.step, flat)
+        guess = self.crossing(lo, hi)
+        if guess is None:
+            self.ask_iteration(self.ho.x0)
+        else:
+            self.ask_fit(guess)
 
     def crossing(self, lo, hi) -> float | None:
         """The crossing of the two pairs' lags interpolated through the interval samples
@@ -447,8 +454,9 @@ class SideCycle:
         """Take in the peak's evaluations: the parabola through the lags an eighth of a step
         either side of the guess and at it, then its vertex once (where within half a step),
         then ``g_peak``: the least lag evaluated. The samples' parabola the guess comes from
-        (:meth:`peak_guess`) misses the least lag by up to 0.02 arcsec where the lag is not
-        symmetric about its minimum (a hand-over in edge contact nearby)."""
+        (:func:`gearopt.mesh.kernels.side_start`) misses the least lag by up to 0.02 arcsec
+        where the lag is not symmetric about its minimum (a hand-over in edge contact
+        nearby)."""
         if self.g_peak is not None:
             return
         for key in [k for k in self.answers if k[0] == "pk"]:
@@ -468,20 +476,6 @@ class SideCycle:
             self.g_peak = float(g.min())
             return
         self.probes.append((self.peak_at + z * self.step / 8.0, ("pk", "vertex")))
-
-    def peak_guess(self) -> float:
-        """The TE maximum's relative rotation: the parabola through the least sample of the
-        carrying pair and its neighbours on the same pair."""
-        lag, pair_id, t, step = self.lag, self.pair_id, self.t, self.step
-        act = np.flatnonzero(pair_id == pair_id[np.argmin(lag)])
-        kk = act[np.argmin(lag[act])]
-        v_peak = t[kk] + pair_id[kk] * self.pitch
-        if 0 < kk < len(t) - 1 and pair_id[kk - 1] == pair_id[kk] == pair_id[kk + 1]:
-            gm, g0, gp = lag[kk - 1], lag[kk], lag[kk + 1]
-            curv = gm - 2.0 * g0 + gp
-            if curv > 0.0:
-                v_peak += float(np.clip(0.5 * (gm - gp) / curv, -1.0, 1.0)) * step
-        return float(v_peak)
 
     def contact_at(self, v: NDArray) -> tuple[NDArray, NDArray]:
         """Starts for refinements at relative rotations ``v``: the contact points interpolated
@@ -535,19 +529,20 @@ class SideCycle:
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
         rows = np.arange(positions)
-        g, lag, carrying = self.g, self.lag, self.carrying
+        lag, carrying = self.lag, self.carrying
         g_hand = self.g_hand
         if g_hand is None:
             g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
         g_min = float(min(ex.minimum_rad[2], lag.min()))
         if self.g_peak is not None:
             g_min = min(g_min, self.g_peak)
-        te = (g_min - lag) * ARCSEC
-        pair_te = ((g_min - g) * ARCSEC).T
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
 
         # separations at the contact gear angle of each position (same lag for every pair),
-        # the pattern (um) and the path (separation_mm, centroids: one compiled pass)
+        # the pattern (um), the path (separation_mm, centroids), the TE and the zones to
+        # measure (gearopt.mesh.zone, every side's at once: M's position and its neighbours',
+        # and the pairs whose zones reach within five compounds, held or about to be: the
+        # neighbours through which the motion is refined) in one compiled pass
         compound_mm = compound_um * 1e-3
         kind = "normal_factor_mm" if separation == "normal" else "radius_mm"
         node_factor = getattr(self.sample, kind)
@@ -555,42 +550,38 @@ class SideCycle:
         profile = field.pinion.profile_mm - frame.root_mm
         size = face.size * profile.size
         sep_um = np.empty((positions * pairs, size))
-        out = np.empty(size + 2 * positions)
-        kernels.pattern_fields(
+        out = np.empty(size + (3 + pairs) * positions)
+        held = np.empty(positions * pairs, np.intp)
+        count = kernels.pattern_fields(
             np.ascontiguousarray(self.sample.clearance_rad).reshape(-1, size),
             np.ascontiguousarray(node_factor).reshape(-1, size),
+            self.sample.minimum_rad,
             self.inv,
             lag,
             carrying,
+            g_min,
             compound_mm,
             face,
             profile,
             sep_um,
             out,
+            held,
         )
         pattern = out[:size].reshape(field.pinion.shape)
-        path_s, path_h = out[size : size + positions], out[size + positions :]
-
-        # the zones measured on the refined field (gearopt.mesh.zone, every side's at once):
-        # M's position and its neighbours', and the pairs whose zones make the pattern
-        flat_g = g.ravel()
-        with np.errstate(invalid="ignore"):  # inf - inf off the flanks
-            above = flat_g - np.repeat(lag, pairs)
-        largest = node_factor.reshape(len(node_factor), -1).max(axis=1)[self.inv]
-        reach = np.where(np.isfinite(above), above, np.inf) * largest
-        # the pairs whose zones reach within five compounds (held or about to be: the
-        # neighbours through which the motion is refined)
-        held = np.flatnonzero(reach < 5.0 * compound_mm)
+        path_s, path_h, te = out[size : size + 3 * positions].reshape(3, positions)
+        pair_te = out[size + 3 * positions :].reshape(pairs, positions)
+        held = held[:count]
+        position = held // pairs
         lines = dict(
             mean_phi_rad=ex.phi_rad[3:6],
             mean_lag_rad=ex.minimum_rad[3:6],
             mean_factor_mm=getattr(ex, kind)[3:6],
             mean_contact_mm=columns(ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]),
             pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
-            pattern_lag_rad=np.repeat(lag, pairs)[held],
+            pattern_lag_rad=lag[position],
             pattern_factor_rows=(node_factor, self.inv[held]),
             pattern_contact_mm=columns(self.cs.ravel()[held], self.ch.ravel()[held]),
-            pattern_position=held // pairs,
+            pattern_position=position,
             pattern_pair=self.ids.ravel()[held],
             interval=self.interval,
         )

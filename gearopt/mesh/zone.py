@@ -151,6 +151,9 @@ class Zones:
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
         self.last = (len(face_mm) - 2, len(profile_mm) - 2)
+        low = np.array([self.face0, self.profile0])
+        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
+        self.box = np.concatenate([low, high])  # the grid's edges (:meth:`to_edge`)
         self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
@@ -196,10 +199,16 @@ class Zones:
         """``(K, 5)`` the clearance's local quadratic form about points ``(face_mm,
         profile_mm)`` of rows ``r``: ``(g_s, g_h, H_ss, H_sh, H_hh)`` (rad per mm, per mm^2),
         fitted on a ring of radius :data:`RING_MM` (least squares)."""
-        face_mm, profile_mm = np.asarray(face_mm, float), np.asarray(profile_mm, float)
-        s = np.concatenate([face_mm[:, None], face_mm[:, None] + _RING[:, 0]], 1)
-        h = np.concatenate([profile_mm[:, None], profile_mm[:, None] + _RING[:, 1]], 1)
-        delta, _ = self.clearance(np.asarray(r, np.intp), s, h)
+        face_mm = np.ascontiguousarray(face_mm, float)
+        delta = np.empty((len(face_mm), 1 + len(_RING)))
+        zone_kernels.ring_clearances(
+            *self.tables()[:3],
+            np.asarray(r, np.intp),
+            face_mm,
+            np.ascontiguousarray(profile_mm, float),
+            _RING,
+            delta,
+        )
         return (delta[:, 1:] - delta[:, :1]) @ _RING_FIT.T
 
     def axes(self, r, face_mm, profile_mm) -> NDArray:
@@ -327,18 +336,14 @@ class Zones:
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         order = np.argsort(ray, kind="stable")
-        start = np.searchsorted(ray[order], np.arange(len(origins) + 1))
-        tau = np.minimum(reach, self.to_edge(origins, directions))[:, None] * SCAN[None, :]
-        out = np.empty(len(origins))
-        zone_kernels.union_exits(
-            *self.tables(),
-            start,
-            r[order],
-            self.rays(origins, directions),
-            tau,
-            _ZOOM_FRACTIONS,
-            out,
-        )
+        k_rays = len(origins)
+        start = np.searchsorted(ray[order], np.arange(k_rays + 1))
+        rays = self.rays(origins, directions)
+        reach = np.array(np.broadcast_to(np.asarray(reach, float), (k_rays,)))  # (writable)
+        tau = np.empty((k_rays, len(SCAN)))  # (to the grid's edge or the reach: to_edge's)
+        zone_kernels.ray_samples(rays, self.box, reach, np.ones(k_rays, bool), SCAN, SCAN, tau)
+        out = np.empty(k_rays)
+        zone_kernels.union_exits(*self.tables(), start, r[order], rays, tau, _ZOOM_FRACTIONS, out)
         return out
 
     def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
@@ -371,20 +376,31 @@ class Zones:
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
         origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays = len(origins)
-        prev, nxt = _neighbours(ray, np.asarray(key), np.asarray(position))
-        starts = np.flatnonzero(np.r_[True, np.diff(ray) != 0])
-        if np.any(np.diff(ray) < 0) or len(starts) != k_rays:
+        prev, nxt, start = np.empty_like(ray), np.empty_like(ray), np.empty(len(ray) + 2, np.intp)
+        found, ordered = kernels.swept_pairs(
+            ray, np.asarray(key, np.int64), np.asarray(position, np.int64), prev, nxt, start
+        )
+        if not ordered or found != k_rays:
             raise ValueError("pattern_exits: every ray's pairs, in order of the rays")
-        fractions = np.where(np.asarray(spread, bool)[:, None], SPREAD[None, :], NEAR[None, :])
-        tau = self.to_edge(origins, directions)[:, None] * fractions
+        rays = self.rays(origins, directions)
+        tau = np.empty((k_rays, len(SPREAD)))  # (to the grid's edge: to_edge's)
+        zone_kernels.ray_samples(
+            rays,
+            self.box,
+            np.full(k_rays, np.inf),
+            np.ascontiguousarray(spread, bool),
+            SPREAD,
+            NEAR,
+            tau,
+        )
         out = np.empty(k_rays)
         zone_kernels.swept_exits(
             *self.tables(),
-            np.r_[starts, len(ray)],
+            start[: found + 1],
             r,
             prev,
             nxt,
-            self.rays(origins, directions),
+            rays,
             tau,
             _ZOOM_FRACTIONS,
             out,
@@ -543,8 +559,7 @@ class Zones:
     def to_edge(self, origins, directions) -> NDArray:
         """``(K,)`` how far rays run from their origins to the grid's edge (off it nothing is
         on the flanks)."""
-        low = np.array([self.face0, self.profile0])
-        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
+        low, high = self.box[:2], self.box[2:]
         with np.errstate(divide="ignore", invalid="ignore"):
             ends = np.where(directions > 0.0, (high - origins) / directions, np.inf)
             ends = np.where(directions < 0.0, (low - origins) / directions, ends)
@@ -583,21 +598,3 @@ def extended_factors(factor_mm: NDArray) -> NDArray:
     f = np.array(factor_mm, float, order="C")
     kernels.extend_factors(f)  # (one compiled pass: :func:`gearopt.mesh.kernels.extend_factors`)
     return f
-
-
-def _neighbours(ray, key, position) -> tuple[NDArray, NDArray]:
-    """The rows of the same ray and tooth pair at the previous and next positions (-1
-    without)."""
-    ray, key, position = (np.asarray(a, np.int64) for a in (ray, key, position))
-    if len(ray):  # one stable sort of one code in the order (ray, key, position): lexsort's
-        k0, p0 = key.min(), position.min()
-        code = (ray * (key.max() - k0 + 1) + (key - k0)) * (position.max() - p0 + 1)
-        order = np.argsort(code + (position - p0), kind="stable")
-    else:
-        order = np.zeros(0, np.intp)
-    same = (np.diff(ray[order]) == 0) & (np.diff(key[order]) == 0)
-    step = same & (np.diff(position[order]) == 1)
-    prev, nxt = np.full(len(ray), -1, np.intp), np.full(len(ray), -1, np.intp)
-    prev[order[1:][step]] = order[:-1][step]
-    nxt[order[:-1][step]] = order[1:][step]
-    return prev, nxt
