@@ -359,6 +359,60 @@ def release(rdb: optuna.storages.RDBStorage) -> None:
     rdb.engine.dispose()
 
 
+#: the columns of Optuna's RDB tables (its schema since version 12) that a supervised worker
+#: writes itself, in one transaction, for its own running trial (:meth:`WorkerStorage.hold`):
+#: the rows Optuna's ``set_trial_param``, ``set_trial_user_attr`` and
+#: ``set_trial_system_attr`` write, one transaction each. Never created here.
+_optuna = sa.MetaData()
+_trials_t = sa.Table(
+    "trials",
+    _optuna,
+    sa.Column("trial_id", sa.Integer, primary_key=True),
+    sa.Column("state", sa.String(8)),
+)
+_params_t = sa.Table(
+    "trial_params",
+    _optuna,
+    sa.Column("param_id", sa.Integer, primary_key=True),
+    sa.Column("trial_id", sa.Integer),
+    sa.Column("param_name", sa.String(512)),
+    sa.Column("param_value", sa.Float),
+    sa.Column("distribution_json", sa.Text),
+)
+_attrs_t = {
+    kind: sa.Table(
+        f"trial_{kind}_attributes",
+        _optuna,
+        sa.Column(f"trial_{kind}_attribute_id", sa.Integer, primary_key=True),
+        sa.Column("trial_id", sa.Integer),
+        sa.Column("key", sa.String(512)),
+        sa.Column("value_json", sa.Text),
+        sa.UniqueConstraint("trial_id", "key"),
+    )
+    for kind in ("user", "system")
+}
+
+
+@functools.cache
+def _upserts(dialect: str) -> dict | None:
+    """Each attribute table's insert that replaces the value of a key the trial has (as
+    Optuna's own writes do), for SQLite and PostgreSQL; None for other dialects."""
+    if dialect == "sqlite":
+        from sqlalchemy.dialects.sqlite import insert
+    elif dialect == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert
+    else:
+        return None
+    upserts = {}
+    for kind, table in _attrs_t.items():
+        statement = insert(table)
+        upserts[kind] = statement.on_conflict_do_update(
+            index_elements=[table.c.trial_id, table.c.key],
+            set_={"value_json": statement.excluded.value_json},
+        )
+    return upserts
+
+
 def held_reads(view: WorkerStorage | None):
     """``view``'s :meth:`WorkerStorage.hold`, or nothing (None: not a supervised worker)."""
     return view.hold() if view is not None else contextlib.nullcontext()
@@ -388,10 +442,15 @@ class WorkerStorage(optuna.storages.BaseStorage):
 
     def __init__(self, rdb: optuna.storages.RDBStorage) -> None:
         self.inner = optuna.storages.get_storage(rdb)
+        self.engine = rdb.engine
+        self.upserts = _upserts(rdb.engine.dialect.name)  # (None: every write at once)
         #: this process's unfinished trials by id: a copy, or None until first read
         self.own: dict[int, optuna.trial.FrozenTrial | None] = {}
         self.read: dict[int, list] = {}  # the hold's read of each study's trials
         self.holding = 0
+        #: writes to this process's trials held until the hold ends, by trial id: parameter
+        #: rows, and the user and system attributes' JSON by key
+        self.held: dict[int, dict] = {}
 
     @contextlib.contextmanager
     def hold(self):
@@ -403,14 +462,49 @@ class WorkerStorage(optuna.storages.BaseStorage):
             self.holding -= 1
             if not self.holding:
                 self.read.clear()
-                self.own = {
-                    k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
-                }
+                try:
+                    self.write_held()
+                finally:
+                    self.own = {
+                        k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
+                    }
 
     def refresh(self) -> None:
         """The hold's next read of the study goes to the database again: for a read that must
         count the trials other processes created since the hold's first one."""
         self.read.clear()
+
+    def write_held(self, trial_id: int | None = None) -> None:
+        """Write the held writes (``trial_id``'s, or every trial's) to the database, each
+        trial's parameters and attributes in one transaction: the rows Optuna's own
+        ``set_trial_param``, ``set_trial_user_attr`` and ``set_trial_system_attr`` write, after
+        its check that the trial is not finished."""
+        for number in [trial_id] if trial_id is not None else list(self.held):
+            writes = self.held.pop(number, None)
+            if not writes:
+                continue
+            with self.engine.begin() as con:
+                state = con.execute(
+                    sa.select(_trials_t.c.state).where(_trials_t.c.trial_id == number)
+                ).scalar_one()
+                self.inner.check_trial_is_updatable(number, optuna.trial.TrialState[state])
+                if writes["params"]:
+                    con.execute(_params_t.insert(), writes["params"])
+                for kind in ("user", "system"):
+                    rows = [
+                        {"trial_id": number, "key": key, "value_json": value}
+                        for key, value in writes[kind].items()
+                    ]
+                    if rows:
+                        con.execute(self.upserts[kind], rows)
+
+    def _held(self, trial_id: int) -> dict | None:
+        """Where a write to ``trial_id`` waits for the hold's end (this process's trial, in a
+        hold, on SQLite or PostgreSQL), with the trial's copy read; None: written at once."""
+        if not self.holding or self.upserts is None or trial_id not in self.own:
+            return None
+        self._mine(trial_id)
+        return self.held.setdefault(trial_id, {"params": [], "user": {}, "system": {}})
 
     def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
         trial = self.own[trial_id]
@@ -457,6 +551,7 @@ class WorkerStorage(optuna.storages.BaseStorage):
         return trial_id
 
     def set_trial_state_values(self, trial_id: int, state, values=None) -> bool:
+        self.write_held(trial_id)  # (a trial's other writes before its state, as Optuna's)
         done = self.inner.set_trial_state_values(trial_id, state, values)
         if done and trial_id not in self.own and state == optuna.trial.TrialState.RUNNING:
             self.own[trial_id] = None  # popped from the queue here
@@ -470,23 +565,45 @@ class WorkerStorage(optuna.storages.BaseStorage):
         return done
 
     def set_trial_param(self, trial_id: int, param_name: str, param_value_internal, distribution):
-        self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
+        held = self._held(trial_id)
+        if held is None:
+            self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
+        elif param_name in self.own[trial_id].distributions:
+            return  # (the database keeps a trial's first value of a parameter)
+        else:
+            held["params"].append(
+                {
+                    "trial_id": trial_id,
+                    "param_name": param_name,
+                    "param_value": float(param_value_internal),
+                    "distribution_json": optuna.distributions.distribution_to_json(distribution),
+                }
+            )
         if self.own.get(trial_id) is not None:
             trial = self.own[trial_id]
             trial.params[param_name] = distribution.to_external_repr(param_value_internal)
             trial.distributions[param_name] = distribution
 
     def set_trial_user_attr(self, trial_id: int, key: str, value) -> None:
-        self.inner.set_trial_user_attr(trial_id, key, value)
+        held = self._held(trial_id)
+        if held is None:
+            self.inner.set_trial_user_attr(trial_id, key, value)
+        else:
+            held["user"][key] = json.dumps(value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].user_attrs[key] = json.loads(json.dumps(value))
 
     def set_trial_system_attr(self, trial_id: int, key: str, value) -> None:
-        self.inner.set_trial_system_attr(trial_id, key, value)
+        held = self._held(trial_id)
+        if held is None:
+            self.inner.set_trial_system_attr(trial_id, key, value)
+        else:
+            held["system"][key] = json.dumps(value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].system_attrs[key] = json.loads(json.dumps(value))
 
     def set_trial_intermediate_value(self, trial_id: int, step: int, intermediate_value) -> None:
+        self.write_held(trial_id)
         self.inner.set_trial_intermediate_value(trial_id, step, intermediate_value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id] = None  # read again (not a study gearopt runs)

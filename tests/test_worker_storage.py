@@ -32,7 +32,8 @@ def _seen(trials) -> list[tuple]:
 def _run(storage, url: str, name: str, reads: list | None = None) -> list[tuple]:
     """Eight trials asked, suggested and told in holds (when ``storage`` has them), a given
     design popped from the queue first and another process's trial running from the fourth;
-    inside each hold the trials read are compared with a fresh read of the database."""
+    the trials read inside each ask's hold are compared with a fresh read of the database
+    after it (a worker's writes to its own trial are made when its hold ends)."""
     study = optuna.create_study(
         storage=storage, sampler=_sampler(), study_name=name, directions=["minimize"] * 2
     )
@@ -52,10 +53,11 @@ def _run(storage, url: str, name: str, reads: list | None = None) -> list[tuple]
             x = trial.suggest_float("x", 0.0, 1.0)
             y = trial.suggest_float("y", 1.0, 3.0, log=True)
             trial.set_user_attr("tag", ("worker", i))
-            held = study.get_trials(deepcopy=False)
-            assert _seen(held) == _seen(database.get_all_trials(study_id, deepcopy=False))
+            held = _seen(study.get_trials(deepcopy=False))
             if reads is not None:  # one read of the study's trials in the whole ask
                 assert len(reads) - before == 1
+        # what the hold read is what the database holds once the hold has written its trial
+        assert held == _seen(database.get_all_trials(study_id, deepcopy=False))
         with hold() if hold else _nothing():
             trial_id = trial.storage.get_trial_id_from_study_id_trial_number(study_id, trial.number)
             trial.storage.set_trial_system_attr(trial_id, "constraints", [x - 0.5])
