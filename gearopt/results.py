@@ -39,7 +39,15 @@ from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome
 
-__all__ = ["ResultsStore", "SCHEMA_NAMES", "TABLES", "VIEWS", "artifact_dir", "upload_figures"]
+__all__ = [
+    "ResultsStore",
+    "SCHEMA_NAMES",
+    "TABLES",
+    "VIEWS",
+    "artifact_dir",
+    "schema_text",
+    "upload_figures",
+]
 
 _meta = sa.MetaData()
 
@@ -134,6 +142,13 @@ VIEWS = {
 
 #: every table and view gearopt makes (its schema's names)
 SCHEMA_NAMES = frozenset(_meta.tables) | frozenset(VIEWS)
+
+
+def schema_text(dialect: sa.engine.Dialect) -> str:
+    """The statements that make gearopt's tables and views in ``dialect`` (what a copy of an
+    empty database must have been made with: :func:`gearopt.storage.create_sqlite`)."""
+    tables = [str(sa.schema.CreateTable(t).compile(dialect=dialect)) for t in _meta.sorted_tables]
+    return "\n".join([*tables, *(f"{name} AS {body}" for name, body in sorted(VIEWS.items()))])
 
 
 def _rows(table: sa.Table, key: tuple, tuples) -> list[dict]:

@@ -14,6 +14,7 @@ import hashlib
 import json
 import os
 import re
+import shutil
 import sqlite3
 import time
 from pathlib import Path
@@ -28,7 +29,7 @@ import sqlalchemy as sa
 import sqlalchemy.exc
 
 from gearopt.errors import StudyError
-from gearopt.results import SCHEMA_NAMES, ResultsStore
+from gearopt.results import SCHEMA_NAMES, ResultsStore, schema_text
 from gearopt.studyfile import StudySpec
 
 __all__ = [
@@ -38,6 +39,7 @@ __all__ = [
     "check_storage_url",
     "create_sqlite",
     "default_storage_url",
+    "empty_template",
     "fast_sqlite",
     "held_reads",
     "masked_url",
@@ -137,8 +139,10 @@ def create_sqlite(url: str) -> bool:
     a temporary file beside it, which is then linked under the database's name (``os.link``,
     which fails when the name exists: another coordinator made it first, and that one is
     used). No coordinator ever sees a half-made file, so two starting together never race on
-    the schema, and a 0-byte file is never gearopt's. True when this call made it; nothing to
-    do for other dialects or an existing file."""
+    the schema, and a 0-byte file is never gearopt's. The temporary file is a copy of the
+    empty database this installation made before (:func:`empty_template`), when there is one:
+    the schema made again costs about half a second of a run's start. True when this call made
+    it; nothing to do for other dialects or an existing file."""
     try:
         parsed = sa.engine.make_url(url)
     except Exception:
@@ -149,13 +153,9 @@ def create_sqlite(url: str) -> bool:
     if path.exists() or not path.parent.is_dir():
         return False  # an existing file is checked; a missing folder, the driver says so
     temporary = path.with_name(f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.new")
-    temp_url = f"sqlite:///{temporary}"
     try:
-        storage = optuna.storages.RDBStorage(
-            temp_url, engine_kwargs=_engine_kwargs(temp_url), skip_compatibility_check=True
-        )  # (its schema is this Optuna's, made now: no version check)
-        ResultsStore(temp_url, engine=storage.engine)
-        storage.engine.dispose()
+        if not _copy_template(temporary):
+            _make_empty(temporary)
         try:
             os.link(temporary, path)
         except FileExistsError:
@@ -168,6 +168,61 @@ def create_sqlite(url: str) -> bool:
     finally:
         for leftover in (temporary, *temporary.parent.glob(f"{temporary.name}-*")):
             Path(leftover).unlink(missing_ok=True)
+
+
+def empty_template() -> Path:
+    """Where this installation keeps a copy of the empty study database it makes (Optuna's
+    schema and gearopt's tables and views): the user's cache folder (``$XDG_CACHE_HOME`` or
+    ``~/.cache``), under ``gearopt/``, named by a digest of the versions of Optuna, SQLAlchemy
+    and SQLite and of gearopt's schema, so that another version never uses it."""
+    from sqlalchemy.dialects import sqlite as dialect
+
+    versions = [optuna.__version__, sa.__version__, sqlite3.sqlite_version]
+    text = json.dumps([*versions, schema_text(dialect.dialect())])
+    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return root / "gearopt" / f"empty-study-{hashlib.sha256(text.encode()).hexdigest()[:16]}.db"
+
+
+def _make_empty(temporary: Path) -> None:
+    """Optuna's schema (this Optuna's, made now: no version check) and gearopt's tables in a
+    new file ``temporary``; a copy kept as :func:`empty_template` (nothing when the cache
+    folder cannot be written)."""
+    temp_url = f"sqlite:///{temporary}"
+    storage = optuna.storages.RDBStorage(
+        temp_url, engine_kwargs=_engine_kwargs(temp_url), skip_compatibility_check=True
+    )
+    ResultsStore(temp_url, engine=storage.engine)
+    storage.engine.dispose()
+    template = empty_template()
+    kept = template.with_name(f".{template.name}.{os.getpid()}.{time.monotonic_ns()}")
+    try:
+        template.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(temporary, kept)
+        os.replace(kept, template)  # (whole or not at all)
+    except OSError:
+        kept.unlink(missing_ok=True)
+
+
+def _copy_template(temporary: Path) -> bool:
+    """``temporary`` made a copy of :func:`empty_template`; False when there is none or it is
+    not a sound SQLite file (then removed)."""
+    template = empty_template()
+    try:
+        shutil.copyfile(template, temporary)
+    except OSError:
+        return False
+    try:
+        con = sqlite3.connect(f"{temporary.resolve().as_uri()}?mode=ro", uri=True)
+        try:
+            sound = [row[0] for row in con.execute("PRAGMA quick_check")] == ["ok"]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        sound = False
+    if not sound:
+        template.unlink(missing_ok=True)
+        temporary.unlink(missing_ok=True)
+    return sound
 
 
 def check_own_tables(url: str) -> None:
@@ -391,12 +446,20 @@ _attrs_t = {
     )
     for kind in ("user", "system")
 }
+_beats_t = sa.Table(
+    "trial_heartbeats",
+    _optuna,
+    sa.Column("trial_heartbeat_id", sa.Integer, primary_key=True),
+    sa.Column("trial_id", sa.Integer, unique=True),
+    sa.Column("heartbeat", sa.DateTime),
+)
 
 
 @functools.cache
 def _upserts(dialect: str) -> dict | None:
     """Each attribute table's insert that replaces the value of a key the trial has (as
-    Optuna's own writes do), for SQLite and PostgreSQL; None for other dialects."""
+    Optuna's own writes do), and the heartbeat's (the database's time now, as Optuna's
+    ``record_heartbeat``), for SQLite and PostgreSQL; None for other dialects."""
     if dialect == "sqlite":
         from sqlalchemy.dialects.sqlite import insert
     elif dialect == "postgresql":
@@ -410,6 +473,10 @@ def _upserts(dialect: str) -> dict | None:
             index_elements=[table.c.trial_id, table.c.key],
             set_={"value_json": statement.excluded.value_json},
         )
+    statement = insert(_beats_t).values(heartbeat=sa.func.current_timestamp())
+    upserts["beat"] = statement.on_conflict_do_update(
+        index_elements=[_beats_t.c.trial_id], set_={"heartbeat": statement.excluded.heartbeat}
+    )
     return upserts
 
 
@@ -428,16 +495,25 @@ class WorkerStorage(optuna.storages.BaseStorage):
     ask and tell read the trial in hand three times) are served from it, with this process's
     trials (created or popped from the queue here) replaced by their copies in memory. A
     trial is read from the database once, when first read after this process took it; every
-    write through this storage is made in the database first, then applied to the copy as
-    the database would store it (attributes through JSON, a finished trial's completion
-    time the moment it is told). With no other process writing meanwhile (``--jobs 1``), every
-    read gives what a read of the database would (the same designs); another
-    worker's writes are seen at the next hold, as Optuna's cached storage sees them at its
-    next read. Outside a hold every read goes to Optuna's cached storage as before.
+    write through this storage is applied to the copy as the database would store it
+    (attributes through JSON, a finished trial's completion time the moment it is told).
+    With no other process writing meanwhile (``--jobs 1``), every read gives what a read of
+    the database would (the same designs); another worker's writes are seen at the next
+    hold, as Optuna's cached storage sees them at its next read. Outside a hold every read
+    goes to Optuna's cached storage as before.
 
-    Not thread-safe: one coordinator's thread uses it. It has no heartbeat of its own (the
-    coordinator records them on the RDB storage): a worker does not fail other coordinators'
-    stale trials, its supervisor does.
+    Writes to this process's own trial inside a hold (its parameters, user and system
+    attributes, heartbeat: about eight of Optuna's one-row transactions a trial, each
+    through SQLAlchemy's ORM) are held and written together in one transaction of plain
+    inserts when the hold ends (:meth:`write_held`: the ask's before the trial is evaluated,
+    so a dead worker's trial has its parameters for its retry as before), or before the
+    trial's state is set (the tell's: its constraints and warnings, then Optuna's own
+    ``set_trial_state_values``). Another process sees them at once then, rather than one by
+    one during the ask. On SQLite and PostgreSQL; other dialects write each at once.
+
+    Not thread-safe: one coordinator's thread uses it. It records no heartbeats of its own
+    accord (the coordinator records them): a worker does not fail other coordinators' stale
+    trials, its supervisor does.
     """
 
     def __init__(self, rdb: optuna.storages.RDBStorage) -> None:
@@ -476,9 +552,9 @@ class WorkerStorage(optuna.storages.BaseStorage):
 
     def write_held(self, trial_id: int | None = None) -> None:
         """Write the held writes (``trial_id``'s, or every trial's) to the database, each
-        trial's parameters and attributes in one transaction: the rows Optuna's own
-        ``set_trial_param``, ``set_trial_user_attr`` and ``set_trial_system_attr`` write, after
-        its check that the trial is not finished."""
+        trial's parameters, attributes and heartbeat in one transaction: the rows Optuna's own
+        ``set_trial_param``, ``set_trial_user_attr``, ``set_trial_system_attr`` and
+        ``record_heartbeat`` write, after its check that the trial is not finished."""
         for number in [trial_id] if trial_id is not None else list(self.held):
             writes = self.held.pop(number, None)
             if not writes:
@@ -497,6 +573,8 @@ class WorkerStorage(optuna.storages.BaseStorage):
                     ]
                     if rows:
                         con.execute(self.upserts[kind], rows)
+                if writes["beat"]:
+                    con.execute(self.upserts["beat"], {"trial_id": number})
 
     def _held(self, trial_id: int) -> dict | None:
         """Where a write to ``trial_id`` waits for the hold's end (this process's trial, in a
@@ -504,7 +582,9 @@ class WorkerStorage(optuna.storages.BaseStorage):
         if not self.holding or self.upserts is None or trial_id not in self.own:
             return None
         self._mine(trial_id)
-        return self.held.setdefault(trial_id, {"params": [], "user": {}, "system": {}})
+        return self.held.setdefault(
+            trial_id, {"params": [], "user": {}, "system": {}, "beat": False}
+        )
 
     def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
         trial = self.own[trial_id]
@@ -601,6 +681,15 @@ class WorkerStorage(optuna.storages.BaseStorage):
             held["system"][key] = json.dumps(value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].system_attrs[key] = json.loads(json.dumps(value))
+
+    def record_heartbeat(self, trial_id: int) -> None:
+        """The trial's heartbeat (Optuna's ``RDBStorage.record_heartbeat``), held with its
+        other writes when it is this process's trial in a hold."""
+        held = self._held(trial_id)
+        if held is None:
+            self.inner.record_heartbeat(trial_id)
+        else:
+            held["beat"] = True
 
     def set_trial_intermediate_value(self, trial_id: int, step: int, intermediate_value) -> None:
         self.write_held(trial_id)

@@ -6,13 +6,21 @@ suggests on Optuna's own cached storage."""
 from __future__ import annotations
 
 import os
+import sqlite3
 
 import optuna
 import pytest
 import sqlalchemy as sa
 from optuna.trial import TrialState
 
-from gearopt.storage import WorkerStorage, fast_sqlite, one_writer
+from gearopt.storage import (
+    WorkerStorage,
+    check_integrity,
+    create_sqlite,
+    empty_template,
+    fast_sqlite,
+    one_writer,
+)
 
 
 def _sampler() -> optuna.samplers.TPESampler:
@@ -135,3 +143,78 @@ def test_one_writer_holds_the_lock_from_the_first_write_to_the_connections_retur
     with engine.connect() as con:
         assert con.execute(sa.text("SELECT x FROM t")).scalars().all() == [2]
     engine.dispose()
+
+
+def test_a_workers_writes_to_its_own_trial_reach_the_database_together_when_its_hold_ends(
+    tmp_path,
+):
+    """An ask's writes to the worker's own trial (parameters, user and system attributes,
+    heartbeat) are one transaction at the hold's end, read back as Optuna's own writes."""
+    url = f"sqlite:///{tmp_path / 'held.db'}"
+    rdb = optuna.storages.RDBStorage(url)
+    view = WorkerStorage(rdb)
+    study = optuna.create_study(storage=view, sampler=_sampler(), study_name="held")
+    database = optuna.storages.RDBStorage(url, skip_compatibility_check=True)
+    commits: list[int] = []
+    wrote: set[int] = set()
+
+    @sa.event.listens_for(rdb.engine, "before_cursor_execute")
+    def _write(conn, cursor, statement, *args):
+        if statement.lstrip()[:6].upper() in ("INSERT", "UPDATE"):
+            wrote.add(id(conn))
+
+    @sa.event.listens_for(rdb.engine, "commit")
+    def _commit(conn):
+        if id(conn) in wrote:
+            wrote.discard(id(conn))
+            commits.append(1)
+
+    with view.hold():
+        trial = study.ask()
+        created = len(commits)
+        x = trial.suggest_float("x", 0.0, 1.0)
+        trial.suggest_float("y", 1.0, 3.0, log=True)
+        trial.set_user_attr("tag", ["worker", 1])
+        study_id = database.get_study_id_from_name("held")
+        trial_id = view.get_trial_id_from_study_id_trial_number(study_id, trial.number)
+        view.set_trial_system_attr(trial_id, "constraints", [x - 0.5])
+        view.record_heartbeat(trial_id)
+        assert database.get_trial(trial_id).params == {}  # held
+        assert len(commits) == created
+    assert len(commits) == created + 1
+    stored = database.get_trial(trial_id)
+    assert stored.params == trial.params and stored.distributions == trial.distributions
+    assert stored.user_attrs == {"tag": ["worker", 1]}
+    assert stored.system_attrs == {"constraints": [x - 0.5]}
+    with database.engine.connect() as con:
+        beats = con.execute(sa.text("SELECT count(*) FROM trial_heartbeats")).scalar()
+    assert beats == 1
+    with view.hold():
+        study.tell(trial, 1.0)
+    assert database.get_trial(trial_id).state == TrialState.COMPLETE
+    rdb.engine.dispose()
+    database.engine.dispose()
+
+
+def test_a_new_sqlite_database_is_a_copy_of_the_empty_one_made_first(tmp_path, monkeypatch):
+    """:func:`gearopt.storage.create_sqlite` keeps the empty database it makes in the cache
+    folder and copies it next time (the same schema); a damaged copy is made again."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    template = empty_template()
+    assert template.is_relative_to(tmp_path / "cache")
+
+    def schema(path) -> list:
+        with sqlite3.connect(path) as con:
+            return con.execute("SELECT type, name, sql FROM sqlite_master ORDER BY name").fetchall()
+
+    assert create_sqlite(f"sqlite:///{tmp_path / 'first.db'}") and template.is_file()
+    assert create_sqlite(f"sqlite:///{tmp_path / 'second.db'}")
+    assert schema(tmp_path / "second.db") == schema(tmp_path / "first.db")
+    assert {"trials", "gearopt_curves", "gearopt_trial_metrics"} <= {
+        name for _, name, _ in schema(tmp_path / "second.db")
+    }
+    template.write_bytes(b"not a database" * 100)
+    assert create_sqlite(f"sqlite:///{tmp_path / 'third.db'}")
+    check_integrity(f"sqlite:///{tmp_path / 'third.db'}")
+    assert schema(tmp_path / "third.db") == schema(tmp_path / "first.db")
+    assert schema(template) == schema(tmp_path / "first.db")  # made again
