@@ -423,7 +423,9 @@ _trials_t = sa.Table(
     "trials",
     _optuna,
     sa.Column("trial_id", sa.Integer, primary_key=True),
+    sa.Column("number", sa.Integer),
     sa.Column("state", sa.String(8)),
+    sa.Column("datetime_start", sa.DateTime),
 )
 _params_t = sa.Table(
     "trial_params",
@@ -628,7 +630,36 @@ class WorkerStorage(optuna.storages.BaseStorage):
     def create_new_trial(self, study_id: int, template_trial=None) -> int:
         trial_id = self.inner.create_new_trial(study_id, template_trial)
         self.own[trial_id] = None
+        if template_trial is None and self.upserts is not None:
+            self.own[trial_id] = self._created(trial_id)
         return trial_id
+
+    def _created(self, trial_id: int) -> optuna.trial.FrozenTrial:
+        """A trial this process has just created (without a template) as Optuna reads it: its
+        number and start from the database, nothing else set yet (one small query rather than
+        Optuna's read of the trial and its five kinds of rows)."""
+        with self.engine.connect() as con:
+            number, start = con.execute(
+                sa.select(_trials_t.c.number, _trials_t.c.datetime_start).where(
+                    _trials_t.c.trial_id == trial_id
+                )
+            ).one()
+        # (stored as naive UTC, read as naive local time: Optuna's own conversion)
+        start = start.replace(tzinfo=dt.UTC).astimezone().replace(tzinfo=None)
+        return optuna.trial.FrozenTrial(
+            number=number,
+            state=optuna.trial.TrialState.RUNNING,
+            value=None,
+            values=None,
+            datetime_start=start,
+            datetime_complete=None,
+            params={},
+            distributions={},
+            user_attrs={},
+            system_attrs={},
+            intermediate_values={},
+            trial_id=trial_id,
+        )
 
     def set_trial_state_values(self, trial_id: int, state, values=None) -> bool:
         self.write_held(trial_id)  # (a trial's other writes before its state, as Optuna's)

@@ -172,11 +172,12 @@ def test_a_workers_writes_to_its_own_trial_reach_the_database_together_when_its_
     with view.hold():
         trial = study.ask()
         created = len(commits)
+        study_id = database.get_study_id_from_name("held")
+        trial_id = view.get_trial_id_from_study_id_trial_number(study_id, trial.number)
+        assert view.get_trial(trial_id) == database.get_trial(trial_id)  # (not read: made)
         x = trial.suggest_float("x", 0.0, 1.0)
         trial.suggest_float("y", 1.0, 3.0, log=True)
         trial.set_user_attr("tag", ["worker", 1])
-        study_id = database.get_study_id_from_name("held")
-        trial_id = view.get_trial_id_from_study_id_trial_number(study_id, trial.number)
         view.set_trial_system_attr(trial_id, "constraints", [x - 0.5])
         view.record_heartbeat(trial_id)
         assert database.get_trial(trial_id).params == {}  # held
