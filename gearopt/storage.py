@@ -170,16 +170,20 @@ def create_sqlite(url: str) -> bool:
             Path(leftover).unlink(missing_ok=True)
 
 
-def empty_template() -> Path:
+def empty_template() -> Path | None:
     """Where this installation keeps a copy of the empty study database it makes (Optuna's
     schema and gearopt's tables and views): the user's cache folder (``$XDG_CACHE_HOME`` or
     ``~/.cache``), under ``gearopt/``, named by a digest of the versions of Optuna, SQLAlchemy
-    and SQLite and of gearopt's schema, so that another version never uses it."""
+    and SQLite and of gearopt's schema, so that another version never uses it; None without a
+    home folder."""
     from sqlalchemy.dialects import sqlite as dialect
 
     versions = [optuna.__version__, sa.__version__, sqlite3.sqlite_version]
     text = json.dumps([*versions, schema_text(dialect.dialect())])
-    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    try:
+        root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    except RuntimeError:  # (no home folder to be found)
+        return None
     return root / "gearopt" / f"empty-study-{hashlib.sha256(text.encode()).hexdigest()[:16]}.db"
 
 
@@ -194,6 +198,8 @@ def _make_empty(temporary: Path) -> None:
     ResultsStore(temp_url, engine=storage.engine)
     storage.engine.dispose()
     template = empty_template()
+    if template is None:
+        return
     kept = template.with_name(f".{template.name}.{os.getpid()}.{time.monotonic_ns()}")
     try:
         template.parent.mkdir(parents=True, exist_ok=True)
@@ -207,9 +213,11 @@ def _copy_template(temporary: Path) -> bool:
     """``temporary`` made a copy of :func:`empty_template`; False when there is none or it is
     not a sound SQLite file (then removed)."""
     template = empty_template()
+    if template is None:
+        return False
     try:
         shutil.copyfile(template, temporary)
-    except OSError:
+    except OSError:  # (none made yet)
         return False
     try:
         con = sqlite3.connect(f"{temporary.resolve().as_uri()}?mode=ro", uri=True)
@@ -414,74 +422,6 @@ def release(rdb: optuna.storages.RDBStorage) -> None:
     rdb.engine.dispose()
 
 
-#: the columns of Optuna's RDB tables (its schema since version 12) that a supervised worker
-#: writes itself, in one transaction, for its own running trial (:meth:`WorkerStorage.hold`):
-#: the rows Optuna's ``set_trial_param``, ``set_trial_user_attr`` and
-#: ``set_trial_system_attr`` write, one transaction each. Never created here.
-_optuna = sa.MetaData()
-_trials_t = sa.Table(
-    "trials",
-    _optuna,
-    sa.Column("trial_id", sa.Integer, primary_key=True),
-    sa.Column("number", sa.Integer),
-    sa.Column("state", sa.String(8)),
-    sa.Column("datetime_start", sa.DateTime),
-)
-_params_t = sa.Table(
-    "trial_params",
-    _optuna,
-    sa.Column("param_id", sa.Integer, primary_key=True),
-    sa.Column("trial_id", sa.Integer),
-    sa.Column("param_name", sa.String(512)),
-    sa.Column("param_value", sa.Float),
-    sa.Column("distribution_json", sa.Text),
-)
-_attrs_t = {
-    kind: sa.Table(
-        f"trial_{kind}_attributes",
-        _optuna,
-        sa.Column(f"trial_{kind}_attribute_id", sa.Integer, primary_key=True),
-        sa.Column("trial_id", sa.Integer),
-        sa.Column("key", sa.String(512)),
-        sa.Column("value_json", sa.Text),
-        sa.UniqueConstraint("trial_id", "key"),
-    )
-    for kind in ("user", "system")
-}
-_beats_t = sa.Table(
-    "trial_heartbeats",
-    _optuna,
-    sa.Column("trial_heartbeat_id", sa.Integer, primary_key=True),
-    sa.Column("trial_id", sa.Integer, unique=True),
-    sa.Column("heartbeat", sa.DateTime),
-)
-
-
-@functools.cache
-def _upserts(dialect: str) -> dict | None:
-    """Each attribute table's insert that replaces the value of a key the trial has (as
-    Optuna's own writes do), and the heartbeat's (the database's time now, as Optuna's
-    ``record_heartbeat``), for SQLite and PostgreSQL; None for other dialects."""
-    if dialect == "sqlite":
-        from sqlalchemy.dialects.sqlite import insert
-    elif dialect == "postgresql":
-        from sqlalchemy.dialects.postgresql import insert
-    else:
-        return None
-    upserts = {}
-    for kind, table in _attrs_t.items():
-        statement = insert(table)
-        upserts[kind] = statement.on_conflict_do_update(
-            index_elements=[table.c.trial_id, table.c.key],
-            set_={"value_json": statement.excluded.value_json},
-        )
-    statement = insert(_beats_t).values(heartbeat=sa.func.current_timestamp())
-    upserts["beat"] = statement.on_conflict_do_update(
-        index_elements=[_beats_t.c.trial_id], set_={"heartbeat": statement.excluded.heartbeat}
-    )
-    return upserts
-
-
 def held_reads(view: WorkerStorage | None):
     """``view``'s :meth:`WorkerStorage.hold`, or nothing (None: not a supervised worker)."""
     return view.hold() if view is not None else contextlib.nullcontext()
@@ -497,38 +437,24 @@ class WorkerStorage(optuna.storages.BaseStorage):
     ask and tell read the trial in hand three times) are served from it, with this process's
     trials (created or popped from the queue here) replaced by their copies in memory. A
     trial is read from the database once, when first read after this process took it; every
-    write through this storage is applied to the copy as the database would store it
-    (attributes through JSON, a finished trial's completion time the moment it is told).
-    With no other process writing meanwhile (``--jobs 1``), every read gives what a read of
-    the database would (the same designs); another worker's writes are seen at the next
-    hold, as Optuna's cached storage sees them at its next read. Outside a hold every read
-    goes to Optuna's cached storage as before.
+    write through this storage is made in the database first, then applied to the copy as
+    the database would store it (attributes through JSON, a finished trial's completion
+    time the moment it is told). With no other process writing meanwhile (``--jobs 1``), every
+    read gives what a read of the database would (the same designs); another
+    worker's writes are seen at the next hold, as Optuna's cached storage sees them at its
+    next read. Outside a hold every read goes to Optuna's cached storage as before.
 
-    Writes to this process's own trial inside a hold (its parameters, user and system
-    attributes, heartbeat: about eight of Optuna's one-row transactions a trial, each
-    through SQLAlchemy's ORM) are held and written together in one transaction of plain
-    inserts when the hold ends (:meth:`write_held`: the ask's before the trial is evaluated,
-    so a dead worker's trial has its parameters for its retry as before), or before the
-    trial's state is set (the tell's: its constraints and warnings, then Optuna's own
-    ``set_trial_state_values``). Another process sees them at once then, rather than one by
-    one during the ask. On SQLite and PostgreSQL; other dialects write each at once.
-
-    Not thread-safe: one coordinator's thread uses it. It records no heartbeats of its own
-    accord (the coordinator records them): a worker does not fail other coordinators' stale
-    trials, its supervisor does.
+    Not thread-safe: one coordinator's thread uses it. It has no heartbeat of its own (the
+    coordinator records them on the RDB storage): a worker does not fail other coordinators'
+    stale trials, its supervisor does.
     """
 
     def __init__(self, rdb: optuna.storages.RDBStorage) -> None:
         self.inner = optuna.storages.get_storage(rdb)
-        self.engine = rdb.engine
-        self.upserts = _upserts(rdb.engine.dialect.name)  # (None: every write at once)
         #: this process's unfinished trials by id: a copy, or None until first read
         self.own: dict[int, optuna.trial.FrozenTrial | None] = {}
         self.read: dict[int, list] = {}  # the hold's read of each study's trials
         self.holding = 0
-        #: writes to this process's trials held until the hold ends, by trial id: parameter
-        #: rows, and the user and system attributes' JSON by key
-        self.held: dict[int, dict] = {}
 
     @contextlib.contextmanager
     def hold(self):
@@ -540,53 +466,14 @@ class WorkerStorage(optuna.storages.BaseStorage):
             self.holding -= 1
             if not self.holding:
                 self.read.clear()
-                try:
-                    self.write_held()
-                finally:
-                    self.own = {
-                        k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
-                    }
+                self.own = {
+                    k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
+                }
 
     def refresh(self) -> None:
         """The hold's next read of the study goes to the database again: for a read that must
         count the trials other processes created since the hold's first one."""
         self.read.clear()
-
-    def write_held(self, trial_id: int | None = None) -> None:
-        """Write the held writes (``trial_id``'s, or every trial's) to the database, each
-        trial's parameters, attributes and heartbeat in one transaction: the rows Optuna's own
-        ``set_trial_param``, ``set_trial_user_attr``, ``set_trial_system_attr`` and
-        ``record_heartbeat`` write, after its check that the trial is not finished."""
-        for number in [trial_id] if trial_id is not None else list(self.held):
-            writes = self.held.pop(number, None)
-            if not writes:
-                continue
-            with self.engine.begin() as con:
-                state = con.execute(
-                    sa.select(_trials_t.c.state).where(_trials_t.c.trial_id == number)
-                ).scalar_one()
-                self.inner.check_trial_is_updatable(number, optuna.trial.TrialState[state])
-                if writes["params"]:
-                    con.execute(_params_t.insert(), writes["params"])
-                for kind in ("user", "system"):
-                    rows = [
-                        {"trial_id": number, "key": key, "value_json": value}
-                        for key, value in writes[kind].items()
-                    ]
-                    if rows:
-                        con.execute(self.upserts[kind], rows)
-                if writes["beat"]:
-                    con.execute(self.upserts["beat"], {"trial_id": number})
-
-    def _held(self, trial_id: int) -> dict | None:
-        """Where a write to ``trial_id`` waits for the hold's end (this process's trial, in a
-        hold, on SQLite or PostgreSQL), with the trial's copy read; None: written at once."""
-        if not self.holding or self.upserts is None or trial_id not in self.own:
-            return None
-        self._mine(trial_id)
-        return self.held.setdefault(
-            trial_id, {"params": [], "user": {}, "system": {}, "beat": False}
-        )
 
     def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
         trial = self.own[trial_id]
@@ -630,39 +517,9 @@ class WorkerStorage(optuna.storages.BaseStorage):
     def create_new_trial(self, study_id: int, template_trial=None) -> int:
         trial_id = self.inner.create_new_trial(study_id, template_trial)
         self.own[trial_id] = None
-        if template_trial is None and self.upserts is not None:
-            self.own[trial_id] = self._created(trial_id)
         return trial_id
 
-    def _created(self, trial_id: int) -> optuna.trial.FrozenTrial:
-        """A trial this process has just created (without a template) as Optuna reads it: its
-        number and start from the database, nothing else set yet (one small query rather than
-        Optuna's read of the trial and its five kinds of rows)."""
-        with self.engine.connect() as con:
-            number, start = con.execute(
-                sa.select(_trials_t.c.number, _trials_t.c.datetime_start).where(
-                    _trials_t.c.trial_id == trial_id
-                )
-            ).one()
-        # (stored as naive UTC, read as naive local time: Optuna's own conversion)
-        start = start.replace(tzinfo=dt.UTC).astimezone().replace(tzinfo=None)
-        return optuna.trial.FrozenTrial(
-            number=number,
-            state=optuna.trial.TrialState.RUNNING,
-            value=None,
-            values=None,
-            datetime_start=start,
-            datetime_complete=None,
-            params={},
-            distributions={},
-            user_attrs={},
-            system_attrs={},
-            intermediate_values={},
-            trial_id=trial_id,
-        )
-
     def set_trial_state_values(self, trial_id: int, state, values=None) -> bool:
-        self.write_held(trial_id)  # (a trial's other writes before its state, as Optuna's)
         done = self.inner.set_trial_state_values(trial_id, state, values)
         if done and trial_id not in self.own and state == optuna.trial.TrialState.RUNNING:
             self.own[trial_id] = None  # popped from the queue here
@@ -676,54 +533,23 @@ class WorkerStorage(optuna.storages.BaseStorage):
         return done
 
     def set_trial_param(self, trial_id: int, param_name: str, param_value_internal, distribution):
-        held = self._held(trial_id)
-        if held is None:
-            self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
-        elif param_name in self.own[trial_id].distributions:
-            return  # (the database keeps a trial's first value of a parameter)
-        else:
-            held["params"].append(
-                {
-                    "trial_id": trial_id,
-                    "param_name": param_name,
-                    "param_value": float(param_value_internal),
-                    "distribution_json": optuna.distributions.distribution_to_json(distribution),
-                }
-            )
+        self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
         if self.own.get(trial_id) is not None:
             trial = self.own[trial_id]
             trial.params[param_name] = distribution.to_external_repr(param_value_internal)
             trial.distributions[param_name] = distribution
 
     def set_trial_user_attr(self, trial_id: int, key: str, value) -> None:
-        held = self._held(trial_id)
-        if held is None:
-            self.inner.set_trial_user_attr(trial_id, key, value)
-        else:
-            held["user"][key] = json.dumps(value)
+        self.inner.set_trial_user_attr(trial_id, key, value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].user_attrs[key] = json.loads(json.dumps(value))
 
     def set_trial_system_attr(self, trial_id: int, key: str, value) -> None:
-        held = self._held(trial_id)
-        if held is None:
-            self.inner.set_trial_system_attr(trial_id, key, value)
-        else:
-            held["system"][key] = json.dumps(value)
+        self.inner.set_trial_system_attr(trial_id, key, value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].system_attrs[key] = json.loads(json.dumps(value))
 
-    def record_heartbeat(self, trial_id: int) -> None:
-        """The trial's heartbeat (Optuna's ``RDBStorage.record_heartbeat``), held with its
-        other writes when it is this process's trial in a hold."""
-        held = self._held(trial_id)
-        if held is None:
-            self.inner.record_heartbeat(trial_id)
-        else:
-            held["beat"] = True
-
     def set_trial_intermediate_value(self, trial_id: int, step: int, intermediate_value) -> None:
-        self.write_held(trial_id)
         self.inner.set_trial_intermediate_value(trial_id, step, intermediate_value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id] = None  # read again (not a study gearopt runs)

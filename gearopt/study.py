@@ -8,9 +8,7 @@ coordinator of its own that evaluates its trials itself, and this process superv
 (:mod:`gearopt.study_workers`: Optuna's own multi-process pattern, so the sampler's and the
 storage's cost per trial is paid side by side rather than by one process).
 :class:`Coordinator` holds a run's state; :func:`run_study` runs one. Only Optuna's public API
-is used, never its private attributes, and its tables through SQL in one place only: a
-supervised worker writes its own running trial's parameters, attributes and heartbeat as
-Optuna's rows, in one transaction (:class:`gearopt.storage.WorkerStorage`).
+is used, never its private attributes or its tables through SQL.
 
 Counting: a run ends when the study holds ``trials`` COMPLETE trials (infeasible ones count,
 FAIL ones do not), so the same command again continues a study and is a no-op on a finished one.
@@ -427,7 +425,7 @@ class Coordinator:
             trial_id = trial.storage.get_trial_id_from_study_id_trial_number(
                 self.opened.study_id, trial.number
             )
-            (self.opened.view or self.opened.storage).record_heartbeat(trial_id)
+            self.opened.storage.record_heartbeat(trial_id)
             trial.set_user_attr(COORDINATOR, self.tag)
             attempt = int(trial.user_attrs.get(ATTEMPT, 1))  # retries carry theirs
             hand = InHand(trial=trial, trial_id=trial_id, params={}, attempt=attempt)
