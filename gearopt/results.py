@@ -39,7 +39,15 @@ from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome
 
-__all__ = ["ResultsStore", "SCHEMA_NAMES", "TABLES", "VIEWS", "artifact_dir", "upload_figures"]
+__all__ = [
+    "ResultsStore",
+    "SCHEMA_NAMES",
+    "TABLES",
+    "VIEWS",
+    "artifact_dir",
+    "schema_text",
+    "upload_figures",
+]
 
 _meta = sa.MetaData()
 
@@ -136,30 +144,40 @@ VIEWS = {
 SCHEMA_NAMES = frozenset(_meta.tables) | frozenset(VIEWS)
 
 
-def _rows(table: sa.Table, key: dict, tuples) -> list[dict]:
-    """Rows of a per-trial table from tuples of its columns after ``study, trial_number``."""
-    names = [c.name for c in table.columns][2:]
-    return [{**key, **dict(zip(names, row, strict=True))} for row in tuples]
+def schema_text(dialect: sa.engine.Dialect) -> str:
+    """The statements that make gearopt's tables and views in ``dialect`` (what a copy of an
+    empty database must have been made with: :func:`gearopt.storage.create_sqlite`)."""
+    tables = [str(sa.schema.CreateTable(t).compile(dialect=dialect)) for t in _meta.sorted_tables]
+    return "\n".join([*tables, *(f"{name} AS {body}" for name, body in sorted(VIEWS.items()))])
+
+
+def _rows(table: sa.Table, key: tuple, tuples) -> list[dict]:
+    """Rows of a per-trial table as dicts from ``key`` (study, trial number) and tuples of its
+    columns after ``study, trial_number``."""
+    names = [c.name for c in table.columns]
+    return [dict(zip(names, (*key, *row), strict=True)) for row in tuples]
 
 
 @functools.cache
-def _insert_sql(table: sa.Table, dialect: sa.engine.Dialect) -> tuple[str, list | None]:
-    """The insert of every column of ``table`` in ``dialect``, and its parameters' order
-    (None for a named paramstyle)."""
+def _insert_sql(table: sa.Table, dialect: sa.engine.Dialect) -> tuple[str, bool]:
+    """The insert of every column of ``table`` in ``dialect``, and whether its parameters are
+    positional in the table's column order (False for a named paramstyle)."""
     compiled = table.insert().compile(dialect=dialect)
-    return str(compiled), compiled.positiontup
+    order = compiled.positiontup
+    return str(compiled), bool(order) and list(order) == [c.name for c in table.columns]
 
 
-def _insert_many(con: sa.Connection, table: sa.Table, rows: list[dict]) -> None:
-    """Insert ``rows`` (every column) through the driver's ``executemany``: SQLAlchemy's
-    per-row parameter handling cost more than SQLite's inserts (a trial's few hundred curve
-    points). Positional drivers (SQLite's ``?``) are given tuples in the statement's
-    parameter order, named ones (psycopg's ``%(name)s``) the rows as they are."""
-    sql, order = _insert_sql(table, con.dialect)
-    if order:
-        con.exec_driver_sql(sql, [tuple(row[n] for n in order) for row in rows])
+def _insert_many(con: sa.Connection, table: sa.Table, key: tuple, tuples: list) -> None:
+    """Insert a trial's rows of ``table`` (``key``: study and trial number, then ``tuples`` of
+    the other columns in the table's order) through the driver's ``executemany``:
+    SQLAlchemy's per-row parameter handling cost more than SQLite's inserts (a trial's few
+    hundred curve points). Positional drivers (SQLite's ``?``) are given the tuples as they
+    are, named ones (psycopg's ``%(name)s``) dicts."""
+    sql, positional = _insert_sql(table, con.dialect)
+    if positional:
+        con.exec_driver_sql(sql, [(*key, *row) for row in tuples])
     else:
-        con.exec_driver_sql(sql, rows)
+        con.exec_driver_sql(sql, _rows(table, key, tuples))
 
 
 def _utcnow() -> dt.datetime:
@@ -231,34 +249,20 @@ class ResultsStore:
         self, study: str, outcome: TrialOutcome, *, attempt: int, coordinator: str, labels
     ) -> None:
         """Write a trial's rows in one transaction (``labels``: objective label -> kind)."""
-        key = {"study": study, "trial_number": outcome.number}
+        key = (study, outcome.number)
+        # each table's rows as tuples of its columns after the key (the outcome's are so)
         rows = {
-            trials_t: [
-                {
-                    **key,
-                    "attempt": attempt,
-                    "seconds": outcome.seconds,
-                    "worker_pid": outcome.pid,
-                    "coordinator": coordinator,
-                }
+            trials_t: [(attempt, outcome.seconds, outcome.pid, coordinator)],
+            objectives_t: [
+                (label, kind, value)
+                for (label, kind), value in zip(
+                    labels.items(), [*outcome.values, *outcome.constraints.values()], strict=True
+                )
             ],
-            objectives_t: _rows(
-                objectives_t,
-                key,
-                [
-                    (label, kind, value)
-                    for (label, kind), value in zip(
-                        labels.items(),
-                        [*outcome.values, *outcome.constraints.values()],
-                        strict=True,
-                    )
-                ],
-            ),
-            # the outcome's row tuples list the columns in the tables' order
-            metrics_t: _rows(metrics_t, key, outcome.metrics),
-            settings_t: _rows(settings_t, key, outcome.settings),
-            curves_t: _rows(curves_t, key, outcome.curves),
-            patterns_t: _rows(patterns_t, key, outcome.patterns),
+            metrics_t: outcome.metrics,
+            settings_t: outcome.settings,
+            curves_t: outcome.curves,
+            patterns_t: outcome.patterns,
         }
         with self.engine.begin() as con:
             # rows of this trial written before (a tell that failed after them) are replaced;
@@ -272,7 +276,7 @@ class ResultsStore:
                 self._delete(con, study, [outcome.number])
             for table, values in rows.items():
                 if values:
-                    _insert_many(con, table, values)
+                    _insert_many(con, table, key, values)
 
     def forget(self, study: str, numbers: Iterable[int]) -> None:
         """Remove the rows of trials that were failed."""

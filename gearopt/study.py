@@ -92,6 +92,9 @@ from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome, evaluate_trial, work
 from gearopt.warmup import warm_kernels
 
+#: the state of a given design in the queue
+WAIT = (TrialState.WAITING,)
+
 __all__ = [
     "MARKERS_PREFIX",
     "MAX_ATTEMPTS",
@@ -412,7 +415,10 @@ class Coordinator:
         """Ask a trial, suggest its parameters and send it; False when the study's places
         are taken."""
         with held_stops(), held_reads(self.opened.view):  # asked and in hand at once
-            asking = self.role.asking() if self.role is not None else contextlib.nullcontext()
+            # a worker pops given designs one at a time (the hold's read, which Optuna's ask
+            # reads again, says whether any wait); with none it creates its trial side by side
+            waiting = self.role is not None and self.study.get_trials(deepcopy=False, states=WAIT)
+            asking = self.role.asking() if waiting else contextlib.nullcontext()
             with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
                 warnings.simplefilter("ignore", UserWarning)
                 trial = self.study.ask()

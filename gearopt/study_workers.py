@@ -87,11 +87,13 @@ class WorkerRole:
 
     @contextlib.contextmanager
     def asking(self):
-        """One of the run's workers at a time in Optuna's ``Study.ask``: it pops a given
-        design from the queue by reading it WAITING and setting it RUNNING in two
+        """One of the run's workers at a time in Optuna's ``Study.ask`` when given designs
+        wait in the queue: it pops one by reading it WAITING and setting it RUNNING in two
         transactions, so on SQLite two workers asking at once (a run's start, with given
-        designs queued) could both pop the same trial. A worker killed while it holds the
-        lock does not stop the others for long: they wait at most :data:`ASK_WAIT_S`."""
+        designs queued) could both pop the same trial (under the lock, a worker whose read
+        is older finds the trial RUNNING and asks the next). With none waiting, a worker
+        creates its trial without the lock. A worker killed while it holds the lock does not
+        stop the others for long: they wait at most :data:`ASK_WAIT_S`."""
         held = self.lock is not None and self.lock.acquire(timeout=ASK_WAIT_S)
         try:
             yield
