@@ -45,7 +45,6 @@ __all__ = [
     "TABLES",
     "VIEWS",
     "artifact_dir",
-    "schema_text",
     "upload_figures",
 ]
 
@@ -142,13 +141,6 @@ VIEWS = {
 
 #: every table and view gearopt makes (its schema's names)
 SCHEMA_NAMES = frozenset(_meta.tables) | frozenset(VIEWS)
-
-
-def schema_text(dialect: sa.engine.Dialect) -> str:
-    """The statements that make gearopt's tables and views in ``dialect`` (what a copy of an
-    empty database must have been made with: :func:`gearopt.storage.create_sqlite`)."""
-    tables = [str(sa.schema.CreateTable(t).compile(dialect=dialect)) for t in _meta.sorted_tables]
-    return "\n".join([*tables, *(f"{name} AS {body}" for name, body in sorted(VIEWS.items()))])
 
 
 def _rows(table: sa.Table, key: tuple, tuples) -> list[dict]:

@@ -14,7 +14,6 @@ import hashlib
 import json
 import os
 import re
-import shutil
 import sqlite3
 import time
 from pathlib import Path
@@ -29,7 +28,7 @@ import sqlalchemy as sa
 import sqlalchemy.exc
 
 from gearopt.errors import StudyError
-from gearopt.results import SCHEMA_NAMES, ResultsStore, schema_text
+from gearopt.results import SCHEMA_NAMES, ResultsStore
 from gearopt.studyfile import StudySpec
 
 __all__ = [
@@ -39,7 +38,6 @@ __all__ = [
     "check_storage_url",
     "create_sqlite",
     "default_storage_url",
-    "empty_template",
     "fast_sqlite",
     "held_reads",
     "masked_url",
@@ -139,10 +137,8 @@ def create_sqlite(url: str) -> bool:
     a temporary file beside it, which is then linked under the database's name (``os.link``,
     which fails when the name exists: another coordinator made it first, and that one is
     used). No coordinator ever sees a half-made file, so two starting together never race on
-    the schema, and a 0-byte file is never gearopt's. The temporary file is a copy of the
-    empty database this installation made before (:func:`empty_template`), when there is one:
-    the schema made again costs about half a second of a run's start. True when this call made
-    it; nothing to do for other dialects or an existing file."""
+    the schema, and a 0-byte file is never gearopt's. True when this call made it; nothing to
+    do for other dialects or an existing file."""
     try:
         parsed = sa.engine.make_url(url)
     except Exception:
@@ -153,9 +149,13 @@ def create_sqlite(url: str) -> bool:
     if path.exists() or not path.parent.is_dir():
         return False  # an existing file is checked; a missing folder, the driver says so
     temporary = path.with_name(f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.new")
+    temp_url = f"sqlite:///{temporary}"
     try:
-        if not _copy_template(temporary):
-            _make_empty(temporary)
+        storage = optuna.storages.RDBStorage(
+            temp_url, engine_kwargs=_engine_kwargs(temp_url), skip_compatibility_check=True
+        )  # (its schema is this Optuna's, made now: no version check)
+        ResultsStore(temp_url, engine=storage.engine)
+        storage.engine.dispose()
         try:
             os.link(temporary, path)
         except FileExistsError:
@@ -168,69 +168,6 @@ def create_sqlite(url: str) -> bool:
     finally:
         for leftover in (temporary, *temporary.parent.glob(f"{temporary.name}-*")):
             Path(leftover).unlink(missing_ok=True)
-
-
-def empty_template() -> Path | None:
-    """Where this installation keeps a copy of the empty study database it makes (Optuna's
-    schema and gearopt's tables and views): the user's cache folder (``$XDG_CACHE_HOME`` or
-    ``~/.cache``), under ``gearopt/``, named by a digest of the versions of Optuna, SQLAlchemy
-    and SQLite and of gearopt's schema, so that another version never uses it; None without a
-    home folder."""
-    from sqlalchemy.dialects import sqlite as dialect
-
-    versions = [optuna.__version__, sa.__version__, sqlite3.sqlite_version]
-    text = json.dumps([*versions, schema_text(dialect.dialect())])
-    try:
-        root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    except RuntimeError:  # (no home folder to be found)
-        return None
-    return root / "gearopt" / f"empty-study-{hashlib.sha256(text.encode()).hexdigest()[:16]}.db"
-
-
-def _make_empty(temporary: Path) -> None:
-    """Optuna's schema (this Optuna's, made now: no version check) and gearopt's tables in a
-    new file ``temporary``; a copy kept as :func:`empty_template` (nothing when the cache
-    folder cannot be written)."""
-    temp_url = f"sqlite:///{temporary}"
-    storage = optuna.storages.RDBStorage(
-        temp_url, engine_kwargs=_engine_kwargs(temp_url), skip_compatibility_check=True
-    )
-    ResultsStore(temp_url, engine=storage.engine)
-    storage.engine.dispose()
-    template = empty_template()
-    if template is None:
-        return
-    kept = template.with_name(f".{template.name}.{os.getpid()}.{time.monotonic_ns()}")
-    try:
-        template.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(temporary, kept)
-        os.replace(kept, template)  # (whole or not at all)
-    except OSError:
-        kept.unlink(missing_ok=True)
-
-
-def _copy_template(temporary: Path) -> bool:
-    """``temporary`` made a copy of :func:`empty_template`; False when there is none or it is
-    not a sound SQLite file (then removed)."""
-    template = empty_template()
-    if template is None:
-        return False
-    try:
-        shutil.copyfile(template, temporary)
-    except OSError:  # (none made yet)
-        return False
-    try:
-        con = sqlite3.connect(f"{temporary.resolve().as_uri()}?mode=ro", uri=True)
-        try:
-            sound = [row[0] for row in con.execute("PRAGMA quick_check")] == ["ok"]
-        finally:
-            con.close()
-    except sqlite3.Error:
-        sound = False
-    if not sound:
-        template.unlink(missing_ok=True)
-        temporary.unlink(missing_ok=True)
-    return sound
 
 
 def check_own_tables(url: str) -> None:

@@ -6,21 +6,13 @@ suggests on Optuna's own cached storage."""
 from __future__ import annotations
 
 import os
-import sqlite3
 
 import optuna
 import pytest
 import sqlalchemy as sa
 from optuna.trial import TrialState
 
-from gearopt.storage import (
-    WorkerStorage,
-    check_integrity,
-    create_sqlite,
-    empty_template,
-    fast_sqlite,
-    one_writer,
-)
+from gearopt.storage import WorkerStorage, fast_sqlite, one_writer
 
 
 def _sampler() -> optuna.samplers.TPESampler:
@@ -141,27 +133,3 @@ def test_one_writer_holds_the_lock_from_the_first_write_to_the_connections_retur
     with engine.connect() as con:
         assert con.execute(sa.text("SELECT x FROM t")).scalars().all() == [2]
     engine.dispose()
-
-
-def test_a_new_sqlite_database_is_a_copy_of_the_empty_one_made_first(tmp_path, monkeypatch):
-    """:func:`gearopt.storage.create_sqlite` keeps the empty database it makes in the cache
-    folder and copies it next time (the same schema); a damaged copy is made again."""
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    template = empty_template()
-    assert template.is_relative_to(tmp_path / "cache")
-
-    def schema(path) -> list:
-        with sqlite3.connect(path) as con:
-            return con.execute("SELECT type, name, sql FROM sqlite_master ORDER BY name").fetchall()
-
-    assert create_sqlite(f"sqlite:///{tmp_path / 'first.db'}") and template.is_file()
-    assert create_sqlite(f"sqlite:///{tmp_path / 'second.db'}")
-    assert schema(tmp_path / "second.db") == schema(tmp_path / "first.db")
-    assert {"trials", "gearopt_curves", "gearopt_trial_metrics"} <= {
-        name for _, name, _ in schema(tmp_path / "second.db")
-    }
-    template.write_bytes(b"not a database" * 100)
-    assert create_sqlite(f"sqlite:///{tmp_path / 'third.db'}")
-    check_integrity(f"sqlite:///{tmp_path / 'third.db'}")
-    assert schema(tmp_path / "third.db") == schema(tmp_path / "first.db")
-    assert schema(template) == schema(tmp_path / "first.db")  # made again
