@@ -428,6 +428,9 @@ def refine(
     active = np.ones(n, np.bool_)
     moving = np.zeros(n, np.bool_)
     taken = np.zeros(n, np.bool_)
+    # a start whose step was refused has the same step refused at every later iteration (its
+    # point, stencil and best stay as they were): it is not evaluated again
+    held = np.zeros(n, np.bool_)
     qs, qt = 0.25 * cell[0], 0.25 * cell[1]
     for r in range(n):
         ok = False
@@ -442,7 +445,7 @@ def refine(
     for it in range(caps.max()):
         for r in range(n):
             moving[r] = taken[r] = False
-            if not active[r]:
+            if not active[r] or held[r]:
                 continue
             fr = f[r]
             g0 = 2.0 * (fr[1] - fr[2])
@@ -481,6 +484,7 @@ def refine(
                     taken[r] = True
                     s[r], t[r], best[r] = ns, nt, value
                     break
+            held[r] = not taken[r]
         still = False
         for g in range(groups):
             stop = it == caps[g] - 1
