@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from gearopt.mesh.zone import NEAR, RING_MM, SCAN, SPREAD, ZOOM, Zones
+from gearopt.mesh.zone import NEAR, RING, RING_FIT, SCAN, SPREAD, ZOOM, Zones
 
 #: the methods of :class:`gearopt.mesh.zone.Zones` this module replaces
 METHODS = {
@@ -24,22 +24,6 @@ METHODS = {
     "point_separations": "zone_point_separations",
     "quadratic": "zone_quadratic",
 }
-
-#: the ring of :meth:`gearopt.mesh.zone.Zones.quadratic` and its least-squares fit (as there)
-RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
-RING = RING_MM * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
-RING_FIT = np.linalg.pinv(
-    np.stack(
-        [
-            RING[:, 0],
-            RING[:, 1],
-            0.5 * RING[:, 0] ** 2,
-            RING[:, 0] * RING[:, 1],
-            0.5 * RING[:, 1] ** 2,
-        ],
-        axis=1,
-    )
-)
 
 
 def install(monkeypatch) -> None:

@@ -52,6 +52,9 @@ from gearopt.mesh import kernels
 
 __all__ = [
     "NEAR",
+    "RING",
+    "RING_ANGLES",
+    "RING_FIT",
     "RING_MM",
     "SCAN",
     "SPREAD",
@@ -83,17 +86,18 @@ STATIONS = 12
 VALLEY = 49
 
 _ZOOM_FRACTIONS = np.linspace(0.0, 1.0, ZOOM)
-_RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
-_RING = RING_MM * np.stack([np.cos(_RING_ANGLES), np.sin(_RING_ANGLES)], axis=1)
+#: the ring of :meth:`Zones.quadratic`: 8 points RING_MM around a point
+RING_ANGLES = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+RING = RING_MM * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
 #: least-squares map from the ring's clearance rises to (g_s, g_h, H_ss, H_sh, H_hh)
-_RING_FIT = np.linalg.pinv(
+RING_FIT = np.linalg.pinv(
     np.stack(
         [
-            _RING[:, 0],
-            _RING[:, 1],
-            0.5 * _RING[:, 0] ** 2,
-            _RING[:, 0] * _RING[:, 1],
-            0.5 * _RING[:, 1] ** 2,
+            RING[:, 0],
+            RING[:, 1],
+            0.5 * RING[:, 0] ** 2,
+            RING[:, 0] * RING[:, 1],
+            0.5 * RING[:, 1] ** 2,
         ],
         axis=1,
     )
@@ -200,16 +204,16 @@ class Zones:
         profile_mm)`` of rows ``r``: ``(g_s, g_h, H_ss, H_sh, H_hh)`` (rad per mm, per mm^2),
         fitted on a ring of radius :data:`RING_MM` (least squares)."""
         face_mm = np.ascontiguousarray(face_mm, float)
-        delta = np.empty((len(face_mm), 1 + len(_RING)))
+        delta = np.empty((len(face_mm), 1 + len(RING)))
         zone_kernels.ring_clearances(
             *self.tables()[:3],
             np.asarray(r, np.intp),
             face_mm,
             np.ascontiguousarray(profile_mm, float),
-            _RING,
+            RING,
             delta,
         )
-        return (delta[:, 1:] - delta[:, :1]) @ _RING_FIT.T
+        return (delta[:, 1:] - delta[:, :1]) @ RING_FIT.T
 
     def axes(self, r, face_mm, profile_mm) -> NDArray:
         """``(K, 2)`` unit vectors (face, profile) of the major axes of the zones of rows
