@@ -13,12 +13,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from gearopt.contact import zone_kernels
 from gearopt.mesh import kernels
 from gearopt.mesh.handover import newton_form, newton_value
+from gearopt.mesh.zone import NEAR, SPREAD, Zones
 
 from .numpy_zone import neighbours
 
@@ -320,3 +323,42 @@ def test_side_start_is_the_numpy_steps(start):
             assert (tuple(bracket), d_lo, d_hi) == want_bracket
             brackets += 1
     assert brackets > 30  # hand-overs bracketed, not only refusals
+
+
+RAYS = [zone_kernels.ray_samples, getattr(zone_kernels.ray_samples, "py_func", None)]
+
+
+@pytest.mark.parametrize("samples", [f for f in RAYS if f is not None])
+def test_ray_samples_are_to_edge_and_the_fractions_bit_for_bit(samples):
+    """The rays' samples to the grid's edge (or their reach) as :meth:`Zones.to_edge` and
+    numpy's minimum give them, NaN and the sign of zero included (a ray along the grid's
+    edge, from a corner, from outside, a NaN origin or reach, zero directions)."""
+    rng = np.random.default_rng(31)
+    box = np.array([-1.5, -0.5, 2.0, 3.0])
+    grid = SimpleNamespace(box=box)
+    picks = np.array([-2.0, -1.5, -0.5, -0.0, 0.0, 0.5, 2.0, 3.0, 4.0, np.nan])
+    bits = 0
+    for _ in range(200):
+        k = int(rng.integers(1, 40))
+        origins = np.where(rng.random((k, 2)) < 0.4, rng.choice(picks, (k, 2)), 0.0)
+        origins += np.where(rng.random((k, 2)) < 0.5, rng.uniform(-2.0, 3.5, (k, 2)), 0.0)
+        directions = np.where(
+            rng.random((k, 2)) < 0.3,
+            rng.choice([-0.0, 0.0, np.nan], (k, 2)),
+            rng.normal(size=(k, 2)),
+        )
+        reach = np.where(
+            rng.random(k) < 0.2, rng.choice([np.inf, np.nan, 0.0], k), rng.uniform(0, 5, k)
+        )
+        spread = rng.random(k) < 0.5
+        tau = np.empty((k, len(SPREAD)))
+        with np.errstate(invalid="ignore"):  # (inf times a zero fraction: NaN, as numpy's)
+            samples(Zones.rays(origins, directions), box, reach, spread, SPREAD, NEAR, tau)
+            far = np.minimum(reach, Zones.to_edge(grid, origins, directions))
+            want = far[:, None] * np.where(spread[:, None], SPREAD[None, :], NEAR[None, :])
+        assert np.array_equal(np.isnan(tau), np.isnan(want))
+        same = ~np.isnan(want)
+        assert np.array_equal(tau[same], want[same])
+        assert np.array_equal(np.signbit(tau[same]), np.signbit(want[same]))
+        bits += int((np.isnan(want).any(axis=1) | (want == 0.0).any(axis=1)).sum())
+    assert bits > 200  # the NaN and zero cases met, not only clean rays
