@@ -272,16 +272,12 @@ def _rint(x):
 @compiled
 def _stable_order(key):
     """The stable ascending order of ``key`` (numpy's ``argsort(kind="stable")``: a stable
-    sort's order is unique): insertion, for the few dozen to few thousand nearly ordered
-    keys here, which compiles in a fraction of numba's merge sort's time."""
-    order = np.arange(key.shape[0])
-    for i in range(1, key.shape[0]):
-        k = order[i]
-        j = i
-        while j > 0 and key[order[j - 1]] > key[k]:
-            order[j] = order[j - 1]
-            j -= 1
-        order[j] = k
+    sort's order is unique): by :func:`_insert`, for the few dozen to few thousand nearly
+    ordered keys here, which compiles in a fraction of numba's merge sort's time."""
+    keys, order = np.empty_like(key), np.empty(key.shape[0], np.intp)
+    m = 0
+    for i in range(key.shape[0]):
+        m = _insert(key[i], i, keys, order, m)
     return order
 
 
