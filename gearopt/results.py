@@ -39,14 +39,7 @@ from optuna.artifacts import FileSystemArtifactStore, upload_artifact
 from gearopt.studyfile import StudySpec
 from gearopt.trial import TrialOutcome
 
-__all__ = [
-    "ResultsStore",
-    "SCHEMA_NAMES",
-    "TABLES",
-    "VIEWS",
-    "artifact_dir",
-    "upload_figures",
-]
+__all__ = ["ResultsStore", "SCHEMA_NAMES", "TABLES", "VIEWS", "artifact_dir", "upload_figures"]
 
 _meta = sa.MetaData()
 
