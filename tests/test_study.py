@@ -14,7 +14,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 import tomllib
 from pathlib import Path
@@ -64,8 +63,8 @@ def _toy_study(folder: Path, *, conditions: str = "{}", sampler: str = "tpe", ex
     return path
 
 
-def _gearopt(args, toy_site, *, check=True, timeout_s=300, **kw):
-    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+def _gearopt(args, toy_site, *, check=True, timeout_s=300, env_extra=None, **kw):
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1", **(env_extra or {})}
     run = subprocess.run(
         [sys.executable, "-m", "gearopt.cli", *map(str, args)],
         env=env,
@@ -455,7 +454,12 @@ def _ran_and_runs(db: Path, *, complete: int, wait_s: float = 120.0) -> bool:
 def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
     study = _toy_study(tmp_path, conditions="{sleep_s = 0.4}")
     db = tmp_path / "toy_probe.db"
-    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    # a temporary directory of its own: a run elsewhere on the host (another test process)
+    # removes the folders of dead coordinators it finds in the shared one, this kill's included
+    private_tmp = tmp_path / "tmp"
+    private_tmp.mkdir()
+    own_tmp = {"TMPDIR": str(private_tmp)}
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1", **own_tmp}
     args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study)]
     args += ["--trials", "10", "--jobs", "2", "--no-progress"]
     # the kill must find a trial running: between the poll and the kill a worker may have just
@@ -476,14 +480,15 @@ def test_a_killed_coordinator_loses_nothing(tmp_path, toy_site):
             break
     assert running
     # the killed coordinator's temporary folder stays behind, until the next run starts
-    folders = Path(tempfile.gettempdir()).glob("gearopt-trials-*")
+    folders = private_tmp.glob("gearopt-trials-*")
     owned = [f for f in folders if (f / "owner").is_file()]
     left = [f for f in owned if (f / "owner").read_text() == str(proc.pid)]
     assert len(left) == 1
     # a trial asked but not yet given its parameters never reached a worker
     killed = {t.number: t.params["machine.tool_tip_width_mm"] for t in running if t.params}
     unsampled = {t.number for t in running if not t.params}
-    _gearopt(["study", "run", study, "--trials", 10, "--jobs", 2, "--no-progress"], toy_site)
+    rerun = ["study", "run", study, "--trials", 10, "--jobs", 2, "--no-progress"]
+    _gearopt(rerun, toy_site, env_extra=own_tmp)
     after = _trials(db)
     states = _states(after)
     assert states["COMPLETE"] == 10 and "RUNNING" not in states
@@ -757,7 +762,12 @@ def test_seed003_table5_sweep_through_the_queue_fills_the_tables(tmp_path, seed_
 def test_a_terminated_coordinator_puts_its_trials_back_in_the_queue(tmp_path, toy_site):
     study = _toy_study(tmp_path, conditions="{sleep_s = 0.4}")
     db = tmp_path / "toy_probe.db"
-    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1"}
+    # a temporary directory of its own: a run elsewhere on the host (another test process)
+    # removes the folders of dead coordinators it finds in the shared one, this kill's included
+    private_tmp = tmp_path / "tmp"
+    private_tmp.mkdir()
+    own_tmp = {"TMPDIR": str(private_tmp)}
+    env = {**os.environ, "PYTHONPATH": str(toy_site), "OMP_NUM_THREADS": "1", **own_tmp}
     args = [sys.executable, "-m", "gearopt.cli", "study", "run", str(study)]
     args += ["--trials", "8", "--jobs", "2", "--no-progress"]
     proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
