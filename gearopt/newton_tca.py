@@ -41,10 +41,10 @@ from gearopt.contact.tangency import TangencySystem
 from gearopt.errors import GearoptError
 from gearopt.flank_jet import FlankJet
 from gearopt.mesh import PairCurve
+from gearopt.units import ARCSEC
 
 __all__ = ["NewtonTCA", "contact_interval_end", "newton_tca", "tangency_equations"]
 
-ARCSEC = 180.0 * 3600.0 / math.pi
 
 RESIDUAL_LIMIT = 1e-8
 """Largest residual (mm for the point equations, cosine for the normal ones) of a converged

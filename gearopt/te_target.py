@@ -29,11 +29,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from gearopt.errors import DesignError
+from gearopt.units import ARCSEC
 from gearopt.validate import check_keys, read_number
 
 __all__ = ["ARCSEC", "TE_TARGET_KEYS", "TETarget", "compare"]
 
-ARCSEC = 180.0 * 3600.0 / math.pi
 TE_TARGET_KEYS = (
     "quadratic",
     "quartic",

@@ -58,6 +58,7 @@ LAYERS = (
             "gearopt.solve",
             "gearopt.jit",
             "gearopt.determinants",
+            "gearopt.units",
         ),
     ),
     (

@@ -38,10 +38,10 @@ from gearopt.load_options import PatchOptions, check_torques
 from gearopt.loaded.lcp import solve_load_patches
 from gearopt.loaded.patch_compliance import PatchCompliance
 from gearopt.loaded.separations import PairPatches, position_patches
+from gearopt.units import ARCSEC
 
 __all__ = ["ARCSEC", "LoadedContact", "PositionLoad", "loaded_contact"]
 
-ARCSEC = 180.0 * 3600.0 / math.pi
 #: extra positions per round of the LTE minimum's refinement
 REFINE_POINTS = 5
 #: rounds of the refinement

@@ -15,11 +15,9 @@ import numpy as np
 
 from gearopt.contact import ClearanceField, FieldSample
 from gearopt.flank_jet import FlankJet
+from gearopt.units import ARCSEC
 
 __all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
-
-#: arcsec per radian
-ARCSEC = 180.0 * 3600.0 / math.pi
 
 
 def as_list(values) -> list[float]:

@@ -54,6 +54,7 @@ from gearopt.errors import SettingsError
 from gearopt.flank import axial_plane, cone_coordinates
 from gearopt.mesh import ToothFrame
 from gearopt.solve import newton
+from gearopt.units import ARCSEC
 from gearopt_plugins.face_milling.family import flank_family
 from gearopt_plugins.face_milling.local import (
     TaylorJet,
@@ -74,7 +75,6 @@ from gearopt_plugins.face_milling.synthesis.targets import (
 
 __all__ = ["default_chosen", "pinion_start", "synthesize_pinion_flank"]
 
-ARCSEC = 180.0 * 3600.0 / math.pi
 #: pinion cutter radius at the pitch plane, default: the mating gear blade's radius there,
 #: made this much smaller (convex flank) or larger (concave flank): the lengthwise mismatch
 DEFAULT_RADIUS_MISMATCH = 0.03
