@@ -431,7 +431,7 @@ class MeshCycle:
                 n_v += v
                 n_s += face
                 n_h += profile
-                owners += [(side, tag) for tag in tags]
+                owners.append((side, tags))
         f_side = np.array(f_side, np.intp)
         f_phi = sense[f_side] * np.array(f_v)
         f_refine = np.array(f_refine, bool)
@@ -443,8 +443,10 @@ class MeshCycle:
                 sample, answers = self.joint.sample(f_side, f_phi, refine=f_refine, near=near)
             else:
                 answers = self.joint.minimum_near(*near)
-            for (side, tag), *answer in zip(owners, *(a.tolist() for a in answers), strict=True):
-                side.answers[tag] = tuple(answer)
+            # each side's requests in turn: its tags first, so that zip stops at their end
+            rows = zip(*(a.tolist() for a in answers), strict=True)
+            for side, tags in owners:
+                side.answers.update(zip(tags, rows, strict=False))
         elif f_side.size:
             sample = self.joint.sample(f_side, f_phi)
         start = 0
