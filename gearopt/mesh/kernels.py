@@ -428,8 +428,8 @@ def beyond_rows(v, u, carrying, pitch, out):
 
 @compiled
 def window_check(v, g, u, carrying, lag, pitch, flat):
-    """A side's window checked on everything sampled for it (:meth:`gearopt.mesh.cycle.
-    MeshCycle.window_checks`): its mesh centre and whether a pair beyond it carries.
+    """A side's window checked on everything sampled for it: its mesh centre and whether a
+    pair beyond it carries (:meth:`gearopt.mesh.cycle.MeshCycle.window_checks`).
 
     Parameters
     ----------
