@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from gearopt.jit import ENABLED, compiled
+from gearopt.mesh import path_kernels
 
 __all__ = [
     "ENABLED",
@@ -705,9 +706,11 @@ def inverse_roots(a, b, d_a, d_b, trail):
 
 def warm() -> None:
     """Compile the kernels, or load them from the disk cache (as
-    :func:`gearopt.contact.kernel_warmup.warm`); nothing without them."""
+    :func:`gearopt.contact.kernel_warmup.warm`), with the path's
+    (:func:`gearopt.mesh.path_kernels.warm`); nothing without them."""
     if not ENABLED:
         return
+    path_kernels.warm()
     one, index = np.zeros((1, 1)), np.zeros(1, np.intp)
     pattern_fields(
         one,
