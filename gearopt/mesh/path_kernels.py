@@ -3,9 +3,10 @@
 frame at their contact angles (:func:`gear_chord`), and the gear flank's tangents there with the
 angle of the chord from the root line (:func:`root_line_angle`).
 
-Each does the Python's arithmetic in its order, numpy's products through numba's ``np.dot``
-(the BLAS calls numpy's ``@`` makes): the results are the same to the bit
-(``tests/test_mesh_kernels.py`` holds them to the Python they replaced).
+Each does the Python's arithmetic in its order, numpy's matrix products through numba's
+``np.dot`` (scipy's OpenBLAS: the same kernels as numpy's ``@``, where a loop of the products
+differs in the last bit): the results are the same to the bit (``tests/test_path_kernels.py``
+holds them to the Python they replaced, and would see two BLAS builds that differ).
 """
 
 from __future__ import annotations
