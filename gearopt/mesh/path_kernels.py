@@ -56,7 +56,10 @@ def gear_chord(face, height, theta, pitch, phi, lag, b, c, ratio, offset, gear_s
         turned[k, 0] = cp * p[k, 0] - sp * p[k, 1]
         turned[k, 1] = sp * p[k, 0] + cp * p[k, 1]
         turned[k, 2] = p[k, 2]
-    q = np.dot(turned, b.T) + c
+    q = np.dot(turned, b.T)
+    for k in range(2):
+        for m in range(3):
+            q[k, m] += c[m]
     return _turned(q, 0, phi, lag, ratio, offset, gear_sense), _turned(
         q, 1, phi, lag, ratio, offset, gear_sense
     )
@@ -116,10 +119,11 @@ def root_line_angle(chord, mid, s, h, jet, coefficients, root_angle):
     j = min(max(math.floor(y), 0), n_p - 2)
     u, v = x - i, y - j
     cm = coefficients[i * columns + j].reshape(4, 4)
-    uu = np.array([1.0, u, u * u, u * u * u])
-    du = np.array([0.0, 1.0, 2.0 * u, 3.0 * u * u]) / ds
-    vv = np.array([1.0, v, v * v, v * v * v])
-    dv = np.array([0.0, 1.0, 2.0 * v, 3.0 * v * v]) / dh
+    uu, du, vv, dv = np.empty(4), np.empty(4), np.empty(4), np.empty(4)
+    uu[0], uu[1], uu[2], uu[3] = 1.0, u, u * u, u * u * u
+    du[0], du[1], du[2], du[3] = 0.0 / ds, 1.0 / ds, 2.0 * u / ds, 3.0 * u * u / ds
+    vv[0], vv[1], vv[2], vv[3] = 1.0, v, v * v, v * v * v
+    dv[0], dv[1], dv[2], dv[3] = 0.0 / dh, 1.0 / dh, 2.0 * v / dh, 3.0 * v * v / dh
     cv, cdv = np.dot(cm, vv), np.dot(cm, dv)
     theta, t_s, t_h = np.dot(uu, cv), np.dot(du, cv), np.dot(uu, cdv)
     # the tangents (p_s, p_h) and the normal p_s x p_h
