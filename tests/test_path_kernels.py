@@ -1,8 +1,9 @@
 """The path's direction on the gear flank at M (:func:`gearopt.mesh.frame.gear_path_angle`, its
 arithmetic compiled in :mod:`gearopt.mesh.path_kernels`) against the Python it replaced (kept
 here as its reference: the flank's point by its splines, the gear frame's numpy products, the
-gear flank's jet and tangents on Python floats), to the last bit, compiled and as plain Python,
-on the section 5.3 pair's two sides at contact points over both flanks.
+gear flank's jet and tangents and the angle from the root line on Python floats), to the last
+bit, compiled and as plain Python, on the section 5.3 pair's two sides at contact points over
+both flanks, and :func:`gearopt.mesh.frame.path_angle` on random chords and normals.
 """
 
 from __future__ import annotations
@@ -50,12 +51,41 @@ def reference_angle(field, ex, tooth_frame) -> float:
         p_s[2] * p_h[0] - p_s[0] * p_h[2],
         p_s[0] * p_h[1] - p_s[1] * p_h[0],
     )
-    return frame.path_angle(
+    return reference_path_angle(
         (b[0] - a[0], b[1] - a[1], b[2] - a[2]),
         normal,
         mid,
         math.radians(tooth_frame.gear_root_angle_deg),
     )
+
+
+def reference_path_angle(tangent, normal, point, root_angle_rad) -> float:
+    """The Python :func:`gearopt.mesh.frame.path_angle` replaced (db029ef's)."""
+
+    def unit(x, y, z):
+        norm = math.sqrt(x * x + y * y + z * z)
+        return (x / norm, y / norm, z / norm)
+
+    def dot(a, b):
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+    def minus(a, k, b):
+        return (a[0] - k * b[0], a[1] - k * b[1], a[2] - k * b[2])
+
+    n = unit(*(float(a) for a in normal))
+    theta = math.atan2(point[1], point[0])
+    c_r, s_r = math.cos(theta), math.sin(theta)
+    sin_g, cos_g = math.sin(root_angle_rad), math.cos(root_angle_rad)
+    along = (sin_g * c_r + cos_g * 0.0, sin_g * s_r + cos_g * 0.0, sin_g * 0.0 + cos_g * 1.0)
+    up = (cos_g * c_r - sin_g * 0.0, cos_g * s_r - sin_g * 0.0, cos_g * 0.0 - sin_g * 1.0)
+    along = unit(*minus(along, dot(along, n), n))
+    up = unit(*minus(minus(up, dot(up, n), n), dot(up, along), along))
+    t = tuple(float(a) for a in tangent)
+    t = minus(t, dot(t, n), n)
+    if dot(t, along) < 0.0:
+        t = (-t[0], -t[1], -t[2])
+    angle = math.degrees(math.atan2(dot(t, up), dot(t, along)))
+    return 90.0 if angle <= -90.0 + 1e-12 else angle
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +150,15 @@ def _cases(sides, count=150):
 @pytest.mark.parametrize("variant", VARIANTS)
 def test_gear_path_angle_is_the_python_bit_for_bit(sides, variant, monkeypatch):
     if variant == "python":
-        for name in ("gear_chord", "root_line_angle", "_turned", "_unit", "_dot", "_minus"):
+        for name in (
+            "gear_chord",
+            "root_line_angle",
+            "chord_angle",
+            "_turned",
+            "_unit",
+            "_dot",
+            "_minus",
+        ):
             kernel = getattr(path_kernels, name)
             monkeypatch.setattr(path_kernels, name, getattr(kernel, "py_func", kernel))
     angles = []
@@ -130,6 +168,21 @@ def test_gear_path_angle_is_the_python_bit_for_bit(sides, variant, monkeypatch):
         assert np.float64(got).view(np.int64) == np.float64(want).view(np.int64)
         angles.append(got)
     assert len(angles) == 302 and np.ptp(angles) > 10.0  # (the points spread over the flank)
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_path_angle_is_the_python_bit_for_bit(variant, monkeypatch):
+    if variant == "python":
+        for name in ("chord_angle", "_unit", "_dot", "_minus"):
+            kernel = getattr(path_kernels, name)
+            monkeypatch.setattr(path_kernels, name, getattr(kernel, "py_func", kernel))
+    rng = np.random.default_rng(23)
+    for _ in range(2000):
+        tangent, normal, point = rng.normal(size=(3, 3)) * rng.uniform(0.01, 100.0, (3, 1))
+        root = float(rng.uniform(0.5, 1.5))
+        want = reference_path_angle(tangent, normal, point, root)
+        got = frame.path_angle(tangent, normal, point, root)
+        assert np.float64(got).view(np.int64) == np.float64(want).view(np.int64)
 
 
 def test_a_point_off_the_grid_fails_as_the_python(sides):

@@ -92,37 +92,16 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
     float
         The angle in degrees, range (-90, 90].
     """
-    # (on Python floats: the products summed in order, as numpy's dot of 3-vectors)
-    n = _unit(*(float(a) for a in normal))
-    theta = math.atan2(point[1], point[0])
-    c_r, s_r = math.cos(theta), math.sin(theta)
-    sin_g, cos_g = math.sin(root_angle_rad), math.cos(root_angle_rad)
-    along = (sin_g * c_r + cos_g * 0.0, sin_g * s_r + cos_g * 0.0, sin_g * 0.0 + cos_g * 1.0)
-    up = (cos_g * c_r - sin_g * 0.0, cos_g * s_r - sin_g * 0.0, cos_g * 0.0 - sin_g * 1.0)
-    along = _unit(*_minus(along, _dot(along, n), n))
-    up = _unit(*_minus(_minus(up, _dot(up, n), n), _dot(up, along), along))
-    t = tuple(float(a) for a in tangent)
-    t = _minus(t, _dot(t, n), n)
-    if _dot(t, along) < 0.0:
-        t = (-t[0], -t[1], -t[2])
-    angle = math.degrees(math.atan2(_dot(t, up), _dot(t, along)))
+    # (compiled: on floats, the products summed in order, as numpy's dot of 3-vectors)
+    angle = math.degrees(
+        path_kernels.chord_angle(
+            tuple(float(a) for a in tangent),
+            tuple(float(a) for a in normal),
+            (float(point[0]), float(point[1]), float(point[2])),
+            float(root_angle_rad),
+        )
+    )
     return 90.0 if angle <= -90.0 + 1e-12 else angle
-
-
-def _dot(a, b) -> float:
-    """``a . b`` of two 3-vectors, the products summed in order."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _minus(a, k: float, b) -> tuple[float, float, float]:
-    """``a - k b``."""
-    return (a[0] - k * b[0], a[1] - k * b[1], a[2] - k * b[2])
-
-
-def _unit(x: float, y: float, z: float) -> tuple[float, float, float]:
-    """``(x, y, z)`` over its length (``numpy.linalg.norm``'s: the root of the dot product)."""
-    norm = math.sqrt(x * x + y * y + z * z)
-    return (x / norm, y / norm, z / norm)
 
 
 def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -> float:

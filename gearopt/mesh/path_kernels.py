@@ -17,7 +17,7 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "gear_chord", "root_line_angle", "warm"]
+__all__ = ["ENABLED", "chord_angle", "gear_chord", "root_line_angle", "warm"]
 
 
 @compiled
@@ -95,8 +95,7 @@ def _minus(a, k, b):
 def root_line_angle(chord, mid, s, h, jet, coefficients, root_angle):
     """The angle (radians) from the gear's root line to the chord ``chord`` through ``mid``
     on the gear flank at grid ``(s, h)``: :class:`gearopt.flank_jet.FlankJet`'s polar jet,
-    :func:`gearopt.mesh.frame._tangents`, their cross product and
-    :func:`gearopt.mesh.frame.path_angle` but for the degrees.
+    :func:`gearopt.mesh.frame._tangents`, their cross product and :func:`chord_angle`.
 
     Parameters
     ----------
@@ -132,9 +131,18 @@ def root_line_angle(chord, mid, s, h, jet, coefficients, root_angle):
     r_s, r_h = big_r * t_s, big_r * t_h
     a = (sg * ca + r_s * -sa + cg * 0.0, sg * sa + r_s * ca + cg * 0.0, sg * 0.0 + r_s * 0.0 + cg)
     b = (cg * ca + r_h * -sa - sg * 0.0, cg * sa + r_h * ca - sg * 0.0, cg * 0.0 + r_h * 0.0 - sg)
-    n = _unit(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-    # the root line and the way up, on the tangent plane; the chord's angle from it
-    th = math.atan2(mid[1], mid[0])
+    normal = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+    return chord_angle(chord, normal, mid, root_angle)
+
+
+@compiled
+def chord_angle(chord, normal, point, root_angle):
+    """The angle (radians) from the gear's root line through ``point`` (the root cone's
+    generatrix projected on the tangent plane of normal ``normal``, toward the heel) to the
+    chord ``chord`` projected there (oriented toward the heel too), positive toward the tooth
+    top: :func:`gearopt.mesh.frame.path_angle` but for the degrees. Each ``(x, y, z)``."""
+    n = _unit(*normal)
+    th = math.atan2(point[1], point[0])
     c_r, s_r = math.cos(th), math.sin(th)
     sin_g, cos_g = math.sin(root_angle), math.cos(root_angle)
     along = (sin_g * c_r + cos_g * 0.0, sin_g * s_r + cos_g * 0.0, sin_g * 0.0 + cos_g * 1.0)
@@ -156,3 +164,4 @@ def warm() -> None:
     jet = (0.0, 0.0, 1.0, 1.0, 2, 2, 1, 0.0, 1.0)
     one = (1.0, 0.0, 0.0)
     root_line_angle(one, one, 0.5, 0.5, jet, np.zeros((1, 16)), 0.5)
+    chord_angle(one, one, one, 0.5)
