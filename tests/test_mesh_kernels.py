@@ -4,8 +4,9 @@ form and the Illinois method on Python floats, on the same four samples a pair; 
 interval's run against the run search on numpy arrays; the hand-over iteration's interpolants
 (the parabola through the nearest samples, the inverse interpolants' roots) against the sorted
 picks on Python floats; the zones' node factors continued below the generated boundary, a
-side's window and its start (carrying pair, TE peak guess, hand-over bracket) and the swept
-pairs' neighbours against the numpy steps they replaced; all to the last bit, compiled and as
+side's window and its start (carrying pair, TE peak guess, hand-over bracket), the swept
+pairs' neighbours and the window's checks (the rows beyond it, its mesh centre, a lower pair
+beyond it) against the numpy steps they replaced; all to the last bit, compiled and as
 plain Python.
 """
 
@@ -33,6 +34,8 @@ EXTENDS = [kernels.extend_factors, getattr(kernels.extend_factors, "py_func", No
 WINDOWS = [kernels.window_rows, getattr(kernels.window_rows, "py_func", None)]
 SWEPT = [kernels.swept_pairs, getattr(kernels.swept_pairs, "py_func", None)]
 STARTS = [kernels.side_start, getattr(kernels.side_start, "py_func", None)]
+BEYOND = [kernels.beyond_rows, getattr(kernels.beyond_rows, "py_func", None)]
+CHECKS = [kernels.window_check, getattr(kernels.window_check, "py_func", None)]
 
 
 def illinois(func: Callable[[float], float], a: float, b: float, tol: float = 1e-12):
@@ -362,3 +365,89 @@ def test_ray_samples_are_to_edge_and_the_fractions_bit_for_bit(samples):
         assert np.array_equal(np.signbit(tau[same]), np.signbit(want[same]))
         bits += int((np.isnan(want).any(axis=1) | (want == 0.0).any(axis=1)).sum())
     assert bits > 200  # the NaN and zero cases met, not only clean rays
+
+
+def python_keys(u, pitch) -> list:
+    """Relative rotations as keys that match to a billionth of a pitch (numpy's round)."""
+    return np.round(u / pitch * 1e9).tolist()
+
+
+def python_ends(u, carrying, pitch):
+    """At each end of a window: where its end pair carries and the rotations beyond it."""
+    for slot, sign in ((0, -1.0), (u.shape[1] - 1, 1.0)):
+        at = np.flatnonzero(carrying == slot)
+        yield at, u[at, slot] + sign * pitch
+
+
+def python_beyond(v, u, carrying, pitch) -> list:
+    """The rotations beyond the window's ends that the sample ``v`` does not hold."""
+    known = set(python_keys(v, pitch))
+    out = []
+    for _, beyond in python_ends(u, carrying, pitch):
+        keys = python_keys(beyond, pitch)
+        out += [x for x, key in zip(beyond.tolist(), keys, strict=True) if key not in known]
+    return out
+
+
+def python_check(v, g, u, carrying, lag, pitch, flat):
+    """The mesh centre and the lower pair beyond the window, as numpy steps and a dict."""
+    gg = np.where(np.isfinite(g), g, np.inf)
+    central = np.abs(v) <= 0.5 * pitch + 1e-9
+    best = int(np.argmin(gg))
+    centre = 0.0
+    if not central[best] and gg[best] < np.min(gg[central], initial=np.inf) - flat:
+        centre = float(v[best])
+    known = dict(zip(python_keys(v, pitch), g.tolist(), strict=True))
+    lower = False
+    for at, beyond in python_ends(u, carrying, pitch):
+        low = np.array([known.get(key, np.inf) for key in python_keys(beyond, pitch)])
+        lower |= bool(np.any(low < lag[at]))
+    return centre, lower
+
+
+def window_case(rng, trial):
+    """A random window, its carrying pairs and lags, and samples that hold some of the rotations
+    beyond it (repeated: the last one counts), with infinite and NaN lags among them."""
+    n, pairs = int(rng.integers(2, 25)), int(rng.integers(1, 6))
+    pitch = 2.0 * math.pi / int(rng.integers(5, 40))
+    t = np.linspace(-pitch, pitch, n)
+    u = t[:, None] + (np.arange(pairs) - (pairs - 1) // 2)[None, :] * pitch
+    carrying = rng.integers(0, pairs, n).astype(np.intp)
+    lag = rng.normal(size=n) * 1e-4
+    beyond = np.concatenate([u[:, 0] - pitch, u[:, -1] + pitch])
+    v = np.concatenate([u.ravel(), rng.choice(beyond, int(rng.integers(0, 2 * n)))])
+    v = v + rng.normal(size=v.size) * pitch * 1e-12 * (trial % 2)  # (within a key, or not)
+    rng.shuffle(v)
+    g = rng.normal(size=v.size) * 1e-4 - 0.5e-4 * (trial % 3)
+    g[rng.random(v.size) < 0.1] = np.inf
+    g[rng.random(v.size) < 0.05] = np.nan
+    g[rng.random(v.size) < 0.02] = -np.inf
+    if trial % 5 == 0:
+        v = v - float(rng.uniform(-1.5, 1.5)) * pitch
+    return v, g, u, carrying, lag, pitch
+
+
+@pytest.mark.parametrize("beyond", [f for f in BEYOND if f is not None])
+def test_beyond_rows_are_the_keyed_set_steps(beyond):
+    rng = np.random.default_rng(39)
+    for trial in range(400):
+        v, _, u, carrying, _, pitch = window_case(rng, trial)
+        want = python_beyond(v, u, carrying, pitch)
+        out = np.empty(2 * len(u))
+        count = beyond(v, u, carrying, pitch, out)
+        assert np.array_equal(out[:count].view(np.int64), np.array(want).view(np.int64))
+
+
+@pytest.mark.parametrize("check", [f for f in CHECKS if f is not None])
+def test_window_check_is_the_numpy_and_dict_steps(check):
+    rng = np.random.default_rng(41)
+    found = set()
+    for trial in range(400):
+        v, g, u, carrying, lag, pitch = window_case(rng, trial)
+        flat = 1e-6 * (trial % 4)
+        want = python_check(v, g, u, carrying, lag, pitch, flat)
+        centre, lower = check(v, g, u, carrying, lag, pitch, flat)
+        assert np.float64(centre).view(np.int64) == np.float64(want[0]).view(np.int64)
+        assert bool(lower) == want[1]
+        found.add((want[0] != 0.0, want[1]))
+    assert found == {(False, False), (False, True), (True, False), (True, True)}

@@ -219,8 +219,6 @@ class MeshCycle:
         self.windows = [self.offsets] * len(self.fields)
         self.widened = False
         self.sides: list[SideCycle] = []
-        #: each side's keys and window ends (:meth:`side_ends`), by index, for the last sample
-        self.ends: dict[int, tuple] = {}
 
     def run(self) -> list[ToothContact]:
         """Every side's TCA (a window sampled again takes the node fields of the rows sampled
@@ -238,8 +236,8 @@ class MeshCycle:
         self.main_sample(np.zeros(n_sides))
         beyond = self.beyond_requests()
         more = self.evaluate([s for s in self.sides if s.extras_due()], beyond)
-        centres = self.mesh_centres(beyond, more)
-        resample = bool(np.any(centres != 0.0)) | self.widen(beyond, more, centres)
+        centres, lower = self.window_checks(beyond, more)
+        resample = bool(np.any(centres != 0.0)) | self.widen(lower, centres)
         # a window that stays (a flat lag) but misses a carrying pair beyond it (more pairs in
         # contact than the window holds) is widened by a pair either side until none beyond
         # carries
@@ -247,7 +245,7 @@ class MeshCycle:
             self.main_sample(centres)
             beyond = self.beyond_requests() if self.widened else []
             more = self.evaluate([s for s in self.sides if s.extras_due()], beyond)
-            resample = self.widen(beyond, more, centres)
+            resample = self.widen(self.window_checks(beyond, more)[1], centres)
         # the contact intervals' ends, the hand-overs' further steps (edge contact, or a poor
         # first guess) and the extra positions still missing (a flat TE is centred on its
         # contact interval)
@@ -290,7 +288,6 @@ class MeshCycle:
             rows_side.append(np.full(len(first) + 2 * len(EXTEND), k, np.intp))
         side_rows = np.concatenate(rows_side)
         phi = self.sense[side_rows] * np.concatenate(rows_u)
-        self.ends = {}
         main = self.joint.sample(side_rows, phi)
         self.sides = [
             SideCycle(
@@ -349,70 +346,31 @@ class MeshCycle:
     def beyond_requests(self) -> list[tuple[int, float]]:
         """The pair beyond a window whose end pair carries, where not sampled yet (is the
         window centred on the mesh? does it hold every pair in contact?), as ``(side,
-        relative rotation)``."""
+        relative rotation)`` (:func:`gearopt.mesh.kernels.beyond_rows`)."""
         req = []
         for side in self.sides:
-            known, ends = self.side_ends(side)
-            known = set(known)
-            for _, beyond, keys in ends:
-                req += [
-                    (side.index, x)
-                    for x, key in zip(beyond.tolist(), keys, strict=True)
-                    if key not in known
-                ]
+            out = np.empty(2 * len(side.u))
+            count = kernels.beyond_rows(
+                side.interval_sample.phi_rad * side.field.sense,
+                side.u,
+                side.carrying,
+                self.pitch,
+                out,
+            )
+            req += [(side.index, x) for x in out[:count].tolist()]
         return req
 
-    def side_ends(self, side) -> tuple[list, list]:
-        """A side's sampled relative rotations as keys (:func:`_keys`) and, at each end of its
-        window, the positions where its end pair carries, the relative rotations of the pair
-        beyond it there and their keys, ``(at, beyond, keys)``; made once per sample."""
-        if side.index not in self.ends:
-            p1 = self.pitch
-            known = _keys(side.interval_sample.phi_rad * side.field.sense, p1)
-            ends = [(at, beyond, _keys(beyond, p1)) for at, beyond in _beyond_ends(side, p1)]
-            self.ends[side.index] = (known, ends)
-        return self.ends[side.index]
+    def window_checks(self, beyond, more: FieldSample | None) -> tuple[NDArray, list[bool]]:
+        """Every side's window checked on everything sampled for it (the window, the rows
+        beyond it and the ``beyond`` rows, sampled in ``more``;
+        :func:`gearopt.mesh.kernels.window_check`): ``(centres, lower)``.
 
-    def widen(self, beyond, more: FieldSample | None, centres: NDArray) -> bool:
-        """Widen by a pair either side (up to :data:`WIDEST` pairs) the window of every side
-        whose window stays (``centres`` 0) and whose pair beyond it at a position where its end
-        pair carries has a lower lag than that end pair (sampled with the window, or among the
-        ``beyond`` rows in ``more``): the TE is the least lag over every pair (a flat lag with
-        more pairs in contact than the window holds: its least is any of them). True where a
-        window was widened (sample again)."""
-        p1 = self.pitch
-        ext_side = np.array([r[0] for r in beyond], np.intp)
-        grown = False
-        for side in self.sides:
-            k = side.index
-            if centres[k] != 0.0 or len(self.windows[k]) + 2 > WIDEST:
-                continue
-            keys, ends = self.side_ends(side)
-            g = side.interval_sample.minimum_rad.tolist()
-            if more is not None:
-                rows = ext_side == k
-                keys = keys + _keys(more.phi_rad[rows] * side.field.sense, p1)
-                g += more.minimum_rad[rows].tolist()
-            known = dict(zip(keys, g, strict=True))
-            lower = False
-            for at, _, beyond in ends:
-                lag = np.array([known.get(key, np.inf) for key in beyond])
-                lower |= bool(np.any(lag < side.lag[at]))
-            if lower:
-                window = self.windows[k]
-                self.windows[k] = np.arange(window[0] - 1, window[-1] + 2)
-                grown = True
-        self.widened |= grown
-        return grown
-
-    def mesh_centres(self, beyond, more: FieldSample | None) -> NDArray:
-        """Each side's mesh centre: the relative rotation of least lag over everything sampled
-        (the window, the rows beyond it and the ``beyond`` rows, sampled in ``more``); 0 (the
-        window stays) where it lies within half a pitch of the window's centre or is not lower
-        than the least lag there by more than :data:`FLAT_ARCSEC` (a flat TE, line contact:
-        its least lag is noise)."""
-        p1 = self.pitch
-        centres = np.zeros(len(self.fields))
+        ``centres``: each side's mesh centre, the relative rotation of least lag; 0 (the window
+        stays) where it lies within half a pitch of the window's centre or is not lower than
+        the least lag there by more than :data:`FLAT_ARCSEC` (a flat TE, line contact: its
+        least lag is noise). ``lower``: True where the pair beyond the window at a position
+        where its end pair carries has a lower lag than that end pair (:meth:`widen`)."""
+        centres, lower = np.zeros(len(self.fields)), []
         ext_side = np.array([r[0] for r in beyond], np.intp)
         for side in self.sides:
             v = side.interval_sample.phi_rad * side.field.sense
@@ -421,13 +379,31 @@ class MeshCycle:
                 rows = ext_side == side.index
                 v = np.concatenate([v, more.phi_rad[rows] * side.field.sense])
                 g = np.concatenate([g, more.minimum_rad[rows]])
-            g = np.where(np.isfinite(g), g, np.inf)
-            central = np.abs(v) <= 0.5 * p1 + 1e-9
-            best = int(np.argmin(g))
-            flat = FLAT_ARCSEC / ARCSEC
-            if not central[best] and g[best] < np.min(g[central], initial=np.inf) - flat:
-                centres[side.index] = float(v[best])
-        return centres
+            centre, low = kernels.window_check(
+                v, g, side.u, side.carrying, side.lag, self.pitch, FLAT_ARCSEC / ARCSEC
+            )
+            centres[side.index] = centre
+            lower.append(low)
+        return centres, lower
+
+    def widen(self, lower: list[bool], centres: NDArray) -> bool:
+        """Widen by a pair either side (up to :data:`WIDEST` pairs) the window of every side
+        whose window stays (``centres`` 0) and whose pair beyond it at a position where its end
+        pair carries has a lower lag than that end pair (``lower``, :meth:`window_checks`): the
+        TE is the least lag over every pair (a flat lag with more pairs in contact than the
+        window holds: its least is any of them). True where a window was widened (sample
+        again)."""
+        grown = False
+        for side, low in zip(self.sides, lower, strict=True):
+            k = side.index
+            if centres[k] != 0.0 or len(self.windows[k]) + 2 > WIDEST:
+                continue
+            if low:
+                window = self.windows[k]
+                self.windows[k] = np.arange(window[0] - 1, window[-1] + 2)
+                grown = True
+        self.widened |= grown
+        return grown
 
     def evaluate(self, full, beyond=()) -> FieldSample | None:
         """One joint evaluation of every side's pending requests and rows to sample
@@ -455,7 +431,7 @@ class MeshCycle:
                 n_v += v
                 n_s += face
                 n_h += profile
-                owners += [(side, tag) for tag in tags]
+                owners.append((side, tags))
         f_side = np.array(f_side, np.intp)
         f_phi = sense[f_side] * np.array(f_v)
         f_refine = np.array(f_refine, bool)
@@ -467,8 +443,10 @@ class MeshCycle:
                 sample, answers = self.joint.sample(f_side, f_phi, refine=f_refine, near=near)
             else:
                 answers = self.joint.minimum_near(*near)
-            for (side, tag), *answer in zip(owners, *(a.tolist() for a in answers), strict=True):
-                side.answers[tag] = tuple(answer)
+            # each side's requests in turn: its tags first, so that zip stops at their end
+            rows = zip(*(a.tolist() for a in answers), strict=True)
+            for side, tags in owners:
+                side.answers.update(zip(tags, rows, strict=False))
         elif f_side.size:
             sample = self.joint.sample(f_side, f_phi)
         start = 0
@@ -626,19 +604,6 @@ def _gathered_factors(lines, counts) -> NDArray:
         np.take(source, rows, axis=0, out=factor[at + 3 : at + 3 + n], mode="clip")
         at += 3 + n
     return factor
-
-
-def _keys(u: NDArray, pitch: float) -> list:
-    """Relative rotations ``u`` as keys that match to a billionth of a pitch."""
-    return np.round(u / pitch * 1e9).tolist()
-
-
-def _beyond_ends(side, pitch: float):
-    """At each end of a side's window: the positions where its end pair carries and the
-    relative rotations of the pair beyond it there, ``(at, beyond)``."""
-    for slot, sign in ((0, -1.0), (side.u.shape[1] - 1, 1.0)):
-        at = np.flatnonzero(side.carrying == slot)
-        yield at, side.u[at, slot] + sign * pitch
 
 
 class _Outlines:

@@ -15,6 +15,7 @@ import numpy as np
 
 from gearopt.contact import ClearanceField, FieldSample
 from gearopt.flank_jet import FlankJet
+from gearopt.mesh import path_kernels
 from gearopt.units import ARCSEC
 
 __all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
@@ -89,37 +90,16 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
     float
         The angle in degrees, range (-90, 90].
     """
-    # (on Python floats: the products summed in order, as numpy's dot of 3-vectors)
-    n = _unit(*(float(a) for a in normal))
-    theta = math.atan2(point[1], point[0])
-    c_r, s_r = math.cos(theta), math.sin(theta)
-    sin_g, cos_g = math.sin(root_angle_rad), math.cos(root_angle_rad)
-    along = (sin_g * c_r + cos_g * 0.0, sin_g * s_r + cos_g * 0.0, sin_g * 0.0 + cos_g * 1.0)
-    up = (cos_g * c_r - sin_g * 0.0, cos_g * s_r - sin_g * 0.0, cos_g * 0.0 - sin_g * 1.0)
-    along = _unit(*_minus(along, _dot(along, n), n))
-    up = _unit(*_minus(_minus(up, _dot(up, n), n), _dot(up, along), along))
-    t = tuple(float(a) for a in tangent)
-    t = _minus(t, _dot(t, n), n)
-    if _dot(t, along) < 0.0:
-        t = (-t[0], -t[1], -t[2])
-    angle = math.degrees(math.atan2(_dot(t, up), _dot(t, along)))
+    # (compiled: on floats, the products summed in order, as numpy's dot of 3-vectors)
+    angle = math.degrees(
+        path_kernels.chord_angle(
+            tuple(float(a) for a in tangent),
+            tuple(float(a) for a in normal),
+            (float(point[0]), float(point[1]), float(point[2])),
+            float(root_angle_rad),
+        )
+    )
     return 90.0 if angle <= -90.0 + 1e-12 else angle
-
-
-def _dot(a, b) -> float:
-    """``a . b`` of two 3-vectors, the products summed in order."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _minus(a, k: float, b) -> tuple[float, float, float]:
-    """``a - k b``."""
-    return (a[0] - k * b[0], a[1] - k * b[1], a[2] - k * b[2])
-
-
-def _unit(x: float, y: float, z: float) -> tuple[float, float, float]:
-    """``(x, y, z)`` over its length (``numpy.linalg.norm``'s: the root of the dot product)."""
-    norm = math.sqrt(x * x + y * y + z * z)
-    return (x / norm, y / norm, z / norm)
 
 
 def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -> float:
@@ -140,26 +120,42 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     -------
     float
         The angle in degrees.
+
+    Notes
+    -----
+    The points' arithmetic and the flank's tangents are compiled
+    (:mod:`gearopt.mesh.path_kernels`; the same results to the bit); the splines stay numpy's.
     """
-    phi = ex.phi_rad[4:6]
-    p = field.pinion.point_at(ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6])
-    q = field.gear_frame_points(p, phi)
-    turn = -field.ratio * phi + field.gear_offset_rad - field.gear_sense * ex.minimum_rad[4:6]
-    # (the two points turned by the gear's turn, on Python floats: numpy's arithmetic, in order)
-    cos, sin = np.cos(turn).tolist(), np.sin(turn).tolist()
-    a, b = (
-        (c * x + s * y, -s * x + c * y, z)
-        for c, s, (x, y, z) in zip(cos, sin, q.tolist(), strict=True)
+    face, profile = ex.contact_face_mm[4:6], ex.contact_profile_mm[4:6]
+    pinion = field.pinion
+    g = math.radians(pinion.pitch_angle_deg)
+    a, b = path_kernels.gear_chord(
+        face,
+        pinion.height_at(face, profile),
+        pinion.polar_angle_at(face, profile),
+        (math.cos(g), math.sin(g)),
+        ex.phi_rad[4:6],
+        ex.minimum_rad[4:6],
+        field.b,
+        field.c,
+        float(field.ratio),
+        float(field.gear_offset_rad),
+        float(field.gear_sense),
     )
     mid = (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
+    chord = (b[0] - a[0], b[1] - a[1], b[2] - a[2])
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
-    p_s, p_h = _tangents(FlankJet(field.gear), float(s2), float(h2))
-    return path_angle(
-        (b[0] - a[0], b[1] - a[1], b[2] - a[2]),
-        _cross(p_s, p_h),
-        mid,
-        math.radians(frame.gear_root_angle_deg),
+    s2, h2 = float(s2), float(h2)
+    jet = FlankJet(field.gear)
+    root = math.radians(frame.gear_root_angle_deg)
+    if not (math.isfinite(s2) and math.isfinite(h2)):  # (the jet's cell: as Python finds it)
+        p_s, p_h = _tangents(jet, s2, h2)
+        return path_angle(chord, _cross(p_s, p_h), mid, root)
+    cells = (jet.s0, jet.h0, jet.ds, jet.dh, jet.n_f, jet.n_p, jet.cells.columns, jet.sg, jet.cg)
+    angle = math.degrees(
+        path_kernels.root_line_angle(chord, mid, s2, h2, cells, jet.cells.coefficients, root)
     )
+    return 90.0 if angle <= -90.0 + 1e-12 else angle
 
 
 def _tangents(jet: FlankJet, s: float, h: float):

@@ -6,13 +6,14 @@ position's nodes at each step (:func:`gearopt.mesh.pattern.separation_mm`,
 :func:`gearopt.mesh.pattern.centroids`: the same arithmetic, array by array); and the steps of
 a side's mesh cycle on its few dozen samples, where numpy's per-call overhead outweighs the
 work: its window's distinct rotations (:func:`window_rows`), its start on the window's sample
-(:func:`side_start`), the contact interval's run of interior samples (:func:`interior_run`)
-and the crossing of two pairs' interpolated lags, the hand-over's first guess
-(:func:`crossing_root`), and its iteration's interpolants on the samples so far
-(:func:`nearest_parabola`, :func:`inverse_roots`); and the zones' node factors continued below
-the generated boundary (:func:`extend_factors`) and the neighbours over the motion of the pairs
-a zone's rays cross (:func:`swept_pairs`). Each does numpy's arithmetic in numpy's
-order: the results are the same to the bit.
+(:func:`side_start`), the checks of its window (the rows beyond it, its mesh centre, a lower
+pair beyond it: :func:`beyond_rows`, :func:`window_check`), the contact interval's run of
+interior samples (:func:`interior_run`) and the crossing of two pairs' interpolated lags, the
+hand-over's first guess (:func:`crossing_root`), and its iteration's interpolants on the
+samples so far (:func:`nearest_parabola`, :func:`inverse_roots`); and the zones' node factors
+continued below the generated boundary (:func:`extend_factors`) and the neighbours over the
+motion of the pairs a zone's rays cross (:func:`swept_pairs`). Each does numpy's arithmetic in
+numpy's order: the results are the same to the bit.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import math
 import numpy as np
 
 from gearopt.jit import ENABLED, compiled
+from gearopt.mesh import path_kernels
 
 __all__ = [
     "ENABLED",
@@ -32,7 +34,9 @@ __all__ = [
     "nearest_parabola",
     "pattern_fields",
     "side_start",
+    "beyond_rows",
     "swept_pairs",
+    "window_check",
     "window_rows",
     "warm",
 ]
@@ -368,6 +372,121 @@ def window_rows(t, centre, window, pitch, ids, u, first, inv):
 
 
 @compiled
+def _end_pair(e, u, pitch):
+    """Window end ``e`` (0: the first pair, 1: the last): its column of ``u`` and the pitch
+    the pair beyond it lies off (toward lower or higher relative rotations)."""
+    if e == 0:
+        return 0, -1.0 * pitch
+    return u.shape[1] - 1, 1.0 * pitch
+
+
+@compiled
+def beyond_rows(v, u, carrying, pitch, out):
+    """The pairs beyond a side's window where its end pair carries and that its sample does
+    not hold (:meth:`gearopt.mesh.cycle.MeshCycle.beyond_requests`): at the first end, then
+    the last, at each position where that end's pair carries, the relative rotation of the
+    pair beyond it, where no sampled one (``v``) matches it to a billionth of a pitch.
+
+    Parameters
+    ----------
+    v
+        ``(m,)`` the relative rotations the window's sample holds.
+    u
+        ``(n, pairs)`` the pairs' relative rotations at each position.
+    carrying
+        ``(n,)`` the column of the carrying pair.
+    pitch
+        The angular pitch.
+    out
+        ``(2 n,)`` out: the rotations beyond, in that order.
+
+    Returns
+    -------
+    int
+        How many ``out`` lists.
+    """
+    known = np.empty(v.shape[0])
+    for j in range(v.shape[0]):
+        known[j] = _rint(v[j] / pitch * 1e9)
+    count = 0
+    for e in range(2):
+        slot, off = _end_pair(e, u, pitch)
+        for i in range(u.shape[0]):
+            if carrying[i] != slot:
+                continue
+            x = u[i, slot] + off
+            key = _rint(x / pitch * 1e9)
+            held = False
+            for j in range(known.shape[0]):
+                if known[j] == key:
+                    held = True
+                    break
+            if not held:
+                out[count] = x
+                count += 1
+    return count
+
+
+@compiled
+def window_check(v, g, u, carrying, lag, pitch, flat):
+    """A side's window checked on everything sampled for it: its mesh centre and whether a
+    pair beyond it carries (:meth:`gearopt.mesh.cycle.MeshCycle.window_checks`).
+
+    Parameters
+    ----------
+    v, g
+        ``(m,)`` the relative rotations sampled (the window's sample, then the rows beyond it)
+        and their lags.
+    u, carrying, lag
+        ``(n, pairs)`` the pairs' relative rotations at each position; ``(n,)`` the carrying
+        pair's column and lag.
+    pitch
+        The angular pitch.
+    flat
+        Lags closer than this are equal (a flat TE).
+
+    Returns
+    -------
+    tuple
+        ``(centre, lower)``: the rotation of least lag (the first; non-finite lags as +inf)
+        where it lies more than half a pitch from the window's centre and is lower than the
+        least lag within by more than ``flat``, else 0.0; True where, at a position where an
+        end pair of the window carries, the pair beyond it has a lower lag (the last sampled
+        one matching its rotation to a billionth of a pitch; +inf without).
+    """
+    m = v.shape[0]
+    best, least, within = 0, np.inf, np.inf
+    half = 0.5 * pitch + 1e-9
+    for j in range(m):
+        gj = g[j] if math.isfinite(g[j]) else np.inf
+        if j == 0 or gj < least:
+            best, least = j, gj
+        if abs(v[j]) <= half and gj < within:
+            within = gj
+    centre = 0.0
+    if m and not abs(v[best]) <= half and least < within - flat:
+        centre = v[best]
+    keys = np.empty(m)
+    for j in range(m):
+        keys[j] = _rint(v[j] / pitch * 1e9)
+    lower = False
+    for e in range(2):
+        slot, off = _end_pair(e, u, pitch)
+        for i in range(u.shape[0]):
+            if carrying[i] != slot:
+                continue
+            key = _rint((u[i, slot] + off) / pitch * 1e9)
+            beyond = np.inf
+            for j in range(m - 1, -1, -1):
+                if keys[j] == key:
+                    beyond = g[j]
+                    break
+            if beyond < lag[i]:
+                lower = True
+    return centre, lower
+
+
+@compiled
 def interior_run(order, inner, lag):
     """The contact interval's run of samples (:meth:`gearopt.mesh.side.SideCycle.start_interval`).
 
@@ -587,9 +706,11 @@ def inverse_roots(a, b, d_a, d_b, trail):
 
 def warm() -> None:
     """Compile the kernels, or load them from the disk cache (as
-    :func:`gearopt.contact.kernel_warmup.warm`); nothing without them."""
+    :func:`gearopt.contact.kernel_warmup.warm`), with the path's
+    (:func:`gearopt.mesh.path_kernels.warm`); nothing without them."""
     if not ENABLED:
         return
+    path_kernels.warm()
     one, index = np.zeros((1, 1)), np.zeros(1, np.intp)
     pattern_fields(
         one,
@@ -638,5 +759,8 @@ def warm() -> None:
     extend_factors(np.zeros((1, 1, 3)))
     nearest_parabola(np.arange(6.0).reshape(3, 2), 0.5)
     inverse_roots(0.0, 1.0, -1.0, 1.0, np.arange(6.0).reshape(3, 2))
+    u, carrying = np.zeros((2, 1)), np.zeros(2, np.intp)
+    beyond_rows(two, u, carrying, 1.0, np.empty(4))
+    window_check(two, two, u, carrying, two, 1.0, 0.0)
     four = np.arange(4.0)
     crossing_root(four, four, four > 9.0, np.zeros((2, 4), np.intp), np.zeros(2), 1.0, 1.0)

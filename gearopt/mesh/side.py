@@ -496,18 +496,23 @@ class SideCycle:
     def near_extras_sample(self, mean: FieldSample) -> FieldSample:
         """The extra positions' sample from their refined minima (answers ``("ex", j)``) and
         the node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
-        got = [self.answers.pop(("ex", j)) for j in range(6)]
-        blank = np.full((3,) + mean.clearance_rad.shape[1:], np.inf)
-        ones = np.ones_like(blank)
+        got = np.array([self.answers.pop(("ex", j)) for j in range(6)], float).T.copy()
+        fields = np.empty((3, 6) + mean.clearance_rad.shape[1:])
+        fields[0, :3], fields[1:, :3] = np.inf, 1.0
+        fields[0, 3:], fields[1, 3:], fields[2, 3:] = (
+            mean.clearance_rad,
+            mean.normal_factor_mm,
+            mean.radius_mm,
+        )
         return FieldSample(
             phi_rad=self.ex_phi,
-            clearance_rad=np.concatenate([blank, mean.clearance_rad]),
-            normal_factor_mm=np.concatenate([ones, mean.normal_factor_mm]),
-            radius_mm=np.concatenate([ones, mean.radius_mm]),
-            minimum_rad=np.array([a[0] for a in got], float),
-            contact_face_mm=np.array([a[1] for a in got], float),
-            contact_profile_mm=np.array([a[2] for a in got], float),
-            edge=np.array([a[3] for a in got], bool),
+            clearance_rad=fields[0],
+            normal_factor_mm=fields[1],
+            radius_mm=fields[2],
+            minimum_rad=got[0],
+            contact_face_mm=got[1],
+            contact_profile_mm=got[2],
+            edge=got[3] != 0.0,
         )
 
     # -- the result -------------------------------------------------------------------------
