@@ -24,6 +24,7 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 from gearopt.mesh import path_kernels
+from gearopt.units import ARCSEC
 
 __all__ = [
     "ENABLED",
@@ -89,7 +90,6 @@ def pattern_fields(
     pairs = inv.shape[0] // n
     n_p = profile.shape[0]
     size = clearance.shape[1]
-    arcsec = 180.0 * 3600.0 / math.pi
     limit = 5.0 * compound
     count = 0
     for g in range(size):
@@ -134,9 +134,9 @@ def pattern_fields(
         else:  # no zone: its least-separated node
             out[size + i] = face[at // n_p]
             out[size + n + i] = profile[at % n_p]
-        out[size + 2 * n + i] = (g_min - lag[i]) * arcsec
+        out[size + 2 * n + i] = (g_min - lag[i]) * ARCSEC
         for p in range(pairs):
-            out[size + (3 + p) * n + i] = (g_min - minimum[inv[i * pairs + p]]) * arcsec
+            out[size + (3 + p) * n + i] = (g_min - minimum[inv[i * pairs + p]]) * ARCSEC
     for k in range(inv.shape[0]):  # mm to um (after the centroids, which take mm)
         for g in range(size):
             sep[k, g] *= 1e3
