@@ -32,6 +32,7 @@ from gearopt.results import SCHEMA_NAMES, ResultsStore
 from gearopt.studyfile import StudySpec
 
 __all__ = [
+    "DRAFT_ID",
     "WorkerStorage",
     "check_integrity",
     "check_own_tables",
@@ -315,6 +316,10 @@ def fast_sqlite(engine: sa.Engine) -> None:
     engine.dispose()  # connections made before the listener get the pragmas when remade
 
 
+#: the trial id of a supervised worker's trial while it is sampled, before it is written
+#: (:meth:`WorkerStorage.draft`): no database's (their ids count from 1)
+DRAFT_ID = -1
+
 #: the statements that make a SQLite transaction a write transaction
 _WRITES = ("INSERT", "UPDATE", "DELETE", "REPLAC")
 
@@ -392,6 +397,8 @@ class WorkerStorage(optuna.storages.BaseStorage):
         self.own: dict[int, optuna.trial.FrozenTrial | None] = {}
         self.read: dict[int, list] = {}  # the hold's read of each study's trials
         self.holding = 0
+        #: a trial being sampled before it is written (:meth:`draft`), under :data:`DRAFT_ID`
+        self.drafted: optuna.trial.FrozenTrial | None = None
 
     @contextlib.contextmanager
     def hold(self):
@@ -407,6 +414,42 @@ class WorkerStorage(optuna.storages.BaseStorage):
                     k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
                 }
 
+    def draft(self, draft: optuna.trial.FrozenTrial) -> None:
+        """Hold ``draft`` (a RUNNING trial made with ``trial_id`` :data:`DRAFT_ID`) in memory
+        until :meth:`write_draft`: a sampler's writes to it (TPE's relative parameters, kept
+        in a system attribute for the other workers' constant liar) and reads of it are the
+        draft's."""
+        self.drafted = draft
+
+    def write_draft(self, study_id: int) -> tuple[int, int]:
+        """Write the draft as a new trial of the study, parameters and attributes with it, in
+        one transaction (Optuna's ``create_new_trial`` from a template trial); kept as this
+        process's trial. Returns its trial id and number."""
+        draft, self.drafted = self.drafted, None
+        trial_id = self.inner.create_new_trial(study_id, template_trial=draft)
+        number = draft.number  # the number it was sampled with, unless another came first
+        try:
+            same = self.inner.get_trial_id_from_study_id_trial_number(study_id, number) == trial_id
+        except KeyError:
+            same = False
+        if not same:
+            number = self.inner.get_trial(trial_id).number
+        self.own[trial_id] = optuna.trial.FrozenTrial(
+            number=number,
+            state=draft.state,
+            value=None,
+            values=None,
+            datetime_start=draft.datetime_start,
+            datetime_complete=None,
+            params=dict(draft.params),
+            distributions=dict(draft.distributions),
+            user_attrs=json.loads(json.dumps(draft.user_attrs)),
+            system_attrs=json.loads(json.dumps(draft.system_attrs)),
+            intermediate_values={},
+            trial_id=trial_id,
+        )
+        return trial_id, number
+
     def refresh(self) -> None:
         """The hold's next read of the study goes to the database again: for a read that must
         count the trials other processes created since the hold's first one."""
@@ -421,6 +464,8 @@ class WorkerStorage(optuna.storages.BaseStorage):
     # --- reads ----------------------------------------------------------------------------
 
     def get_trial(self, trial_id: int) -> optuna.trial.FrozenTrial:
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            return copy.deepcopy(self.drafted)
         if self.holding and trial_id in self.own:
             return copy.deepcopy(self._mine(trial_id))
         trial = self.inner.get_trial(trial_id)
@@ -470,6 +515,10 @@ class WorkerStorage(optuna.storages.BaseStorage):
         return done
 
     def set_trial_param(self, trial_id: int, param_name: str, param_value_internal, distribution):
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            self.drafted.params[param_name] = distribution.to_external_repr(param_value_internal)
+            self.drafted.distributions[param_name] = distribution
+            return
         self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
         if self.own.get(trial_id) is not None:
             trial = self.own[trial_id]
@@ -477,11 +526,17 @@ class WorkerStorage(optuna.storages.BaseStorage):
             trial.distributions[param_name] = distribution
 
     def set_trial_user_attr(self, trial_id: int, key: str, value) -> None:
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            self.drafted.user_attrs[key] = value
+            return
         self.inner.set_trial_user_attr(trial_id, key, value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].user_attrs[key] = json.loads(json.dumps(value))
 
     def set_trial_system_attr(self, trial_id: int, key: str, value) -> None:
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            self.drafted.system_attrs[key] = value
+            return
         self.inner.set_trial_system_attr(trial_id, key, value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].system_attrs[key] = json.loads(json.dumps(value))
