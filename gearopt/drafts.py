@@ -1,7 +1,9 @@
-"""A supervised worker's ask in one write: the new trial sampled as a draft in memory, then
-written whole (parameters, the sampler's system attributes and the worker's user attributes
-with it) in one transaction, rather than created and then written a value at a time (Optuna's
-``Study.ask`` and a ``suggest`` per parameter: a transaction each, about half a worker's ask).
+"""A supervised worker's ask with fewer writes: the new trial sampled as a draft in memory,
+then written with its user attributes and the sampler's system attributes in one transaction
+(Optuna's ``create_new_trial`` from a template trial) and its parameters after it, rather
+than created, read back and then written an attribute at a time (Optuna's ``Study.ask``, a
+``suggest`` per parameter, the coordinator's tag: about 12 % fewer SQL statements a trial, and
+the tag is never missing from a RUNNING trial of a worker).
 
 The sampler is called as ``Study.ask`` and ``Trial.suggest_*`` call it, through its public
 methods and in the same order: ``before_trial``, the relative search space and its sample,
@@ -35,7 +37,7 @@ def ask_drafted(
     user_attrs: dict,
 ) -> tuple[optuna.Trial, int]:
     """A new trial of ``study`` (on ``view``, inside its hold) with its parameters sampled
-    and ``user_attrs`` set, written in one transaction.
+    and ``user_attrs`` set, written (:meth:`gearopt.storage.WorkerStorage.write_draft`).
 
     Parameters
     ----------
