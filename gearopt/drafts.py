@@ -35,9 +35,10 @@ def ask_drafted(
     study_id: int,
     space: list[tuple[str, BaseDistribution]],
     user_attrs: dict,
-) -> tuple[optuna.Trial, int]:
+) -> tuple[int, int]:
     """A new trial of ``study`` (on ``view``, inside its hold) with its parameters sampled
-    and ``user_attrs`` set, written (:meth:`gearopt.storage.WorkerStorage.write_draft`).
+    and ``user_attrs`` set, written with its attributes
+    (:meth:`gearopt.storage.WorkerStorage.write_draft`).
 
     Parameters
     ----------
@@ -55,8 +56,10 @@ def ask_drafted(
 
     Returns
     -------
-    tuple of optuna.Trial and int
-        The trial asked and its trial id.
+    tuple of int
+        The trial's id and number. Its parameters are written by the view's
+        :meth:`~gearopt.storage.WorkerStorage.write_params` (a trial asked for a place another
+        worker took is given back without them).
     """
     trials = study.get_trials(deepcopy=False)
     draft = optuna.trial.FrozenTrial(
@@ -95,10 +98,9 @@ def ask_drafted(
             distribution.to_internal_repr(value)  # (refuses NaN, as suggest does)
             draft.params[name] = value
             draft.distributions[name] = distribution
-        trial_id, _ = view.write_draft(study_id)
+        return view.write_draft(study_id)
     finally:
         view.drafted = None
-    return optuna.Trial(study, trial_id), trial_id
 
 
 def _single_value(distribution: BaseDistribution):

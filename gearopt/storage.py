@@ -399,6 +399,8 @@ class WorkerStorage(optuna.storages.BaseStorage):
         self.holding = 0
         #: a trial being sampled before it is written (:meth:`draft`), under :data:`DRAFT_ID`
         self.drafted: optuna.trial.FrozenTrial | None = None
+        #: drafts written without their parameters yet, by trial id (:meth:`write_params`)
+        self.unwritten: dict[int, optuna.trial.FrozenTrial] = {}
 
     @contextlib.contextmanager
     def hold(self):
@@ -410,6 +412,7 @@ class WorkerStorage(optuna.storages.BaseStorage):
             self.holding -= 1
             if not self.holding:
                 self.read.clear()
+                self.unwritten.clear()  # (a trial given back without its parameters)
                 self.own = {
                     k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
                 }
@@ -422,20 +425,13 @@ class WorkerStorage(optuna.storages.BaseStorage):
         self.drafted = draft
 
     def write_draft(self, study_id: int) -> tuple[int, int]:
-        """Write the draft as a new trial of the study, its attributes with it in one
-        transaction (Optuna's ``create_new_trial`` from a template trial), then its
-        parameters; kept as this process's trial. Returns its trial id and number."""
+        """Write the draft as a new trial of the study with its attributes, in one transaction
+        (Optuna's ``create_new_trial`` from a template trial), its parameters kept for
+        :meth:`write_params`; kept as this process's trial. Returns its trial id and number."""
         draft, self.drafted = self.drafted, None
-        # the parameters go through the cached storage, which knows their distributions:
-        # in the template each would cost two more queries (its trial, and the study's
-        # distribution of the name)
         template = copy.copy(draft)
         template.params, template.distributions = {}, {}
         trial_id = self.inner.create_new_trial(study_id, template_trial=template)
-        for name, value in draft.params.items():
-            distribution = draft.distributions[name]
-            internal = distribution.to_internal_repr(value)
-            self.inner.set_trial_param(trial_id, name, internal, distribution)
         number = draft.number  # the number it was sampled with, unless another came first
         try:
             same = self.inner.get_trial_id_from_study_id_trial_number(study_id, number) == trial_id
@@ -450,14 +446,27 @@ class WorkerStorage(optuna.storages.BaseStorage):
             values=None,
             datetime_start=draft.datetime_start,
             datetime_complete=None,
-            params=dict(draft.params),
-            distributions=dict(draft.distributions),
+            params={},
+            distributions={},
             user_attrs=json.loads(json.dumps(draft.user_attrs)),
             system_attrs=json.loads(json.dumps(draft.system_attrs)),
             intermediate_values={},
             trial_id=trial_id,
         )
+        self.unwritten[trial_id] = draft
         return trial_id, number
+
+    def write_params(self, trial_id: int) -> None:
+        """Write the parameters of a trial written by :meth:`write_draft` (through the cached
+        storage, which knows their distributions: in the template each would cost two more
+        queries, its trial's and the study's distribution of the name)."""
+        draft = self.unwritten.pop(trial_id)
+        for name, value in draft.params.items():
+            distribution = draft.distributions[name]
+            internal = distribution.to_internal_repr(value)
+            self.inner.set_trial_param(trial_id, name, internal, distribution)
+        mine = self._mine(trial_id)
+        mine.params, mine.distributions = dict(draft.params), dict(draft.distributions)
 
     def refresh(self) -> None:
         """The hold's next read of the study goes to the database again: for a read that must

@@ -420,11 +420,15 @@ class Coordinator:
             # reads again, says whether any wait); with none it creates its trial side by side
             waiting = self.role is not None and self.study.get_trials(deepcopy=False, states=WAIT)
             view, tag = self.opened.view, {COORDINATOR: self.tag}
-            if view is not None and not waiting:  # sampled, then written whole
+            if view is not None and not waiting:  # sampled, then written (gearopt.drafts)
                 space = search_space(self.spec)
                 space = [(d.key, space[d.key]) for d in self.spec.search]
-                trial, trial_id = ask_drafted(self.study, view, self.opened.study_id, space, tag)
+                trial_id, number = ask_drafted(self.study, view, self.opened.study_id, space, tag)
                 self.opened.storage.record_heartbeat(trial_id)
+                surplus = number >= self.trials and self.ahead(number) >= self.trials
+                if not surplus:  # (a surplus trial is given back without parameters)
+                    view.write_params(trial_id)
+                trial = optuna.Trial(self.study, trial_id)
             else:
                 asking = self.role.asking() if waiting else contextlib.nullcontext()
                 with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for optimize)
@@ -435,11 +439,12 @@ class Coordinator:
                 )
                 self.opened.storage.record_heartbeat(trial_id)
                 trial.set_user_attr(COORDINATOR, self.tag)
+                # another coordinator took the last place (only trials numbered from
+                # ``trials`` on can find ``trials`` before them: the common case asks nothing)
+                surplus = trial.number >= self.trials and self.ahead(trial.number) >= self.trials
             attempt = int(trial.user_attrs.get(ATTEMPT, 1))  # retries carry theirs
             hand = InHand(trial=trial, trial_id=trial_id, params={}, attempt=attempt)
-            # another coordinator took the last place (only trials numbered from ``trials``
-            # on can find ``trials`` before them: the common case asks nothing)
-            if trial.number >= self.trials and self.ahead(trial.number) >= self.trials:
+            if surplus:
                 self.surplus(hand)
                 return False
             hand.params = {d.key: d.suggest(trial) for d in self.spec.search}

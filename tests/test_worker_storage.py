@@ -176,11 +176,12 @@ def _asked(url: str, name: str, *, drafted: bool) -> tuple[list[tuple], list[int
         if drafted:
             with view.hold():
                 before = len(writes)
-                trial, trial_id = ask_drafted(study, view, study_id, SPACE, {"tag": ["w", i]})
+                trial_id, number = ask_drafted(study, view, study_id, SPACE, {"tag": ["w", i]})
+                view.write_params(trial_id)
                 asks.append(len(writes) - before)
-                assert trial_id == view.get_trial_id_from_study_id_trial_number(
-                    study_id, trial.number
-                )
+                trial = optuna.Trial(study, trial_id)
+                assert trial.number == number
+                assert trial_id == view.get_trial_id_from_study_id_trial_number(study_id, number)
             x, y = trial.params["x"], trial.params["y"]
         else:
             trial = study.ask()
@@ -236,6 +237,8 @@ def test_a_draft_written_after_another_processs_trial_gets_its_own_number(tmp_pa
         view.set_trial_system_attr(DRAFT_ID, "k", [1])  # a sampler's write: the draft's
         other.ask()  # another process's trial takes number 0
         trial_id, number = view.write_draft(study_id)
+        assert view.get_trial(trial_id).params == {}  # (written next, unless given back)
+        view.write_params(trial_id)
         mine = view.get_trial(trial_id)
     assert number == 1 == mine.number
     stored = rdb.get_trial(trial_id)
