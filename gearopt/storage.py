@@ -432,13 +432,7 @@ class WorkerStorage(optuna.storages.BaseStorage):
         template = copy.copy(draft)
         template.params, template.distributions = {}, {}
         trial_id = self.inner.create_new_trial(study_id, template_trial=template)
-        number = draft.number  # the number it was sampled with, unless another came first
-        try:
-            same = self.inner.get_trial_id_from_study_id_trial_number(study_id, number) == trial_id
-        except KeyError:
-            same = False
-        if not same:
-            number = self.inner.get_trial(trial_id).number
+        number = self._number_of(study_id, trial_id, draft.number)
         self.own[trial_id] = optuna.trial.FrozenTrial(
             number=number,
             state=draft.state,
@@ -455,6 +449,18 @@ class WorkerStorage(optuna.storages.BaseStorage):
         )
         self.unwritten[trial_id] = draft
         return trial_id, number
+
+    def _number_of(self, study_id: int, trial_id: int, guess: int) -> int:
+        """The number of a trial just created: the number it was sampled with, unless other
+        processes created trials meanwhile (then one of the next few; the cached storage
+        knows the new trial's number, a look at another's costs a query)."""
+        for number in range(guess, guess + 4):
+            try:
+                if self.inner.get_trial_id_from_study_id_trial_number(study_id, number) == trial_id:
+                    return number
+            except KeyError:
+                break
+        return self.inner.get_trial(trial_id).number
 
     def write_params(self, trial_id: int) -> None:
         """Write the parameters of a trial written by :meth:`write_draft` (through the cached
