@@ -32,6 +32,7 @@ from gearopt.results import SCHEMA_NAMES, ResultsStore
 from gearopt.studyfile import StudySpec
 
 __all__ = [
+    "DRAFT_ID",
     "WorkerStorage",
     "check_integrity",
     "check_own_tables",
@@ -315,6 +316,10 @@ def fast_sqlite(engine: sa.Engine) -> None:
     engine.dispose()  # connections made before the listener get the pragmas when remade
 
 
+#: the trial id of a supervised worker's trial while it is sampled, before it is written
+#: (:meth:`WorkerStorage.draft`): no database's (their ids count from 1)
+DRAFT_ID = -1
+
 #: the statements that make a SQLite transaction a write transaction
 _WRITES = ("INSERT", "UPDATE", "DELETE", "REPLAC")
 
@@ -392,6 +397,10 @@ class WorkerStorage(optuna.storages.BaseStorage):
         self.own: dict[int, optuna.trial.FrozenTrial | None] = {}
         self.read: dict[int, list] = {}  # the hold's read of each study's trials
         self.holding = 0
+        #: a trial being sampled before it is written (:meth:`draft`), under :data:`DRAFT_ID`
+        self.drafted: optuna.trial.FrozenTrial | None = None
+        #: drafts written without their parameters yet, by trial id (:meth:`write_params`)
+        self.unwritten: dict[int, optuna.trial.FrozenTrial] = {}
 
     @contextlib.contextmanager
     def hold(self):
@@ -403,9 +412,67 @@ class WorkerStorage(optuna.storages.BaseStorage):
             self.holding -= 1
             if not self.holding:
                 self.read.clear()
+                self.unwritten.clear()  # (a trial given back without its parameters)
                 self.own = {
                     k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
                 }
+
+    def draft(self, draft: optuna.trial.FrozenTrial) -> None:
+        """Hold ``draft`` (a RUNNING trial made with ``trial_id`` :data:`DRAFT_ID`) in memory
+        until :meth:`write_draft`: a sampler's writes to it (TPE's relative parameters, kept
+        in a system attribute for the other workers' constant liar) and reads of it are the
+        draft's."""
+        self.drafted = draft
+
+    def write_draft(self, study_id: int) -> tuple[int, int]:
+        """Write the draft as a new trial of the study with its attributes, in one transaction
+        (Optuna's ``create_new_trial`` from a template trial), its parameters kept for
+        :meth:`write_params`; kept as this process's trial. Returns its trial id and number."""
+        draft, self.drafted = self.drafted, None
+        template = copy.copy(draft)
+        template.params, template.distributions = {}, {}
+        trial_id = self.inner.create_new_trial(study_id, template_trial=template)
+        number = self._number_of(study_id, trial_id, draft.number)
+        self.own[trial_id] = optuna.trial.FrozenTrial(
+            number=number,
+            state=draft.state,
+            value=None,
+            values=None,
+            datetime_start=draft.datetime_start,
+            datetime_complete=None,
+            params={},
+            distributions={},
+            user_attrs=json.loads(json.dumps(draft.user_attrs)),
+            system_attrs=json.loads(json.dumps(draft.system_attrs)),
+            intermediate_values={},
+            trial_id=trial_id,
+        )
+        self.unwritten[trial_id] = draft
+        return trial_id, number
+
+    def _number_of(self, study_id: int, trial_id: int, guess: int) -> int:
+        """The number of a trial just created: the number it was sampled with, unless other
+        processes created trials meanwhile (then one of the next few; the cached storage
+        knows the new trial's number, a look at another's costs a query)."""
+        for number in range(guess, guess + 4):
+            try:
+                if self.inner.get_trial_id_from_study_id_trial_number(study_id, number) == trial_id:
+                    return number
+            except KeyError:
+                break
+        return self.inner.get_trial(trial_id).number
+
+    def write_params(self, trial_id: int) -> None:
+        """Write the parameters of a trial written by :meth:`write_draft` (through the cached
+        storage, which knows their distributions: in the template each would cost two more
+        queries, its trial's and the study's distribution of the name)."""
+        draft = self.unwritten.pop(trial_id)
+        for name, value in draft.params.items():
+            distribution = draft.distributions[name]
+            internal = distribution.to_internal_repr(value)
+            self.inner.set_trial_param(trial_id, name, internal, distribution)
+        mine = self._mine(trial_id)
+        mine.params, mine.distributions = dict(draft.params), dict(draft.distributions)
 
     def refresh(self) -> None:
         """The hold's next read of the study goes to the database again: for a read that must
@@ -421,8 +488,10 @@ class WorkerStorage(optuna.storages.BaseStorage):
     # --- reads ----------------------------------------------------------------------------
 
     def get_trial(self, trial_id: int) -> optuna.trial.FrozenTrial:
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            return copy.deepcopy(self.drafted)
         if self.holding and trial_id in self.own:
-            return copy.deepcopy(self._mine(trial_id))
+            return _copied(self._mine(trial_id))
         trial = self.inner.get_trial(trial_id)
         if trial_id in self.own and self.own[trial_id] is not None:
             self.own[trial_id] = copy.deepcopy(trial)
@@ -470,6 +539,10 @@ class WorkerStorage(optuna.storages.BaseStorage):
         return done
 
     def set_trial_param(self, trial_id: int, param_name: str, param_value_internal, distribution):
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            self.drafted.params[param_name] = distribution.to_external_repr(param_value_internal)
+            self.drafted.distributions[param_name] = distribution
+            return
         self.inner.set_trial_param(trial_id, param_name, param_value_internal, distribution)
         if self.own.get(trial_id) is not None:
             trial = self.own[trial_id]
@@ -477,11 +550,17 @@ class WorkerStorage(optuna.storages.BaseStorage):
             trial.distributions[param_name] = distribution
 
     def set_trial_user_attr(self, trial_id: int, key: str, value) -> None:
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            self.drafted.user_attrs[key] = value
+            return
         self.inner.set_trial_user_attr(trial_id, key, value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].user_attrs[key] = json.loads(json.dumps(value))
 
     def set_trial_system_attr(self, trial_id: int, key: str, value) -> None:
+        if trial_id == DRAFT_ID and self.drafted is not None:
+            self.drafted.system_attrs[key] = value
+            return
         self.inner.set_trial_system_attr(trial_id, key, value)
         if self.own.get(trial_id) is not None:
             self.own[trial_id].system_attrs[key] = json.loads(json.dumps(value))
@@ -525,3 +604,17 @@ class WorkerStorage(optuna.storages.BaseStorage):
 
     def remove_session(self) -> None:
         self.inner.remove_session()
+
+
+def _copied(trial: optuna.trial.FrozenTrial) -> optuna.trial.FrozenTrial:
+    """A copy of ``trial`` whose parameters, distributions and attributes can be set without
+    touching the original (as Optuna's ``Trial`` sets those of the trial it is given): the
+    dictionaries copied, their values shared (a deep copy of every value cost about a
+    millisecond a trial)."""
+    twin = copy.copy(trial)
+    twin.params, twin.distributions = dict(trial.params), dict(trial.distributions)
+    twin.user_attrs, twin.system_attrs = dict(trial.user_attrs), dict(trial.system_attrs)
+    twin.intermediate_values = dict(trial.intermediate_values)
+    if trial.values is not None:
+        twin.values = list(trial.values)
+    return twin

@@ -54,6 +54,7 @@ from optuna.trial import TrialState
 from tqdm import tqdm
 
 from gearopt.best import CONSTRAINTS_KEY, constraint_values, pick_best, save_design
+from gearopt.drafts import ask_drafted
 from gearopt.errors import GearoptError, StudyError
 from gearopt.pools import JoblibBatches, Resubmit, broken_pool, worker_pool
 from gearopt.recovery import (
@@ -70,7 +71,7 @@ from gearopt.recovery import (
     trial_markers,
 )
 from gearopt.results import ResultsStore, artifact_dir, upload_figures
-from gearopt.samplers import sampler_for
+from gearopt.samplers import sampler_for, search_space
 from gearopt.stops import held_stops
 from gearopt.storage import (
     WorkerStorage,
@@ -418,20 +419,32 @@ class Coordinator:
             # a worker pops given designs one at a time (the hold's read, which Optuna's ask
             # reads again, says whether any wait); with none it creates its trial side by side
             waiting = self.role is not None and self.study.get_trials(deepcopy=False, states=WAIT)
-            asking = self.role.asking() if waiting else contextlib.nullcontext()
-            with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for study.optimize)
-                warnings.simplefilter("ignore", UserWarning)
-                trial = self.study.ask()
-            trial_id = trial.storage.get_trial_id_from_study_id_trial_number(
-                self.opened.study_id, trial.number
-            )
-            self.opened.storage.record_heartbeat(trial_id)
-            trial.set_user_attr(COORDINATOR, self.tag)
+            view, tag = self.opened.view, {COORDINATOR: self.tag}
+            if view is not None and not waiting:  # sampled, then written (gearopt.drafts)
+                space = search_space(self.spec)
+                space = [(d.key, space[d.key]) for d in self.spec.search]
+                trial_id, number = ask_drafted(self.study, view, self.opened.study_id, space, tag)
+                self.opened.storage.record_heartbeat(trial_id)
+                surplus = number >= self.trials and self.ahead(number) >= self.trials
+                if not surplus:  # (a surplus trial is given back without parameters)
+                    view.write_params(trial_id)
+                trial = optuna.Trial(self.study, trial_id)
+            else:
+                asking = self.role.asking() if waiting else contextlib.nullcontext()
+                with warnings.catch_warnings(), asking:  # (Optuna: heartbeats for optimize)
+                    warnings.simplefilter("ignore", UserWarning)
+                    trial = self.study.ask()
+                trial_id = trial.storage.get_trial_id_from_study_id_trial_number(
+                    self.opened.study_id, trial.number
+                )
+                self.opened.storage.record_heartbeat(trial_id)
+                trial.set_user_attr(COORDINATOR, self.tag)
+                # another coordinator took the last place (only trials numbered from
+                # ``trials`` on can find ``trials`` before them: the common case asks nothing)
+                surplus = trial.number >= self.trials and self.ahead(trial.number) >= self.trials
             attempt = int(trial.user_attrs.get(ATTEMPT, 1))  # retries carry theirs
             hand = InHand(trial=trial, trial_id=trial_id, params={}, attempt=attempt)
-            # another coordinator took the last place (only trials numbered from ``trials``
-            # on can find ``trials`` before them: the common case asks nothing)
-            if trial.number >= self.trials and self.ahead(trial.number) >= self.trials:
+            if surplus:
                 self.surplus(hand)
                 return False
             hand.params = {d.key: d.suggest(trial) for d in self.spec.search}

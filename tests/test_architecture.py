@@ -119,6 +119,7 @@ LAYERS = (
             "gearopt.pools",
             "gearopt.recovery",
             "gearopt.samplers",
+            "gearopt.drafts",
             "gearopt.best",
             "gearopt.stops",
             "gearopt.study_workers",

@@ -12,7 +12,8 @@ import pytest
 import sqlalchemy as sa
 from optuna.trial import TrialState
 
-from gearopt.storage import WorkerStorage, fast_sqlite, one_writer
+from gearopt.drafts import ask_drafted
+from gearopt.storage import DRAFT_ID, WorkerStorage, fast_sqlite, one_writer
 
 
 def _sampler() -> optuna.samplers.TPESampler:
@@ -133,3 +134,114 @@ def test_one_writer_holds_the_lock_from_the_first_write_to_the_connections_retur
     with engine.connect() as con:
         assert con.execute(sa.text("SELECT x FROM t")).scalars().all() == [2]
     engine.dispose()
+
+
+#: the study file's parameters in its order (a single-valued one draws nothing)
+SPACE = [
+    ("x", optuna.distributions.FloatDistribution(0.0, 1.0)),
+    ("y", optuna.distributions.FloatDistribution(1.0, 3.0, log=True)),
+    ("z", optuna.distributions.FloatDistribution(2.0, 2.0)),
+]
+
+
+def _asked(url: str, name: str, *, drafted: bool) -> tuple[list[tuple], list[int]]:
+    """Eight trials asked (Optuna's ``Study.ask`` and a ``suggest`` per parameter, or
+    :func:`gearopt.drafts.ask_drafted` on a worker's view), tagged and told, as the database
+    holds them; and the write transactions of each drafted ask."""
+    rdb = optuna.storages.RDBStorage(url)
+    writes: list[int] = []
+    wrote: list[bool] = []
+
+    @sa.event.listens_for(rdb.engine, "before_cursor_execute")
+    def _write(conn, cursor, statement, *args):
+        if statement.lstrip()[:6].upper() in ("INSERT", "UPDATE"):
+            wrote.append(True)
+
+    @sa.event.listens_for(rdb.engine, "commit")
+    def _commit(conn):
+        if wrote:
+            writes.append(1)
+            wrote.clear()
+
+    view = WorkerStorage(rdb)
+    study = optuna.create_study(
+        storage=view if drafted else rdb,
+        sampler=_sampler(),
+        study_name=name,
+        directions=["minimize"] * 2,
+    )
+    study_id = rdb.get_study_id_from_name(name)
+    asks = []
+    for i in range(8):
+        if drafted:
+            with view.hold():
+                before = len(writes)
+                trial_id, number = ask_drafted(study, view, study_id, SPACE, {"tag": ["w", i]})
+                view.write_params(trial_id)
+                asks.append(len(writes) - before)
+                trial = optuna.Trial(study, trial_id)
+                assert trial.number == number
+                assert trial_id == view.get_trial_id_from_study_id_trial_number(study_id, number)
+            x, y = trial.params["x"], trial.params["y"]
+        else:
+            trial = study.ask()
+            x, y, _ = (trial.suggest_float(n, d.low, d.high, log=d.log) for n, d in SPACE)
+            trial.set_user_attr("tag", ["w", i])
+        study.tell(trial, [x * y, (x - 0.3) ** 2])
+    trials = rdb.get_all_trials(study_id, deepcopy=False)
+    rdb.engine.dispose()
+    return _seen(trials), asks
+
+
+def test_a_drafted_ask_writes_the_trial_optuna_asks(tmp_path):
+    """The same seed gives the same trials (parameters, TPE's relative parameters shared for
+    the constant liar, user attributes, values) whether asked through Optuna's ``Study.ask``
+    and ``suggest`` or drafted and then written, and a drafted ask writes its trial with its
+    attributes at once."""
+    plain, _ = _asked(f"sqlite:///{tmp_path / 'plain.db'}", "s", drafted=False)
+    drafted, asks = _asked(f"sqlite:///{tmp_path / 'drafted.db'}", "s", drafted=True)
+    assert drafted == plain
+    assert len(plain) == 8 and all(t[1] == TrialState.COMPLETE for t in plain)
+    # past TPE's start-up trials the sampler's relative parameters went with the trial
+    assert any(k.startswith("tpe:relative_params") for k in plain[-1][-1])
+    # the trial with its attributes, then a write per parameter (Optuna's ask also writes
+    # each attribute on its own: the coordinator's tag, and TPE's relative parameters)
+    assert asks == [1 + len(SPACE)] * 8
+
+
+def test_a_draft_written_after_another_processs_trial_gets_its_own_number(tmp_path):
+    """A draft carries the number its trial would have; when another process created a trial
+    meanwhile the trial written gets the next number, and the worker's copy says so."""
+    url = f"sqlite:///{tmp_path / 'd.db'}"
+    rdb = optuna.storages.RDBStorage(url)
+    view = WorkerStorage(rdb)
+    study = optuna.create_study(storage=view, study_name="d")
+    study_id = rdb.get_study_id_from_name("d")
+    other = optuna.load_study(study_name="d", storage=url)
+    with view.hold():
+        draft = optuna.trial.FrozenTrial(
+            number=len(study.get_trials(deepcopy=False)),
+            state=TrialState.RUNNING,
+            value=None,
+            values=None,
+            datetime_start=None,
+            datetime_complete=None,
+            params={"x": 0.5},
+            distributions={"x": SPACE[0][1]},
+            user_attrs={"tag": ("w", 0)},
+            system_attrs={},
+            intermediate_values={},
+            trial_id=DRAFT_ID,
+        )
+        view.draft(draft)
+        view.set_trial_system_attr(DRAFT_ID, "k", [1])  # a sampler's write: the draft's
+        other.ask()  # another process's trial takes number 0
+        trial_id, number = view.write_draft(study_id)
+        assert view.get_trial(trial_id).params == {}  # (written next, unless given back)
+        view.write_params(trial_id)
+        mine = view.get_trial(trial_id)
+    assert number == 1 == mine.number
+    stored = rdb.get_trial(trial_id)
+    assert _seen([stored]) == _seen([mine])
+    assert stored.user_attrs == {"tag": ["w", 0]} and stored.system_attrs == {"k": [1]}
+    rdb.engine.dispose()
