@@ -144,7 +144,7 @@ SPACE = [
 ]
 
 
-def _asked(url: str, name: str, *, drafted: bool) -> tuple[list[tuple], list[int]]:
+def _asked(url: str, name: str, *, drafted: bool, sampler=None) -> tuple[list[tuple], list[int]]:
     """Eight trials asked (Optuna's ``Study.ask`` and a ``suggest`` per parameter, or
     :func:`gearopt.drafts.ask_drafted` on a worker's view), tagged and told, as the database
     holds them; and the write transactions of each drafted ask."""
@@ -166,7 +166,7 @@ def _asked(url: str, name: str, *, drafted: bool) -> tuple[list[tuple], list[int
     view = WorkerStorage(rdb)
     study = optuna.create_study(
         storage=view if drafted else rdb,
-        sampler=_sampler(),
+        sampler=sampler or _sampler(),
         study_name=name,
         directions=["minimize"] * 2,
     )
@@ -207,6 +207,26 @@ def test_a_drafted_ask_writes_the_trial_optuna_asks(tmp_path):
     # the trial with its attributes, then a write per parameter (Optuna's ask also writes
     # each attribute on its own: the coordinator's tag, and TPE's relative parameters)
     assert asks == [1 + len(SPACE)] * 8
+
+
+#: the study file's other samplers (gearopt.samplers): NSGA-II with a population of four, so
+#: that its second generation (parents, crossover) is drawn within the eight trials
+OTHER_SAMPLERS = {
+    "random": lambda: optuna.samplers.RandomSampler(seed=3),
+    "nsga2": lambda: optuna.samplers.NSGAIISampler(seed=3, population_size=4),
+    "qmc": lambda: optuna.samplers.QMCSampler(seed=3),
+}
+
+
+@pytest.mark.filterwarnings("ignore::optuna.exceptions.ExperimentalWarning")
+@pytest.mark.parametrize("name", sorted(OTHER_SAMPLERS))
+def test_a_drafted_ask_gives_the_other_samplers_trials(tmp_path, name):
+    """Drafted, the study file's other samplers suggest what Optuna's ask gives them on one
+    seed (their ``before_trial`` and study attributes included)."""
+    make = OTHER_SAMPLERS[name]
+    plain, _ = _asked(f"sqlite:///{tmp_path / 'p.db'}", "s", drafted=False, sampler=make())
+    drafted, _ = _asked(f"sqlite:///{tmp_path / 'd.db'}", "s", drafted=True, sampler=make())
+    assert len(plain) == 8 and drafted == plain
 
 
 def test_a_draft_written_after_another_processs_trial_gets_its_own_number(tmp_path):
