@@ -15,7 +15,9 @@ picks each point's row.
 The point evaluations :func:`_point_meshing`, :func:`_point_jacobian` and the node's Newton
 iteration :func:`_newton_node` are compiled once and called, not inlined: inlined, the
 iteration's two Jacobians were compiled again into each of :func:`newton` and
-:func:`bisected` (36 s of a cold compile, now 7-9 s; the same flanks, bit for bit).
+:func:`bisected` (36 s of a cold compile, now 7-9 s; the same flanks, bit for bit). The calls
+cost about 0.1 ms of a member's 3-4 ms generation (with :func:`_point_jacobian` inlined again:
+0.05 ms, and 15 s of compile).
 """
 
 from __future__ import annotations
