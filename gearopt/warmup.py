@@ -4,11 +4,11 @@ they load the cache rather than compile it side by side (numba's cache is not sa
 concurrent writers), and before the trials' clock.
 
 After an install (nothing in the cache yet) the compile takes minutes of CPU; it is split over
-two processes: this one compiles the FlankMap, determinant and contact kernels, a helper process
-(:func:`warm_group` ``"helper"``) the mesh cycle's, the loaded contact's and the machine models'
-at the same time. The two groups write disjoint modules' cache files (a kernel inlined from
-another module, ``compiled(inline=True)``, writes no cache file of its own); this process loads
-the helper's kernels after it has finished."""
+two processes: this one compiles the FlankMap, determinant and contact engine kernels, a helper
+process (:func:`warm_group` ``"helper"``) the marking-compound zone's, the mesh cycle's, the
+loaded contact's and the machine models' at the same time. The two groups write disjoint
+modules' cache files (a kernel inlined from another module, ``compiled(inline=True)``, writes no
+cache file of its own); this process loads the helper's kernels after it has finished."""
 
 from __future__ import annotations
 
@@ -36,12 +36,22 @@ def _models() -> None:
 
 
 def _stages() -> dict[str, tuple]:
-    """The warm-up's stages in the order this process runs them, by group: ``"probe"`` (small,
-    run first: whether it compiled tells a first use), ``"main"``, then ``"helper"``."""
+    """The warm-up's stages by group: ``"probe"`` (small, run first here: whether it compiled
+    tells a first use), ``"main"`` (here, beside the helper), ``"helper"`` (the helper
+    process's), ``"after"`` (here, after the helper: every kernel not yet warmed here, loaded
+    from the cache where the helper compiled it)."""
     return {
         "probe": (flank.warm_kernels, determinants.warm_kernels),
-        "main": (contact_kernels.warm,),
+        "main": (contact_kernels.warm_engine,),
         "helper": (
+            contact_kernels.warm_zones,
+            mesh_kernels.warm,
+            loaded_kernels.warm,
+            lcp_kernels.warm,
+            _models,
+        ),
+        "after": (
+            contact_kernels.warm,
             mesh_kernels.warm,
             loaded_kernels.warm,
             lcp_kernels.warm,
@@ -107,7 +117,7 @@ def warm_kernels(*, announce: bool = True) -> float:
         if helper is not None:
             helper.wait()
             helper = None
-        for stage in stages["helper"]:  # (loaded from the cache where the helper compiled it)
+        for stage in stages["after"]:
             stage()
     finally:
         if helper is not None:  # interrupted: no writer left behind (numba writes atomically)
