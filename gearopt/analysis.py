@@ -9,13 +9,11 @@ and the ease-off on it (:mod:`gearopt.mesh`). The evaluator plugins ``tca``, ``b
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from gearopt.analysis_options import TCA_GRID, AnalysisOptions
 from gearopt.design import MEMBERS, Design
 from gearopt.load_options import LoadOptions
-from gearopt.loaded.ltca import LoadedContact
-from gearopt.loaded.pair import loaded_sides
 from gearopt.mesh import (
     Backlash,
     EaseOff,
@@ -27,6 +25,9 @@ from gearopt.mesh import (
     tooth_contacts,
 )
 from gearopt.plugins import get_machine_model
+
+if TYPE_CHECKING:
+    from gearopt.loaded.ltca import LoadedContact
 
 __all__ = [
     "analysed_flanks",
@@ -132,4 +133,8 @@ def pair_loaded_contact(
 ) -> dict[str, list[LoadedContact]]:
     """Loaded TCA of both sides (or ``which``) at the load's torques (:mod:`gearopt.loaded`),
     on the positions of the unloaded TCA ``sides`` (:func:`contact_sides`)."""
+    # (imported here: the loaded contact's modules, SciPy's linear algebra and spatial parts
+    # among them, are not loaded by a study or analysis that asks for no loaded contact)
+    from gearopt.loaded.pair import loaded_sides
+
     return loaded_sides(pair, sides, design.blank, load, which=which)

@@ -28,14 +28,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import RectBivariateSpline
 
 from gearopt.errors import GearoptError
 from gearopt.jit import ENABLED, compiled
+
+if TYPE_CHECKING:
+    from scipy.interpolate import RectBivariateSpline
 
 __all__ = [
     "axial_plane",
@@ -400,6 +402,10 @@ class FlankMap:
     @cached_property
     def polar_spline(self) -> RectBivariateSpline:
         """Bicubic spline Theta(s, h) through all nodes (evaluate it on generated nodes only)."""
+        # (imported here: about 0.5 s that a process which fits no spline, such as a study's
+        # coordinator or the CLI's start, does not pay)
+        from scipy.interpolate import RectBivariateSpline
+
         return RectBivariateSpline(self.face_mm, self.profile_mm, self.polar_angle_rad)
 
     def polar_angle_at(self, face_mm, profile_mm, *, dface: int = 0, dprofile: int = 0) -> NDArray:

@@ -18,9 +18,12 @@ try:  # pragma: no cover - depends on the installed extras
 except ImportError:  # pragma: no cover
     numba = None
 
-__all__ = ["ENABLED", "blas_threads", "compiled"]
+__all__ = ["ENABLED", "blas_threads", "compiled", "compiled_here"]
 
 ENABLED = numba is not None and os.environ.get("GEAROPT_JIT", "1") != "0"
+
+#: every kernel :func:`compiled` made in this process (what :func:`compiled_here` counts)
+_KERNELS = []
 
 
 def compiled(func=None, *, inline=False):
@@ -32,7 +35,16 @@ def compiled(func=None, *, inline=False):
     if not ENABLED:
         return func
     options = {"inline": "always"} if inline else {}
-    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
+    kernel = numba.njit(cache=True, nogil=True, error_model="numpy", **options)(func)
+    _KERNELS.append(kernel)
+    return kernel
+
+
+def compiled_here() -> int:
+    """How many kernel signatures this process compiled rather than loaded from numba's disk
+    cache (numba's ``Dispatcher.stats``): nonzero after a first use, after an install or a
+    change of a kernel's source; 0 without the kernels."""
+    return sum(len(kernel.stats.cache_misses) for kernel in _KERNELS)
 
 
 @functools.cache

@@ -41,6 +41,8 @@ LAZY = {
     ("gearopt.study_cli", "gearopt.study"),
     ("gearopt.study_cli", "gearopt.export"),
     ("gearopt.cli", "gearopt.dashboard"),
+    # the loaded contact (SciPy's linear algebra and spatial parts, about 0.4 s) where asked
+    ("gearopt.analysis", "gearopt.loaded.pair"),
 }
 #: the reference TCA's importers outside the tests
 REFERENCE = "gearopt.newton_tca"

@@ -41,3 +41,44 @@ def test_a_study_trial_after_the_warm_up_compiles_no_kernel():
     after = _signatures()
     grown = {k: (before.get(k, 0), n) for k, n in after.items() if n > before.get(k, 0)}
     assert not grown, f"compiled after the warm-up (signatures before, after): {grown}"
+
+
+def _recorded_processes(monkeypatch, compiled: int) -> list:
+    """The processes :func:`warm_kernels` starts, with the probe's kernels counted as
+    ``compiled`` in this process (a first use, or a cached load)."""
+    import subprocess
+
+    import gearopt.warmup as warmup
+
+    started, popen = [], subprocess.Popen
+
+    def record(*args, **kwargs):
+        started.append(popen(*args, **kwargs))
+        return started[-1]
+
+    monkeypatch.setattr(warmup.subprocess, "Popen", record)
+    monkeypatch.setattr(warmup.jit, "compiled_here", lambda: compiled)
+    return started
+
+
+def test_a_first_use_compiles_the_helper_group_in_a_second_process(monkeypatch):
+    import gearopt.warmup as warmup
+
+    started = _recorded_processes(monkeypatch, compiled=1)
+    calls = []
+    monkeypatch.setattr(warmup.contact_kernels, "warm", lambda: calls.append("contact"))
+    monkeypatch.setattr(
+        warmup.mesh_kernels, "warm", lambda: calls.append(("mesh", started[0].poll()))
+    )
+    warmup.warm_kernels(announce=False)
+    # one helper, finished (its group warmed without error) before this process loads it
+    assert len(started) == 1 and started[0].returncode == 0
+    assert calls == ["contact", ("mesh", 0)]
+
+
+def test_a_cached_warm_up_starts_no_process(monkeypatch):
+    import gearopt.warmup as warmup
+
+    started = _recorded_processes(monkeypatch, compiled=0)
+    warmup.warm_kernels(announce=False)
+    assert started == []

@@ -16,39 +16,9 @@
   pressure, mesh stiffness, edge loading); :mod:`gearopt.loaded.pair`: both sides of a pair.
 """
 
-from gearopt.load_options import PatchOptions
-from gearopt.loaded.compliance import (
-    DEFAULT_MESH,
-    Factorised,
-    Material,
-    SolidModel,
-    ToothCompliance,
-    factorise,
-    member_compliance,
-    solid_model,
-    tooth_compliance,
-)
-from gearopt.loaded.halfspace import (
-    FAR_FIELD_RATIO,
-    PatchGrid,
-    composite_compliance_mm2_per_n,
-    halfspace_columns_mm_per_n,
-    halfspace_compliance_mm_per_n,
-    patch_grid,
-    rectangle_influence_mm_per_mpa,
-)
-from gearopt.loaded.lcp import (
-    ColumnCache,
-    ComplementarityResiduals,
-    LoadDistribution,
-    solve_load_columns,
-    solve_load_distribution,
-    solve_load_patches,
-)
-from gearopt.loaded.ltca import LoadedContact, PositionLoad, loaded_contact
-from gearopt.loaded.pair import loaded_sides
-from gearopt.loaded.patch_compliance import PatchCompliance
-from gearopt.loaded.separations import PairPatches, contact_patches
+from __future__ import annotations
+
+import importlib
 
 __all__ = [
     "ColumnCache",
@@ -82,3 +52,50 @@ __all__ = [
     "solve_load_patches",
     "tooth_compliance",
 ]
+
+#: where each public name lives: imported at its first use (PEP 562), so that importing one
+#: submodule (the warm-up's kernels) does not import scikit-fem's and SciPy's parts
+_WHERE = {
+    "PatchOptions": "gearopt.load_options",
+    "DEFAULT_MESH": "gearopt.loaded.compliance",
+    "Factorised": "gearopt.loaded.compliance",
+    "Material": "gearopt.loaded.compliance",
+    "SolidModel": "gearopt.loaded.compliance",
+    "ToothCompliance": "gearopt.loaded.compliance",
+    "factorise": "gearopt.loaded.compliance",
+    "member_compliance": "gearopt.loaded.compliance",
+    "solid_model": "gearopt.loaded.compliance",
+    "tooth_compliance": "gearopt.loaded.compliance",
+    "FAR_FIELD_RATIO": "gearopt.loaded.halfspace",
+    "PatchGrid": "gearopt.loaded.halfspace",
+    "composite_compliance_mm2_per_n": "gearopt.loaded.halfspace",
+    "halfspace_columns_mm_per_n": "gearopt.loaded.halfspace",
+    "halfspace_compliance_mm_per_n": "gearopt.loaded.halfspace",
+    "patch_grid": "gearopt.loaded.halfspace",
+    "rectangle_influence_mm_per_mpa": "gearopt.loaded.halfspace",
+    "ColumnCache": "gearopt.loaded.lcp",
+    "ComplementarityResiduals": "gearopt.loaded.lcp",
+    "LoadDistribution": "gearopt.loaded.lcp",
+    "solve_load_columns": "gearopt.loaded.lcp",
+    "solve_load_distribution": "gearopt.loaded.lcp",
+    "solve_load_patches": "gearopt.loaded.lcp",
+    "LoadedContact": "gearopt.loaded.ltca",
+    "PositionLoad": "gearopt.loaded.ltca",
+    "loaded_contact": "gearopt.loaded.ltca",
+    "loaded_sides": "gearopt.loaded.pair",
+    "PatchCompliance": "gearopt.loaded.patch_compliance",
+    "PairPatches": "gearopt.loaded.separations",
+    "contact_patches": "gearopt.loaded.separations",
+}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -11,6 +11,13 @@ per member). The numpy functions stay the reference and the complex-step path.
 The blade systems come as a table (:func:`system_table`), one row per system: the columns of
 :data:`FIELDS`, then the constant sines and cosines of :data:`TRIG_FIELDS`; ``flank`` ``(n,)``
 picks each point's row.
+
+The point evaluations :func:`_point_meshing`, :func:`_point_jacobian` and the node's Newton
+iteration :func:`_newton_node` are compiled once and called, not inlined: inlined, the
+iteration's two Jacobians were compiled again into each of :func:`newton` and
+:func:`bisected` (36 s of a cold compile, now 7-9 s; the same flanks, bit for bit). The calls
+cost about 0.1 ms of a member's 3-4 ms generation (with :func:`_point_jacobian` inlined again:
+0.05 ms, and 15 s of compile).
 """
 
 from __future__ import annotations
@@ -185,7 +192,7 @@ def _axial_radial(rel, work_axis):
     return axial, math.sqrt(rx * rx + ry * ry + rz * rz - axial * axial)
 
 
-@compiled(inline=True)
+@compiled
 def _point_meshing(t, u, theta, psi, scale_mm):
     """``(L, R, f / (|N| A))`` at one point (FaceHobbingFamily.axial_radial_meshing)."""
     _, _, _, r_u, r_t, r_p, rel, work_axis = _components(t, u, theta, psi)
@@ -211,7 +218,7 @@ def _dot(a0, a1, a2, b0, b1, b2):
     return a0 * b0 + a1 * b1 + a2 * b2
 
 
-@compiled(inline=True)
+@compiled
 def _point_jacobian(t, u, theta, psi, scale_mm):
     """``(L, R, g)`` and the rows of their Jacobian in (u, theta, psi) at one point
     (family.meshing_jacobian): ``(L, R, g, dL, dR, dg)``, each row a 3-tuple."""
@@ -365,7 +372,7 @@ def _clipped(step, limit):
     return (s0 * scale, s1 * scale, s2 * scale)
 
 
-@compiled(inline=True)
+@compiled
 def _newton_node(t, q0, q1, q2, l0, r0, scale_mm, limit, tol, max_iter, give_up, chords):
     """:func:`newton` at one node of system row ``t`` from ``(q0, q1, q2)`` toward the axial
     plane target ``(l0, r0)``: ``(q, f, jac, iterations)`` (``give_up``: iterations,
@@ -477,7 +484,8 @@ def bisected(
     determinant of the sign ``sheet[i]`` (on the envelope's sheet, LAPACK's LU as numpy's
     det), else the edge point's height at least ``least_height_mm`` (the tool reaches it)."""
     cg, sg = cos_sin[0], cos_sin[1]
-    give_up = (3, 1e-6)
+    # typed as newton's arguments (not literals), so that _newton_node compiles once for both
+    give_up, iterations, chords = (np.int64(3), 1e-6), np.int64(8), np.bool_(True)
     zero = (0.0, 0.0, 0.0)
     for i in range(q_up.shape[0]):
         t = table[flank[i]]
@@ -488,7 +496,7 @@ def bisected(
             mid = 0.5 * (lo + up)
             big_l, big_r = s * cg - mid * sg, s * sg + mid * cg
             qm, f, jac, _ = _newton_node(
-                t, q0, q1, q2, big_l, big_r, scale_mm, limit, tol, 8, give_up, True
+                t, q0, q1, q2, big_l, big_r, scale_mm, limit, tol, iterations, give_up, chords
             )
             norm = _max_abs(f)
             ok = math.isfinite(norm) and norm <= tol
