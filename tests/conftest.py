@@ -18,6 +18,19 @@ TOY = Path(__file__).parent / "toy_plugin"
 SEED_CASES = Path(__file__).parent / "data" / "seed_cases.json"
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session):
+    """Every kernel compiled (after an install: in two processes, :mod:`gearopt.warmup`) or
+    loaded once by pytest-xdist's controller before it starts the test processes (or by the
+    one process without xdist): they then load the cache rather than each compile the same
+    kernels side by side."""
+    if hasattr(session.config, "workerinput"):  # a test process: its controller did it
+        return
+    from gearopt.warmup import warm_kernels
+
+    warm_kernels()
+
+
 @pytest.fixture(scope="session", autouse=True)
 def _compiled_kernels():
     """The compiled kernels (contact engine, mesh cycle, loaded contact) compiled (or loaded
