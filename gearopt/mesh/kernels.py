@@ -372,12 +372,27 @@ def window_rows(t, centre, window, pitch, ids, u, first, inv):
 
 
 @compiled
-def _end_pair(e, u, pitch):
-    """Window end ``e`` (0: the first pair, 1: the last): its column of ``u`` and the pitch
-    the pair beyond it lies off (toward lower or higher relative rotations)."""
-    if e == 0:
-        return 0, -1.0 * pitch
-    return u.shape[1] - 1, 1.0 * pitch
+def _beyond_ends(u, carrying, pitch, at, beyond):
+    """At the window's first end, then its last, at each position where that end's pair
+    carries: the position (``at``) and the relative rotation of the pair beyond it
+    (``beyond``), each ``(2 n,)`` out. Returns how many they list."""
+    count = 0
+    for e in range(2):
+        slot, off = (0, -1.0 * pitch) if e == 0 else (u.shape[1] - 1, 1.0 * pitch)
+        for i in range(u.shape[0]):
+            if carrying[i] == slot:
+                at[count], beyond[count] = i, u[i, slot] + off
+                count += 1
+    return count
+
+
+@compiled
+def _pitch_keys(v, pitch):
+    """Relative rotations ``v`` as keys that match to a billionth of a pitch."""
+    keys = np.empty(v.shape[0])
+    for j in range(v.shape[0]):
+        keys[j] = _rint(v[j] / pitch * 1e9)
+    return keys
 
 
 @compiled
@@ -405,25 +420,20 @@ def beyond_rows(v, u, carrying, pitch, out):
     int
         How many ``out`` lists.
     """
-    known = np.empty(v.shape[0])
-    for j in range(v.shape[0]):
-        known[j] = _rint(v[j] / pitch * 1e9)
+    known = _pitch_keys(v, pitch)
+    at = np.empty(2 * u.shape[0], np.intp)
+    beyond = np.empty(2 * u.shape[0])
     count = 0
-    for e in range(2):
-        slot, off = _end_pair(e, u, pitch)
-        for i in range(u.shape[0]):
-            if carrying[i] != slot:
-                continue
-            x = u[i, slot] + off
-            key = _rint(x / pitch * 1e9)
-            held = False
-            for j in range(known.shape[0]):
-                if known[j] == key:
-                    held = True
-                    break
-            if not held:
-                out[count] = x
-                count += 1
+    for q in range(_beyond_ends(u, carrying, pitch, at, beyond)):
+        key = _rint(beyond[q] / pitch * 1e9)
+        held = False
+        for j in range(known.shape[0]):
+            if known[j] == key:
+                held = True
+                break
+        if not held:
+            out[count] = beyond[q]
+            count += 1
     return count
 
 
@@ -466,23 +476,19 @@ def window_check(v, g, u, carrying, lag, pitch, flat):
     centre = 0.0
     if m and not abs(v[best]) <= half and least < within - flat:
         centre = v[best]
-    keys = np.empty(m)
-    for j in range(m):
-        keys[j] = _rint(v[j] / pitch * 1e9)
+    keys = _pitch_keys(v, pitch)
+    at = np.empty(2 * u.shape[0], np.intp)
+    beyond = np.empty(2 * u.shape[0])
     lower = False
-    for e in range(2):
-        slot, off = _end_pair(e, u, pitch)
-        for i in range(u.shape[0]):
-            if carrying[i] != slot:
-                continue
-            key = _rint((u[i, slot] + off) / pitch * 1e9)
-            beyond = np.inf
-            for j in range(m - 1, -1, -1):
-                if keys[j] == key:
-                    beyond = g[j]
-                    break
-            if beyond < lag[i]:
-                lower = True
+    for q in range(_beyond_ends(u, carrying, pitch, at, beyond)):
+        key = _rint(beyond[q] / pitch * 1e9)
+        lag_beyond = np.inf
+        for j in range(m - 1, -1, -1):
+            if keys[j] == key:
+                lag_beyond = g[j]
+                break
+        if lag_beyond < lag[at[q]]:
+            lower = True
     return centre, lower
 
 
