@@ -91,7 +91,7 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
         The angle in degrees, range (-90, 90].
     """
     # (compiled: on floats, the products summed in order, as numpy's dot of 3-vectors)
-    angle = math.degrees(
+    return _folded_degrees(
         path_kernels.chord_angle(
             tuple(float(a) for a in tangent),
             tuple(float(a) for a in normal),
@@ -99,6 +99,11 @@ def path_angle(tangent, normal, point, root_angle_rad: float) -> float:
             float(root_angle_rad),
         )
     )
+
+
+def _folded_degrees(angle_rad: float) -> float:
+    """``angle_rad`` in degrees, -90 (the same line as 90) folded to 90: range (-90, 90]."""
+    angle = math.degrees(angle_rad)
     return 90.0 if angle <= -90.0 + 1e-12 else angle
 
 
@@ -148,29 +153,8 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     s2, h2 = float(s2), float(h2)
     jet = FlankJet(field.gear)
     root = math.radians(frame.gear_root_angle_deg)
-    if not (math.isfinite(s2) and math.isfinite(h2)):  # (the jet's cell: as Python finds it)
-        p_s, p_h = _tangents(jet, s2, h2)
-        return path_angle(chord, _cross(p_s, p_h), mid, root)
     cells = (jet.s0, jet.h0, jet.ds, jet.dh, jet.n_f, jet.n_p, jet.cells.columns, jet.sg, jet.cg)
-    angle = math.degrees(
-        path_kernels.root_line_angle(chord, mid, s2, h2, cells, jet.cells.coefficients, root)
-    )
-    return 90.0 if angle <= -90.0 + 1e-12 else angle
-
-
-def _tangents(jet: FlankJet, s: float, h: float):
-    """The flank's tangents ``(p_s, p_h)`` at ``(s, h)`` (:meth:`FlankJet.surface`'s, its
-    vector arithmetic on Python floats, component by component)."""
-    theta, t_s, t_h, *_ = jet.polar(s, h)
-    sg, cg = jet.sg, jet.cg
-    big_r = s * sg + h * cg
-    ca, sa = math.cos(theta + 0.0), math.sin(theta + 0.0)
-    r_s, r_h = big_r * t_s, big_r * t_h
-    p_s = (sg * ca + r_s * -sa + cg * 0.0, sg * sa + r_s * ca + cg * 0.0, sg * 0.0 + r_s * 0.0 + cg)
-    p_h = (cg * ca + r_h * -sa - sg * 0.0, cg * sa + r_h * ca - sg * 0.0, cg * 0.0 + r_h * 0.0 - sg)
-    return p_s, p_h
-
-
-def _cross(a, b) -> tuple[float, float, float]:
-    """``a x b`` of two 3-vectors (:func:`gearopt.flank_jet.cross`'s arithmetic)."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+    angle = path_kernels.root_line_angle
+    if not (math.isfinite(s2) and math.isfinite(h2)):  # off the grid: the plain Python raises
+        angle = getattr(angle, "py_func", angle)  # at the cell's floor, as FlankJet.polar
+    return _folded_degrees(angle(chord, mid, s2, h2, cells, jet.cells.coefficients, root))

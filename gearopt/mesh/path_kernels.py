@@ -95,7 +95,8 @@ def _minus(a, k, b):
 def root_line_angle(chord, mid, s, h, jet, coefficients, root_angle):
     """The angle (radians) from the gear's root line to the chord ``chord`` through ``mid``
     on the gear flank at grid ``(s, h)``: :class:`gearopt.flank_jet.FlankJet`'s polar jet,
-    :func:`gearopt.mesh.frame._tangents`, their cross product and :func:`chord_angle`.
+    :meth:`gearopt.flank_jet.FlankJet.surface`'s tangents, their cross product and
+    :func:`chord_angle`.
 
     Parameters
     ----------
