@@ -199,13 +199,11 @@ class HandOver:
         one pair's lag steps and the other's is smooth across the bracket (:attr:`smooth`),
         only the stepping pair. The tags asked for are :attr:`asked`."""
         self.mode = "iterate"
-        self.xs = sorted({float(x) for x in np.atleast_1d(xs)})
+        self.xs = sorted({float(x) for x in (xs if isinstance(xs, list) else np.atleast_1d(xs))})
         self.x = self.xs[0]
-        out = []
-        for j, x in enumerate(self.xs):
-            for pair, shift in ((0, 0.0), (1, pitch)):
-                if pair != self.smooth:
-                    out.append((x - shift, ("ho", pair, j)))
+        smooth = int(self.state[_SMOOTH])  # (-1: none)
+        pairs = [(pair, shift) for pair, shift in ((0, 0.0), (1, pitch)) if pair != smooth]
+        out = [(x - shift, ("ho", pair, j)) for j, x in enumerate(self.xs) for pair, shift in pairs]
         self.asked = [tag for _, tag in out]
         return out
 
