@@ -21,6 +21,7 @@ from gearopt import determinants, flank, jit
 from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
+from gearopt.mesh import handover_kernels
 from gearopt.mesh import kernels as mesh_kernels
 from gearopt.plugins import machine_models
 
@@ -47,12 +48,14 @@ def _stages() -> dict[str, tuple]:
         "helper": (
             contact_kernels.warm_zones,
             mesh_kernels.warm,
+            handover_kernels.warm,
             loaded_kernels.warm,
             lcp_kernels.warm,
         ),
         "after": (
             contact_kernels.warm,
             mesh_kernels.warm,
+            handover_kernels.warm,
             loaded_kernels.warm,
             lcp_kernels.warm,
         ),

@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 
+from gearopt.mesh import handover_kernels
 from gearopt.mesh.handover import ITERATIONS, TOLERANCE_RAD, HandOver
 
 PITCH = 2.0 * math.pi / 16.0
@@ -86,3 +87,17 @@ def test_incoming_step():
     assert b - a <= TOLERANCE_RAD and a <= root <= b
     low = [min(incoming(x), float(stepping(x))) for x in (a, b)]
     assert ho.lag == pytest.approx(max(low), abs=1e-13)
+
+
+@pytest.mark.skipif(not handover_kernels.ENABLED, reason="the kernels run as plain Python")
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_compiled_step_is_the_python_step(name, monkeypatch):
+    """The compiled step (:func:`gearopt.mesh.handover_kernels.iteration_step`) settles every
+    case where its plain Python does, to the bit."""
+    leaving, _ = CASES[name]
+    compiled_ho, compiled_rounds = settle(leaving, incoming)
+    monkeypatch.setattr(handover_kernels, "iteration_step", handover_kernels.iteration_step.py_func)
+    python_ho, python_rounds = settle(leaving, incoming)
+    assert compiled_rounds == python_rounds
+    assert (compiled_ho.x, compiled_ho.lag) == (python_ho.x, python_ho.lag)
+    assert compiled_ho.bracket == python_ho.bracket

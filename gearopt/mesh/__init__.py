@@ -68,6 +68,7 @@ Modules:
 - :mod:`gearopt.mesh.zone`: the zones' chords on the refined field
   (:class:`~gearopt.mesh.zone.Zones`);
 - :mod:`gearopt.mesh.handover`: the hand-over's search (:class:`~gearopt.mesh.handover.HandOver`);
+  its iteration's step compiled in :mod:`gearopt.mesh.handover_kernels`;
 - :mod:`gearopt.mesh.side`: :class:`SideCycle`, one side's mesh cycle;
 - :mod:`gearopt.mesh.cycle`: :class:`ToothContact`, :class:`MeshCycle` (every side's joint
   evaluations), :func:`tooth_contacts`, :func:`tooth_contact`;

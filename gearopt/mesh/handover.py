@@ -34,7 +34,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import FieldSample
-from gearopt.mesh import kernels
+from gearopt.mesh import handover_kernels, kernels
+from gearopt.mesh.handover_kernels import STATE
 
 __all__ = [
     "FIT_TAGS",
@@ -79,6 +80,13 @@ ITERATIONS = 40
 SPREAD = 7
 #: the widest bracket on which a stepping lag is sampled alone
 SINGLE_RAD = 1e-4
+#: the rows :class:`HandOver` holds for its samples and trail at first (grown as needed)
+ROWS = 64
+
+_LIMITS = np.array([TOLERANCE_RAD, ITERATIONS, SPREAD, SINGLE_RAD], float)
+_WIDTH, _RISE, _STEPS, _SMOOTH, _X, _LAG, _HAS_LAG = (
+    STATE.index(name) for name in ("width", "rise", "steps", "smooth", "x", "lag", "has_lag")
+)
 
 
 class HandOver:
@@ -124,26 +132,24 @@ class HandOver:
         0 at a guess's first check, 1 at its second.
     bracket
         ``[a, b, d_a, d_b, low_a, low_b]`` the iteration's bracket, D at its ends and the lower
-        of the two pairs' lags there (None at the bracket's first ends).
+        of the two pairs' lags there (None at the bracket's first ends), from ``state``; a line
+        contact's: ``flat_bracket``, ``[a, b]``.
     xs
         The points of the iteration's step being evaluated.
-    width
-        The bracket's width before the last step.
-    rise
-        ``d_b - d_a`` before the last step (D's rise across the bracket).
-    guarded
-        0 after an even step, 1 after a guarded step, 2 after its retry with wider guards.
+    state
+        The iteration's state (:data:`gearopt.mesh.handover_kernels.STATE`): the bracket, both
+        pairs' lags at its ends, its width and D's rise across it before the last step, the
+        steps so far, whether the last step was even (0), guarded (1) or its retry with wider
+        guards (2), the smooth pair, and the hand-over once settled.
     smooth
         The pair (0 leaving, 1 incoming) whose lag is interpolated, not sampled, in the step
         being evaluated, or None.
     asked
         The tags of the lags asked for by the step being evaluated.
-    end_lags
-        Both pairs' lags ``(leaving, incoming)`` at the bracket's ends (None at the first ends).
-    samples
-        Each pair's sampled ``(x, lag)`` points (finite lags): the smooth pair's interpolation.
-    trail
-        Every ``(x, D)`` with D finite so far, the bracket's first ends among them.
+    samples, counts, trail
+        Each pair's sampled ``(x, lag)`` points (finite lags; ``samples[pair, :counts[pair]]``):
+        the smooth pair's interpolation; every ``(x, D)`` with D finite so far, the bracket's
+        first ends among them (``trail[:counts[2]]``).
     steps
         The iteration's evaluations so far.
     done
@@ -160,18 +166,18 @@ class HandOver:
         self.x = None
         self.lag = None
         self.round = 0
-        self.bracket = [lo, hi, d_lo, d_hi, None, None]
-        self.width = hi - lo
+        self.flat_bracket = [lo, hi]
         self.xs = []
-        self.steps = 0
         self.done = False
         self.asked = []
-        self.smooth = None
-        self.end_lags = [None, None]
-        self.samples = ([], [])
-        self.trail = [(lo, d_lo), (hi, d_hi)]
-        self.rise = d_hi - d_lo
-        self.guarded = 0
+        state = np.zeros(len(STATE))
+        state[:4] = lo, hi, d_lo, d_hi
+        state[_WIDTH], state[_RISE], state[_SMOOTH] = hi - lo, d_hi - d_lo, -1.0
+        self.state = state
+        self.samples, self.trail = np.empty((2, ROWS, 2)), np.empty((ROWS, 2))
+        self.trail[0], self.trail[1] = (lo, d_lo), (hi, d_hi)
+        self.counts = np.array([0, 0, 2], np.intp)
+        self.out = np.empty(SPREAD)
 
     def fit_requests(self, x, pitch: float) -> list[Request]:
         """Check a guess ``x``: both pairs a delta either side of it (the evaluations at ``x``
@@ -193,13 +199,11 @@ class HandOver:
         one pair's lag steps and the other's is smooth across the bracket (:attr:`smooth`),
         only the stepping pair. The tags asked for are :attr:`asked`."""
         self.mode = "iterate"
-        self.xs = sorted({float(x) for x in np.atleast_1d(xs)})
+        self.xs = sorted({float(x) for x in (xs if isinstance(xs, list) else np.atleast_1d(xs))})
         self.x = self.xs[0]
-        out = []
-        for j, x in enumerate(self.xs):
-            for pair, shift in ((0, 0.0), (1, pitch)):
-                if pair != self.smooth:
-                    out.append((x - shift, ("ho", pair, j)))
+        smooth = int(self.state[_SMOOTH])  # (-1: none)
+        pairs = [(pair, shift) for pair, shift in ((0, 0.0), (1, pitch)) if pair != smooth]
+        out = [(x - shift, ("ho", pair, j)) for j, x in enumerate(self.xs) for pair, shift in pairs]
         self.asked = [tag for _, tag in out]
         return out
 
@@ -252,99 +256,77 @@ class HandOver:
         the other's (its least clearance jumping to another part of its flank) the TE's trough
         there.
 
-        Next (:meth:`next_points`): where D is smooth, its root interpolated through the
-        bracket's ends and the nearest other point and two guards either side, as far as the
-        interpolation's error; where D steps (the bracket closes in but D's rise across it
-        does not shrink with it), is infinite or a step left more than a quarter of the
-        bracket, :data:`SPREAD` points evenly across it. A stepping lag is sampled alone once
-        the other pair's lag changes by at most a twentieth of D's rise across a bracket
-        narrower than 1e-4 rad: the other's is then interpolated (a parabola through its three
-        nearest samples), which cannot move D's sign.
+        Next: where D is smooth, its root interpolated through the bracket's ends and the
+        nearest other point and two guards either side, as far as the interpolation's error;
+        where D steps (the bracket closes in but D's rise across it does not shrink with it),
+        is infinite or a step left more than a quarter of the bracket, :data:`SPREAD` points
+        evenly across it. A stepping lag is sampled alone once the other pair's lag changes by
+        at most a twentieth of D's rise across a bracket narrower than 1e-4 rad: the other's is
+        then interpolated (a parabola through its three nearest samples), which cannot move
+        D's sign. One compiled step (:func:`gearopt.mesh.handover_kernels.iteration_step`).
         """
-        self.steps += 1
-        a, b, d_a, d_b, low_a, low_b = self.bracket
-        points = [(a, d_a, low_a, self.end_lags[0])]
-        # (on Python floats: inf - inf, both off the flanks, is NaN without a warning)
-        for j, x in enumerate(self.xs):
-            g = []
-            for pair in (0, 1):
-                value = got.get(("ho", pair, j))
-                if value is None:
-                    value = self.interpolated(pair, x)
-                elif math.isfinite(value):
-                    self.samples[pair].append((x, float(value)))
-                g.append(float(value))
-            d = g[0] - g[1]
-            if math.isfinite(d):
-                self.trail.append((x, d))
-            if a < x < b and d == d:  # (not NaN)
-                points.append((x, d, min(g), tuple(g)))
-        points.append((b, d_b, low_b, self.end_lags[1]))
-        for (x0, d0, l0, e0), (x1, d1, l1, e1) in zip(points[:-1], points[1:], strict=True):
-            if d0 <= 0.0 < d1 or d1 == 0.0:
-                a, b, d_a, d_b, low_a, low_b = x0, x1, d0, d1, l0, l1
-                self.end_lags = [e0, e1]
-                break
-        self.bracket = [a, b, d_a, d_b, low_a, low_b]
-        if d_b == 0.0:
-            self.done, self.x, self.lag = True, float(b), low_b
-            return None
-        if b - a <= TOLERANCE_RAD or self.steps >= ITERATIONS:
-            self.done, self.x = True, float(0.5 * (a + b))
-            if b - a <= TOLERANCE_RAD and low_a is not None and low_b is not None:
-                self.lag = float(max(low_a, low_b))
-            return None
-        return self.next_points()
-
-    def next_points(self) -> list[float]:
-        """The points of the iteration's next step on the bracket (:meth:`take_iteration`)."""
-        a, b, d_a, d_b = self.bracket[:4]
-        w = b - a
-        width, self.width = self.width, w
-        with np.errstate(invalid="ignore"):
-            rise, previous = d_b - d_a, self.rise
-        self.rise = rise
-        closing = w <= 0.25 * width
-        stepping = not np.isfinite(rise) or (closing and rise > 0.5 * previous)
-        # a guarded step whose guards fell on one side of a root they nearly hit: once more,
-        # guards ten times wider
-        retry = not closing and self.guarded == 1 and min(-d_a, d_b) < 0.01 * rise
-        if stepping or not (closing or retry):
-            self.guarded = 0
-            self.smooth = self.smooth_pair() if stepping else None
-            return list(a + w * np.arange(1, SPREAD + 1) / (SPREAD + 1))
-        self.guarded, self.smooth = 2 if retry else 1, None
-        # the inverse interpolants through the bracket's ends and one, then two more points:
-        # the second's root, guarded as far as the two roots differ
-        secant = a - d_a * w / (d_b - d_a)
-        roots = kernels.inverse_roots(*map(float, (a, b, d_a, d_b)), np.array(self.trail, float))
-        roots = [secant] + [x for x in roots if a < x < b]  # (NaN: none)
-        x = roots[-1]
-        error = abs(x - roots[-2]) if len(roots) > 1 else 0.005 * w
-        guard = max(2.0 * error, 0.25 * TOLERANCE_RAD) * (10.0 if retry else 1.0)
-        xs = [x - min(guard, 0.5 * (x - a)), x, x + min(guard, 0.5 * (b - x))]
-        if guard > 0.125 * w or retry:
-            xs.append(0.5 * (a + b))
-        return [x for x in xs if a < x < b]
-
-    def smooth_pair(self) -> int | None:
-        """The pair whose lag is smooth across a stepping bracket, to be interpolated
-        (:meth:`take_iteration`), or None (both sampled)."""
-        a, b, d_a, d_b = self.bracket[:4]
-        ends = self.end_lags
-        if b - a > SINGLE_RAD or ends[0] is None or ends[1] is None:
-            return None
-        if not np.all(np.isfinite(ends[0] + ends[1])):  # a pair off the flanks
-            return None
-        for pair in (0, 1):
-            change = abs(ends[1][pair] - ends[0][pair])
-            if change <= 0.05 * (d_b - d_a) and len(self.samples[pair]) >= 3:
-                return pair
+        k = len(self.xs)
+        values, asked = np.empty((k, 2)), np.zeros((k, 2), bool)
+        for tag in self.asked:
+            values[tag[2], tag[1]] = got[tag]
+            asked[tag[2], tag[1]] = True
+        if self.trail.shape[0] < int(self.counts.max()) + k:  # (room for the step's points)
+            self.grow(k)
+        count = handover_kernels.iteration_step(
+            self.state,
+            np.array(self.xs),
+            values,
+            asked,
+            self.samples,
+            self.counts,
+            self.trail,
+            _LIMITS,
+            self.out,
+        )
+        state = self.state
+        if count:
+            return self.out[:count].tolist()
+        self.done, self.x = True, float(state[_X])
+        if state[_HAS_LAG]:
+            self.lag = float(state[_LAG])
         return None
 
-    def interpolated(self, pair: int, x: float) -> float:
-        """The lag of ``pair`` at ``x``: the parabola through its three nearest samples."""
-        return kernels.nearest_parabola(np.array(self.samples[pair], float), float(x))
+    def grow(self, k: int) -> None:
+        """Room for ``k`` more rows in :attr:`samples` and :attr:`trail`."""
+        rows = 2 * self.trail.shape[0] + k
+        samples, trail = np.empty((2, rows, 2)), np.empty((rows, 2))
+        samples[:, : self.samples.shape[1]] = self.samples
+        trail[: self.trail.shape[0]] = self.trail
+        self.samples, self.trail = samples, trail
+
+    @property
+    def bracket(self) -> list:
+        """``[a, b, d_a, d_b, low_a, low_b]`` the iteration's bracket, D at its ends and the
+        lower of the two pairs' lags there (None at the bracket's first ends); a line
+        contact's iteration: its bracket ``[a, b]``."""
+        if self.flat:
+            return self.flat_bracket
+        s = self.state
+        return [
+            float(s[0]),
+            float(s[1]),
+            float(s[2]),
+            float(s[3]),
+            float(s[4]) if s[6] else None,
+            float(s[5]) if s[7] else None,
+        ]
+
+    @property
+    def smooth(self) -> int | None:
+        """The pair (0 leaving, 1 incoming) whose lag is interpolated, not sampled, in the step
+        being evaluated, or None."""
+        pair = int(self.state[_SMOOTH])
+        return None if pair < 0 else pair
+
+    @property
+    def steps(self) -> int:
+        """The iteration's evaluations so far."""
+        return int(self.state[_STEPS])
 
     def flat_requests(self, x, pitch: float) -> list[Request]:
         """A step of a line contact's iteration (``flat``): both pairs at ``x``, refined from
@@ -364,17 +346,17 @@ class HandOver:
             return None
         lo, hi, d_lo, d_hi = self.lo, self.hi, self.d_lo, self.d_hi
         if self.steps == 0:
-            self.steps, self.d0, x0 = 1, d, self.x
+            self.state[_STEPS], self.d0, x0 = 1.0, d, self.x
             a, b, c = parabola(lo - x0, hi - x0, d_lo, d, d_hi)
             roots = np.roots([a, b, c]) if abs(a) > 0.0 else np.array([-c / b])
             roots = np.real(roots[np.isreal(roots)]) + x0
-            self.bracket = [lo, x0] if d > 0.0 else [x0, hi]
-            good = roots[(roots >= self.bracket[0]) & (roots <= self.bracket[1])]
+            self.flat_bracket = [lo, x0] if d > 0.0 else [x0, hi]
+            good = roots[(roots >= self.flat_bracket[0]) & (roots <= self.flat_bracket[1])]
             return float(good[0]) if good.size else x0
         x0, d0, x1 = self.x0, self.d0, self.x
         if d != d0:
             x2 = x1 - d * (x1 - x0) / (d - d0)
-            if self.bracket[0] <= x2 <= self.bracket[1]:
+            if self.flat_bracket[0] <= x2 <= self.flat_bracket[1]:
                 self.x = float(x2)
         self.done = True
         return None
