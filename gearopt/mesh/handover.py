@@ -84,8 +84,11 @@ SINGLE_RAD = 1e-4
 ROWS = 64
 
 _LIMITS = np.array([TOLERANCE_RAD, ITERATIONS, SPREAD, SINGLE_RAD], float)
-_WIDTH, _RISE, _STEPS, _SMOOTH, _X, _LAG, _HAS_LAG = (
-    STATE.index(name) for name in ("width", "rise", "steps", "smooth", "x", "lag", "has_lag")
+_WIDTH, _RISE, _STEPS, _SMOOTH = (
+    handover_kernels.WIDTH,
+    handover_kernels.RISE,
+    handover_kernels.STEPS,
+    handover_kernels.SMOOTH,
 )
 
 
@@ -286,9 +289,9 @@ class HandOver:
         state = self.state
         if count:
             return self.out[:count].tolist()
-        self.done, self.x = True, float(state[_X])
-        if state[_HAS_LAG]:
-            self.lag = float(state[_LAG])
+        self.done, self.x = True, float(state[handover_kernels.X])
+        if state[handover_kernels.HAS_LAG]:
+            self.lag = float(state[handover_kernels.LAG])
         return None
 
     def grow(self, k: int) -> None:
@@ -306,14 +309,14 @@ class HandOver:
         contact's iteration: its bracket ``[a, b]``."""
         if self.flat:
             return self.flat_bracket
-        s = self.state
+        s, k = self.state, handover_kernels
         return [
-            float(s[0]),
-            float(s[1]),
-            float(s[2]),
-            float(s[3]),
-            float(s[4]) if s[6] else None,
-            float(s[5]) if s[7] else None,
+            float(s[k.A]),
+            float(s[k.B]),
+            float(s[k.D_A]),
+            float(s[k.D_B]),
+            float(s[k.LOW_A]) if s[k.HAS_LOW_A] else None,
+            float(s[k.LOW_B]) if s[k.HAS_LOW_B] else None,
         ]
 
     @property

@@ -48,19 +48,46 @@ STATE = (
     "has_lag",
 )
 
+#: the index of each entry of :data:`STATE`
+(
+    A,
+    B,
+    D_A,
+    D_B,
+    LOW_A,
+    LOW_B,
+    HAS_LOW_A,
+    HAS_LOW_B,
+    END_A0,
+    END_A1,
+    END_B0,
+    END_B1,
+    HAS_END_A,
+    HAS_END_B,
+    WIDTH,
+    RISE,
+    STEPS,
+    GUARDED,
+    SMOOTH,
+    DONE,
+    X,
+    LAG,
+    HAS_LAG,
+) = range(len(STATE))
+
 
 @compiled
 def _smooth_pair(state, counts, single):
     """:meth:`gearopt.mesh.handover.HandOver.smooth_pair` on the state: the pair (0, 1) whose
     lag is smooth across the bracket, or -1."""
-    a, b, d_a, d_b = state[0], state[1], state[2], state[3]
-    if b - a > single or state[12] == 0.0 or state[13] == 0.0:
+    a, b, d_a, d_b = state[A], state[B], state[D_A], state[D_B]
+    if b - a > single or state[HAS_END_A] == 0.0 or state[HAS_END_B] == 0.0:
         return -1
-    for k in range(8, 12):
+    for k in range(END_A0, END_B1 + 1):
         if not math.isfinite(state[k]):
             return -1
     for pair in range(2):
-        change = abs(state[10 + pair] - state[8 + pair])
+        change = abs(state[END_B0 + pair] - state[END_A0 + pair])
         if change <= 0.05 * (d_b - d_a) and counts[pair] >= 3:
             return pair
     return -1
@@ -100,15 +127,15 @@ def iteration_step(state, xs, got, asked, samples, counts, trail, limits, out):
         How many next points (0: settled, at ``state`` x with its lag where ``has_lag``).
     """
     tolerance, iterations, spread, single = limits[0], limits[1], limits[2], limits[3]
-    state[16] += 1.0
-    a, b, d_a, d_b = state[0], state[1], state[2], state[3]
+    state[STEPS] += 1.0
+    a, b, d_a, d_b = state[A], state[B], state[D_A], state[D_B]
     k = xs.shape[0]
     # the points: the bracket's ends and the step's points inside it with D not NaN
     px, pd, pl = np.empty(k + 2), np.empty(k + 2), np.empty(k + 2)
     pe0, pe1 = np.empty(k + 2), np.empty(k + 2)
     phl, phe = np.empty(k + 2), np.empty(k + 2)
-    px[0], pd[0], pl[0], phl[0] = a, d_a, state[4], state[6]
-    pe0[0], pe1[0], phe[0] = state[8], state[9], state[12]
+    px[0], pd[0], pl[0], phl[0] = a, d_a, state[LOW_A], state[HAS_LOW_A]
+    pe0[0], pe1[0], phe[0] = state[END_A0], state[END_A1], state[HAS_END_A]
     m = 1
     for j in range(k):
         x = xs[j]
@@ -140,48 +167,53 @@ def iteration_step(state, xs, got, asked, samples, counts, trail, limits, out):
             phl[m] = 1.0
             pe0[m], pe1[m], phe[m] = g0, g1, 1.0
             m += 1
-    px[m], pd[m], pl[m], phl[m] = b, d_b, state[5], state[7]
-    pe0[m], pe1[m], phe[m] = state[10], state[11], state[13]
+    px[m], pd[m], pl[m], phl[m] = b, d_b, state[LOW_B], state[HAS_LOW_B]
+    pe0[m], pe1[m], phe[m] = state[END_B0], state[END_B1], state[HAS_END_B]
     m += 1
     for i in range(m - 1):
         d0, d1 = pd[i], pd[i + 1]
         if d0 <= 0.0 < d1 or d1 == 0.0:
-            state[0], state[1], state[2], state[3] = px[i], px[i + 1], d0, d1
-            state[4], state[5], state[6], state[7] = pl[i], pl[i + 1], phl[i], phl[i + 1]
-            state[8], state[9], state[12] = pe0[i], pe1[i], phe[i]
-            state[10], state[11], state[13] = pe0[i + 1], pe1[i + 1], phe[i + 1]
+            state[A], state[B], state[D_A], state[D_B] = px[i], px[i + 1], d0, d1
+            state[LOW_A], state[LOW_B], state[HAS_LOW_A], state[HAS_LOW_B] = (
+                pl[i],
+                pl[i + 1],
+                phl[i],
+                phl[i + 1],
+            )
+            state[END_A0], state[END_A1], state[HAS_END_A] = pe0[i], pe1[i], phe[i]
+            state[END_B0], state[END_B1], state[HAS_END_B] = pe0[i + 1], pe1[i + 1], phe[i + 1]
             break
-    a, b, d_a, d_b = state[0], state[1], state[2], state[3]
+    a, b, d_a, d_b = state[A], state[B], state[D_A], state[D_B]
     if d_b == 0.0:
-        state[19], state[20] = 1.0, b
-        state[21], state[22] = state[5], state[7]
+        state[DONE], state[X] = 1.0, b
+        state[LAG], state[HAS_LAG] = state[LOW_B], state[HAS_LOW_B]
         return 0
-    if b - a <= tolerance or state[16] >= iterations:
-        state[19], state[20] = 1.0, 0.5 * (a + b)
-        if b - a <= tolerance and state[6] != 0.0 and state[7] != 0.0:
-            low_a, low_b = state[4], state[5]
-            state[21], state[22] = (low_b if low_b > low_a else low_a), 1.0  # Python's max
+    if b - a <= tolerance or state[STEPS] >= iterations:
+        state[DONE], state[X] = 1.0, 0.5 * (a + b)
+        if b - a <= tolerance and state[HAS_LOW_A] != 0.0 and state[HAS_LOW_B] != 0.0:
+            low_a, low_b = state[LOW_A], state[LOW_B]
+            state[LAG], state[HAS_LAG] = (low_b if low_b > low_a else low_a), 1.0  # Python's max
         return 0
     # the next points (HandOver.next_points)
     w = b - a
-    width = state[14]
-    state[14] = w
+    width = state[WIDTH]
+    state[WIDTH] = w
     rise = d_b - d_a
-    previous = state[15]
-    state[15] = rise
+    previous = state[RISE]
+    state[RISE] = rise
     closing = w <= 0.25 * width
     stepping = not math.isfinite(rise) or (closing and rise > 0.5 * previous)
     least = d_b if d_b < -d_a else -d_a
-    retry = not closing and state[17] == 1.0 and least < 0.01 * rise
+    retry = not closing and state[GUARDED] == 1.0 and least < 0.01 * rise
     if stepping or not (closing or retry):
-        state[17] = 0.0
-        state[18] = _smooth_pair(state, counts, single) if stepping else -1.0
+        state[GUARDED] = 0.0
+        state[SMOOTH] = _smooth_pair(state, counts, single) if stepping else -1.0
         n = int(spread)
         for j in range(n):
             out[j] = a + w * float(j + 1) / float(n + 1)
         return n
-    state[17] = 2.0 if retry else 1.0
-    state[18] = -1.0
+    state[GUARDED] = 2.0 if retry else 1.0
+    state[SMOOTH] = -1.0
     secant = a - d_a * w / (d_b - d_a)
     r1, r2 = inverse_roots(a, b, d_a, d_b, trail[: counts[2]])
     x = secant
@@ -220,7 +252,7 @@ def warm() -> None:
     if not ENABLED:
         return
     state = np.zeros(len(STATE))
-    state[1], state[2], state[3] = 1.0, -1.0, 1.0
+    state[B], state[D_A], state[D_B] = 1.0, -1.0, 1.0
     samples, trail = np.zeros((2, 4, 2)), np.zeros((4, 2))
     iteration_step(
         state,
