@@ -46,6 +46,7 @@ __all__ = [
     "EnvelopeSurface",
     "solve_envelope",
     "flank_map",
+    "extended_geometry",
     "require_flank",
 ]
 
@@ -321,12 +322,11 @@ def solve_envelope(
     j0 = int(np.argmin(np.abs(h)))
     det = det_signs(jac)  # (the determinants' signs: all the solver reads of them)
     good = converged & (det == sign0[..., None])
-    toward = np.where(np.arange(n_p) > j0, -1, np.where(np.arange(n_p) < j0, 1, 0))
-    neighbour = np.broadcast_to(np.arange(n_p) + toward, shape)
-    retry = ~converged & np.take_along_axis(good, neighbour, axis=2)
+    neighbour = np.arange(n_p) + np.sign(j0 - np.arange(n_p))  # each node's, per column
+    retry = ~converged & good[..., neighbour]
     if retry.any():
         fk, fi, pj = np.nonzero(retry)
-        nj = neighbour[fk, fi, pj]
+        nj = neighbour[pj]
         dq = _predictor(family, jac[fk, fi, nj], sg, cg)
         qr, fr, jr, ok, it = _newton(
             family,
@@ -344,9 +344,9 @@ def solve_envelope(
     unfolded = det == sign0[..., None]
     good = converged & unfolded
     # on the sheet: connected to the pitch row through good nodes of the column
-    up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
-    down = np.flip(np.cumprod(np.flip(good[..., : j0 + 1], axis=-1), axis=-1), axis=-1)
-    connected = np.concatenate([down[..., :j0].astype(bool), up], axis=-1)
+    up = np.logical_and.accumulate(good[..., j0:], axis=-1)
+    down = np.logical_and.accumulate(good[..., j0::-1], axis=-1)[..., :0:-1]
+    connected = np.concatenate([down, up], axis=-1)
     # the nodes: trimmed fold_trim_mm above the first bad node below the pitch row, column by
     # column
     first_bad = np.where(~connected & (h < h[j0]), height, -np.inf).max(axis=-1)
@@ -694,16 +694,35 @@ def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
 def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
     """Replace each column's values below its lowest ``mask`` node by the quadratic through
     that node and the two above it, so that a spline through all nodes stays smooth at the edge
-    of the generated region (the envelope's values past the fold are a different sheet)."""
-    n_f, n_p = mask.shape
+    of the generated region (the envelope's values past the fold are a different sheet); the
+    columns along the last axis."""
+    n_p = mask.shape[-1]
     j = np.arange(n_p)
-    low = np.where(mask.any(axis=1), np.argmax(mask, axis=1), n_p - 3)
-    low = np.minimum(low, n_p - 3)[:, None]
-    rows = np.arange(n_f)[:, None]
-    p0, p1, p2 = values[rows, low], values[rows, low + 1], values[rows, low + 2]
-    t = (j[None, :] - low).astype(float)
+    low = np.where(mask.any(axis=-1), np.argmax(mask, axis=-1), n_p - 3)
+    low = np.minimum(low, n_p - 3)[..., None]
+    p0, p1, p2 = (np.take_along_axis(values, low + d, axis=-1) for d in range(3))
+    t = (j - low).astype(float)
     quadratic = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
-    return np.where(j[None, :] < low, quadratic, values)
+    return np.where(j < low, quadratic, values)
+
+
+def extended_geometry(family: GeneratingFamily, solution: EnvelopeSolution, indices=None):
+    """``(polar, point, normal)`` ``(m, n_f, n_p[, 3])`` of flanks ``indices`` (None: all) of a
+    solution as generated, for :func:`flank_map`, in one batch: the polar angle unwrapped along
+    the face and extended below the sheet (:func:`_extend_below`), the points off the flank
+    moved onto that extended surface (finite, smooth for the spline)."""
+    k = np.arange(solution.q.shape[0]) if indices is None else np.asarray(indices)
+    geo = family.geometry(solution.q[k], k[:, None, None])
+    point, normal = geo["point"], geo["normal"]
+    polar = np.unwrap(np.arctan2(point[..., 1], point[..., 0]), axis=-2)
+    polar = _extend_below(polar, solution.sheet[k])
+    radius = np.hypot(point[..., 0], point[..., 1])
+    point = np.where(
+        solution.mask[k][..., None],
+        point,
+        np.stack([radius * np.cos(polar), radius * np.sin(polar), point[..., 2]], axis=-1),
+    )
+    return polar, point, normal
 
 
 def require_flank(solution: EnvelopeSolution, index: int, *, member: str, flank: str) -> None:
@@ -727,24 +746,24 @@ def flank_map(
     turn_rad: float = 0.0,
     notes: tuple[str, ...] = (),
     tooth: int = 0,
+    geometry: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> FlankMap:
     """FlankMap of flank ``index`` of a solution: right-hand as generated, turned by
     ``turn_rad`` about the member axis, then mirrored if ``hand`` is left (as
     :meth:`FlankMap.rotated` and :meth:`FlankMap.mirrored` would, the map made once);
-    ``tooth``: the index of the tooth it is on."""
-    q = solution.q[index]
-    mask, sheet = solution.mask[index], solution.sheet[index]
-    geo = family.geometry(q, np.full(q.shape[:-1], index))
-    point, normal = geo["point"], geo["normal"]
-    polar = np.unwrap(np.arctan2(point[..., 1], point[..., 0]), axis=0)
-    polar = _extend_below(polar, sheet)
-    # nodes off the generated flank: the extended surface (finite, smooth for the spline)
-    radius = np.hypot(point[..., 0], point[..., 1])
-    point = np.where(
-        mask[..., None],
-        point,
-        np.stack([radius * np.cos(polar), radius * np.sin(polar), point[..., 2]], axis=-1),
-    )
+    ``tooth``: the index of the tooth it is on. ``geometry``: :func:`extended_geometry` of
+    the solution when the caller has it (made once for all flanks), else made here."""
+    q, mask = solution.q[index], solution.mask[index]
+    found = geometry or extended_geometry(family, solution, (index,))
+    polar, point, normal = (a[0 if geometry is None else index] for a in found)
+    # the surface's frame: EnvelopeSurface.transformed's arithmetic, the surface made once
+    sign, offset_rad = 1.0, 0.0
+    if turn_rad:
+        polar, point, normal = turned(polar, point, normal, turn_rad)
+        sign, offset_rad = 1.0 * sign, 1.0 * offset_rad + turn_rad
+    if hand == "left":
+        polar, point, normal = mirror_image(polar, point, normal)
+        sign, offset_rad = -1.0 * sign, -1.0 * offset_rad + 0.0
     surface = EnvelopeSurface(
         family=family,
         index=index,
@@ -753,14 +772,10 @@ def flank_map(
         profile_mm=solution.profile_mm,
         q=q,
         mask=mask,
+        sign=sign,
+        offset_rad=offset_rad,
         taper=solution.taper,
     )
-    if turn_rad:
-        polar, point, normal = turned(polar, point, normal, turn_rad)
-        surface = surface.transformed(offset_rad=turn_rad)
-    if hand == "left":
-        polar, point, normal = mirror_image(polar, point, normal)
-        surface = surface.transformed(sign=-1.0)
     return FlankMap(
         member=member,
         flank=flank,
