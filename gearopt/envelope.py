@@ -36,8 +36,10 @@ from gearopt.flank import (
     FlankGrid,
     FlankMap,
     axial_plane,
+    extended_below,
     mirror_image,
     turned,
+    unwrapped_along_face,
 )
 
 __all__ = [
@@ -215,8 +217,9 @@ def _predictor(family, jac, sg, cg):
 
     The targets move by dL/dh = -sin(gamma), dR/dh = cos(gamma); J dq/dh = their change / A.
     """
-    rhs = np.array([-sg, cg, 0.0]) / family.scale_mm
-    return np.linalg.solve(jac, np.broadcast_to(rhs, jac.shape[:-1])[..., None])[..., 0]
+    rhs = np.empty(jac.shape[:-1])  # contiguous: numpy's solve copies a broadcast one slowly
+    rhs[...] = np.array([-sg, cg, 0.0]) / family.scale_mm
+    return np.linalg.solve(jac, rhs[..., None])[..., 0]
 
 
 def solve_envelope(
@@ -691,31 +694,16 @@ def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
     return out
 
 
-def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
-    """Replace each column's values below its lowest ``mask`` node by the quadratic through
-    that node and the two above it, so that a spline through all nodes stays smooth at the edge
-    of the generated region (the envelope's values past the fold are a different sheet); the
-    columns along the last axis."""
-    n_p = mask.shape[-1]
-    j = np.arange(n_p)
-    low = np.where(mask.any(axis=-1), np.argmax(mask, axis=-1), n_p - 3)
-    low = np.minimum(low, n_p - 3)[..., None]
-    p0, p1, p2 = (np.take_along_axis(values, low + d, axis=-1) for d in range(3))
-    t = (j - low).astype(float)
-    quadratic = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
-    return np.where(j < low, quadratic, values)
-
-
 def extended_geometry(family: GeneratingFamily, solution: EnvelopeSolution, indices=None):
     """``(polar, point, normal)`` ``(m, n_f, n_p[, 3])`` of flanks ``indices`` (None: all) of a
     solution as generated, for :func:`flank_map`, in one batch: the polar angle unwrapped along
-    the face and extended below the sheet (:func:`_extend_below`), the points off the flank
-    moved onto that extended surface (finite, smooth for the spline)."""
+    the face and extended below the sheet (:func:`gearopt.flank.extended_below`), the points
+    off the flank moved onto that extended surface (finite, smooth for the spline)."""
     k = np.arange(solution.q.shape[0]) if indices is None else np.asarray(indices)
     geo = family.geometry(solution.q[k], k[:, None, None])
     point, normal = geo["point"], geo["normal"]
-    polar = np.unwrap(np.arctan2(point[..., 1], point[..., 0]), axis=-2)
-    polar = _extend_below(polar, solution.sheet[k])
+    polar = unwrapped_along_face(np.arctan2(point[..., 1], point[..., 0]))
+    polar = extended_below(polar, solution.sheet[k])
     radius = np.hypot(point[..., 0], point[..., 1])
     point = np.where(
         solution.mask[k][..., None],
