@@ -704,12 +704,9 @@ def extended_geometry(family: GeneratingFamily, solution: EnvelopeSolution, indi
     point, normal = geo["point"], geo["normal"]
     polar = unwrapped_along_face(np.arctan2(point[..., 1], point[..., 0]))
     polar = extended_below(polar, solution.sheet[k])
-    radius = np.hypot(point[..., 0], point[..., 1])
-    point = np.where(
-        solution.mask[k][..., None],
-        point,
-        np.stack([radius * np.cos(polar), radius * np.sin(polar), point[..., 2]], axis=-1),
-    )
+    point, off = np.array(point, float), ~solution.mask[k]
+    radius = np.hypot(point[..., 0][off], point[..., 1][off])
+    point[off, 0], point[off, 1] = radius * np.cos(polar[off]), radius * np.sin(polar[off])
     return polar, point, normal
 
 

@@ -86,14 +86,17 @@ def extended_below(values: NDArray, mask: NDArray) -> NDArray:
     so that a spline through all nodes stays smooth at the edge of the generated region (the
     envelope's values past the fold are a different sheet)."""
     n_p = mask.shape[-1]
-    j = np.arange(n_p)
     low = np.where(mask.any(axis=-1), np.argmax(mask, axis=-1), n_p - 3)
-    low = np.minimum(low, n_p - 3)[..., None]
-    at = (np.arange(low.size) * n_p)[:, None] + low.reshape(-1, 1) + np.arange(3)
-    p0, p1, p2 = np.moveaxis(values.reshape(-1)[at], -1, 0).reshape(3, *low.shape)
-    t = (j - low).astype(float)
-    quadratic = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
-    return np.where(j < low, quadratic, values)
+    low = np.minimum(low, n_p - 3).reshape(-1)
+    out = np.array(values, float)
+    flat = out.reshape(-1)  # (a view: out is a new contiguous array)
+    # the nodes below (column c, node j): the quadratic's arithmetic there alone
+    c, j = np.nonzero(np.arange(n_p) < low[:, None])
+    at = c * n_p + low[c]
+    p0, p1, p2 = flat[at], flat[at + 1], flat[at + 2]
+    t = (j - low[c]).astype(float)
+    flat[c * n_p + j] = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
+    return out
 
 
 def unwrapped_along_face(p: NDArray) -> NDArray:
