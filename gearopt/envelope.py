@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.determinants import det_signs
+from gearopt.envelope_nodes import grid_nodes
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
@@ -263,21 +264,12 @@ def solve_envelope(
     SettingsError
         When Newton fails on the pitch line (the settings generate no flank there).
     """
-    s = np.linspace(*cone_distances_mm, grid.n_face)
-    h = np.linspace(*heights_mm, grid.n_profile)
-    k, (n_f, n_p) = family.n_flanks, grid.shape
-    cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
-    flank = np.broadcast_to(np.arange(k)[:, None, None], (k, n_f, n_p))
-    # the nodes' heights above the pitch cone (n_f, n_p): h in every column for uniform depth
-    if taper is None:
-        height = np.broadcast_to(h[None, :], (n_f, n_p))
-    else:
-        height = taper.height_mm(s[:, None], h[None, :])
-    big_l = np.broadcast_to(s[:, None] * cg - height * sg, (k, n_f, n_p))
-    big_r = np.broadcast_to(s[:, None] * sg + height * cg, (k, n_f, n_p))
+    nodes = grid_nodes(cone_distances_mm, heights_mm, pitch_angle_rad, grid, taper, family.n_flanks)
+    s, h, height, flank = nodes.face_mm, nodes.profile_mm, nodes.height_mm, nodes.flank
+    big_l, big_r, row_l, row_r = nodes.big_l, nodes.big_r, nodes.row_l, nodes.row_r
+    k, (n_f, n_p), (cg, sg) = family.n_flanks, grid.shape, nodes.cos_sin
     # the pitch line (h = 0) from the model's start there (often exact: no iteration)
-    row_l, row_r = np.tile(s * cg, k), np.tile(s * sg, k)
-    row_flank = flank[:, :, 0].ravel()
+    row_flank = nodes.row_flank.copy()
     q0, _, jac0, ok, iterations = _newton(
         family,
         np.array(family.pitch_row(s), float).reshape(-1, 3),
@@ -322,10 +314,10 @@ def solve_envelope(
     converged = converged.reshape(shape)
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
-    j0 = int(np.argmin(np.abs(h)))
+    j0 = nodes.pitch_row
     det = det_signs(jac)  # (the determinants' signs: all the solver reads of them)
     good = converged & (det == sign0[..., None])
-    neighbour = np.arange(n_p) + np.sign(j0 - np.arange(n_p))  # each node's, per column
+    neighbour = nodes.neighbour
     retry = ~converged & good[..., neighbour]
     if retry.any():
         fk, fi, pj = np.nonzero(retry)
@@ -370,8 +362,8 @@ def solve_envelope(
         (s, (cg, sg), taper, tol),
     )
     return EnvelopeSolution(
-        face_mm=s,
-        profile_mm=h,
+        face_mm=s.copy(),  # (writable, not the shared grid's)
+        profile_mm=h.copy(),
         pitch_angle_rad=pitch_angle_rad,
         q=q,
         residual=res,
