@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.determinants import det_signs
-from gearopt.envelope_nodes import grid_nodes
+from gearopt.envelope_nodes import grid_nodes, sheet_nodes
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
@@ -314,7 +314,6 @@ def solve_envelope(
     converged = converged.reshape(shape)
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
-    j0 = nodes.pitch_row
     det = det_signs(jac)  # (the determinants' signs: all the solver reads of them)
     good = converged & (det == sign0[..., None])
     neighbour = nodes.neighbour
@@ -336,20 +335,12 @@ def solve_envelope(
         sel = (fk[ok], fi[ok], pj[ok])
         q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
         det[sel] = det_signs(jr[ok])
-    unfolded = det == sign0[..., None]
-    good = converged & unfolded
-    # on the sheet: connected to the pitch row through good nodes of the column
-    up = np.logical_and.accumulate(good[..., j0:], axis=-1)
-    down = np.logical_and.accumulate(good[..., j0::-1], axis=-1)[..., :0:-1]
-    connected = np.concatenate([down, up], axis=-1)
-    # the nodes: trimmed fold_trim_mm above the first bad node below the pitch row, column by
-    # column
-    first_bad = np.where(~connected & (h < h[j0]), height, -np.inf).max(axis=-1)
-    margin = np.where(np.isfinite(first_bad), fold_trim_mm, 0.0)
-    trimmed = height >= (first_bad + margin)[..., None]
+    # on the sheet: connected to the pitch row through good nodes of the column; trimmed
+    # fold_trim_mm above the first bad node below the pitch row, column by column
+    unfolded, connected, trimmed, top = sheet_nodes(converged, det, sign0, nodes, fold_trim_mm)
     within = np.asarray(family.within_tool(q, flank), bool)
     # the generated boundary, continuous: the fold solved, trimmed by fold_trim_mm
-    fold = _fold_profiles(family, q, connected, sign0, s, h, (cg, sg), j0, taper, tol)
+    fold = _fold_profiles(family, q, top, sign0, s, h, (cg, sg), taper, tol)
     limit = fold + fold_trim_mm  # -inf without a fold
     above = h[None, None, :] >= limit[..., None]
     lowest = _lowest_profiles(
@@ -415,18 +406,17 @@ def _bisected(
     return up
 
 
-def _fold_profiles(family, q, connected, sign0, s, h, cos_sin, j0, taper, tol) -> NDArray:
+def _fold_profiles(family, q, top, sign0, s, h, cos_sin, taper, tol) -> NDArray:
     """``(k, n_f)`` the profile coordinate of each column's fold: the lowest point of the
     envelope's sheet through the pitch row, between the first node below the pitch row off
     it (folded, or Newton failed) and the node above it (:func:`_bisected`: Newton converges
-    with the meshing Jacobian's sign unchanged); -inf where the column has no such node."""
-    k, n_f, n_p = connected.shape
-    below = ~connected & (np.arange(n_p) < j0)
-    fold = np.full((k, n_f), -np.inf)
-    fk, fi = np.nonzero(below.any(axis=-1))
+    with the meshing Jacobian's sign unchanged); -inf where the column has no such node
+    (``top`` ``(k, n_f)``: the highest node below the pitch row off the sheet, -1 none)."""
+    fold = np.full(top.shape, -np.inf)
+    fk, fi = np.nonzero(top >= 0)
     if not fk.size:
         return fold
-    jb = n_p - 1 - np.argmax(below[fk, fi, ::-1], axis=-1)  # the highest node off the sheet
+    jb = top[fk, fi]
     sheet = sign0[fk, fi]
 
     def on_sheet(qm, jac, flank):
