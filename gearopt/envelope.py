@@ -310,31 +310,39 @@ def solve_envelope(
     )
     iterations = max(iterations, it)
     shape = (k, n_f, n_p)
-    q, res, jac = q.reshape(*shape, 3), res.reshape(*shape, 3), jac.reshape(*shape, 3, 3)
-    converged = converged.reshape(shape)
+    # contiguous (the repair writes through flat views of them)
+    q, res = (
+        np.ascontiguousarray(q.reshape(*shape, 3)),
+        np.ascontiguousarray(res.reshape(*shape, 3)),
+    )
+    jac, converged = np.ascontiguousarray(jac.reshape(*shape, 3, 3)), converged.reshape(shape)
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
     det = det_signs(jac)  # (the determinants' signs: all the solver reads of them)
     good = converged & (det == sign0[..., None])
     neighbour = nodes.neighbour
     retry = ~converged & good[..., neighbour]
-    if retry.any():
-        fk, fi, pj = np.nonzero(retry)
-        nj = neighbour[pj]
-        dq = _predictor(family, jac[fk, fi, nj], sg, cg)
+    if retry.any():  # (flat node indices into the contiguous arrays, their neighbours')
+        node = np.flatnonzero(retry)
+        fk, column = np.divmod(node, n_f * n_p)
+        pj = node % n_p
+        step = neighbour[pj] - pj
+        dq = _predictor(family, jac.reshape(-1, 3, 3)[node + step], sg, cg)
+        hn = height.reshape(-1)
         qr, fr, jr, ok, it = _newton(
             family,
-            q[fk, fi, nj] + (height[fi, pj] - height[fi, nj])[:, None] * dq,
+            q.reshape(-1, 3)[node + step] + (hn[column] - hn[column + step])[:, None] * dq,
             fk,
-            big_l[fk, fi, pj],
-            big_r[fk, fi, pj],
+            big_l.reshape(-1)[node],
+            big_r.reshape(-1)[node],
             tol=tol,
             max_iter=3,  # from a converged neighbour: converges at once, or lies past the fold
         )
         iterations = max(iterations, it)
-        sel = (fk[ok], fi[ok], pj[ok])
-        q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
-        det[sel] = det_signs(jr[ok])
+        sel = node[ok]
+        q.reshape(-1, 3)[sel], res.reshape(-1, 3)[sel] = qr[ok], fr[ok]
+        jac.reshape(-1, 3, 3)[sel], converged.reshape(-1)[sel] = jr[ok], True
+        det.reshape(-1)[sel] = det_signs(jr[ok])
     # on the sheet: connected to the pitch row through good nodes of the column; trimmed
     # fold_trim_mm above the first bad node below the pitch row, column by column
     unfolded, connected, trimmed, top = sheet_nodes(converged, det, sign0, nodes, fold_trim_mm)
@@ -681,8 +689,9 @@ def extended_geometry(family: GeneratingFamily, solution: EnvelopeSolution, indi
     solution as generated, for :func:`flank_map`, in one batch: the polar angle unwrapped along
     the face and extended below the sheet (:func:`gearopt.flank.extended_below`), the points
     off the flank moved onto that extended surface (finite, smooth for the spline)."""
-    k = np.arange(solution.q.shape[0]) if indices is None else np.asarray(indices)
-    geo = family.geometry(solution.q[k], k[:, None, None])
+    k = slice(None) if indices is None else np.asarray(indices)
+    flank = np.arange(solution.q.shape[0])[k]
+    geo = family.geometry(solution.q[k], flank[:, None, None])
     point, normal = geo["point"], geo["normal"]
     polar = unwrapped_along_face(np.arctan2(point[..., 1], point[..., 0]))
     polar = extended_below(polar, solution.sheet[k])

@@ -141,6 +141,10 @@ class FaceHobbingFamily:
     def _table(self) -> NDArray:
         return kernels.system_table(self.blades)
 
+    @cached_property
+    def _limit(self) -> NDArray:
+        return np.asarray(self.max_step, dtype=float)
+
     def _compiled(self, q) -> bool:
         """Whether the compiled kernels evaluate ``q`` (real parameters; the numpy functions of
         :mod:`~gearopt_plugins.face_hobbing.family` take complex steps and run without numba)."""
@@ -187,7 +191,7 @@ class FaceHobbingFamily:
             np.ascontiguousarray(big_l, dtype=float),
             np.ascontiguousarray(big_r, dtype=float),
             float(self.scale_mm),
-            np.asarray(self.max_step, dtype=float),
+            self._limit,
             float(tol),
             int(max_iter),
             int(give_up[0]),
@@ -217,7 +221,7 @@ class FaceHobbingFamily:
             np.ascontiguousarray(upper, dtype=float),
             np.asarray(cos_sin, dtype=float),
             float(self.scale_mm),
-            np.asarray(self.max_step, dtype=float),
+            self._limit,
             float(tol),
             int(bisections),
             sheet is not None,
