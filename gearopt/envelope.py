@@ -30,14 +30,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.determinants import det_signs
+from gearopt.envelope_nodes import grid_nodes, sheet_nodes
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
     FlankGrid,
     FlankMap,
     axial_plane,
+    extended_below,
     mirror_image,
     turned,
+    unwrapped_along_face,
 )
 
 __all__ = [
@@ -46,6 +49,7 @@ __all__ = [
     "EnvelopeSurface",
     "solve_envelope",
     "flank_map",
+    "extended_geometry",
     "require_flank",
 ]
 
@@ -214,8 +218,9 @@ def _predictor(family, jac, sg, cg):
 
     The targets move by dL/dh = -sin(gamma), dR/dh = cos(gamma); J dq/dh = their change / A.
     """
-    rhs = np.array([-sg, cg, 0.0]) / family.scale_mm
-    return np.linalg.solve(jac, np.broadcast_to(rhs, jac.shape[:-1])[..., None])[..., 0]
+    rhs = np.empty(jac.shape[:-1])  # contiguous: numpy's solve copies a broadcast one slowly
+    rhs[...] = np.array([-sg, cg, 0.0]) / family.scale_mm
+    return np.linalg.solve(jac, rhs[..., None])[..., 0]
 
 
 def solve_envelope(
@@ -259,21 +264,12 @@ def solve_envelope(
     SettingsError
         When Newton fails on the pitch line (the settings generate no flank there).
     """
-    s = np.linspace(*cone_distances_mm, grid.n_face)
-    h = np.linspace(*heights_mm, grid.n_profile)
-    k, (n_f, n_p) = family.n_flanks, grid.shape
-    cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
-    flank = np.broadcast_to(np.arange(k)[:, None, None], (k, n_f, n_p))
-    # the nodes' heights above the pitch cone (n_f, n_p): h in every column for uniform depth
-    if taper is None:
-        height = np.broadcast_to(h[None, :], (n_f, n_p))
-    else:
-        height = taper.height_mm(s[:, None], h[None, :])
-    big_l = np.broadcast_to(s[:, None] * cg - height * sg, (k, n_f, n_p))
-    big_r = np.broadcast_to(s[:, None] * sg + height * cg, (k, n_f, n_p))
+    nodes = grid_nodes(cone_distances_mm, heights_mm, pitch_angle_rad, grid, taper, family.n_flanks)
+    s, h, height, flank = nodes.face_mm, nodes.profile_mm, nodes.height_mm, nodes.flank
+    big_l, big_r, row_l, row_r = nodes.big_l, nodes.big_r, nodes.row_l, nodes.row_r
+    k, (n_f, n_p), (cg, sg) = family.n_flanks, grid.shape, nodes.cos_sin
     # the pitch line (h = 0) from the model's start there (often exact: no iteration)
-    row_l, row_r = np.tile(s * cg, k), np.tile(s * sg, k)
-    row_flank = flank[:, :, 0].ravel()
+    row_flank = nodes.row_flank.copy()
     q0, _, jac0, ok, iterations = _newton(
         family,
         np.array(family.pitch_row(s), float).reshape(-1, 3),
@@ -314,47 +310,45 @@ def solve_envelope(
     )
     iterations = max(iterations, it)
     shape = (k, n_f, n_p)
-    q, res, jac = q.reshape(*shape, 3), res.reshape(*shape, 3), jac.reshape(*shape, 3, 3)
-    converged = converged.reshape(shape)
+    # contiguous (the repair writes through flat views of them)
+    q, res = (
+        np.ascontiguousarray(q.reshape(*shape, 3)),
+        np.ascontiguousarray(res.reshape(*shape, 3)),
+    )
+    jac, converged = np.ascontiguousarray(jac.reshape(*shape, 3, 3)), converged.reshape(shape)
     # repair: a node that failed next to a good node (toward the pitch row) restarts from it;
     # one pass recovers what the predictor missed (past the fold, a second finds nothing)
-    j0 = int(np.argmin(np.abs(h)))
     det = det_signs(jac)  # (the determinants' signs: all the solver reads of them)
     good = converged & (det == sign0[..., None])
-    toward = np.where(np.arange(n_p) > j0, -1, np.where(np.arange(n_p) < j0, 1, 0))
-    neighbour = np.broadcast_to(np.arange(n_p) + toward, shape)
-    retry = ~converged & np.take_along_axis(good, neighbour, axis=2)
-    if retry.any():
-        fk, fi, pj = np.nonzero(retry)
-        nj = neighbour[fk, fi, pj]
-        dq = _predictor(family, jac[fk, fi, nj], sg, cg)
+    neighbour = nodes.neighbour
+    retry = ~converged & good[..., neighbour]
+    if retry.any():  # (flat node indices into the contiguous arrays, their neighbours')
+        node = np.flatnonzero(retry)
+        fk, column = np.divmod(node, n_f * n_p)
+        pj = node % n_p
+        step = neighbour[pj] - pj
+        dq = _predictor(family, jac.reshape(-1, 3, 3)[node + step], sg, cg)
+        hn = height.reshape(-1)
         qr, fr, jr, ok, it = _newton(
             family,
-            q[fk, fi, nj] + (height[fi, pj] - height[fi, nj])[:, None] * dq,
+            q.reshape(-1, 3)[node + step] + (hn[column] - hn[column + step])[:, None] * dq,
             fk,
-            big_l[fk, fi, pj],
-            big_r[fk, fi, pj],
+            big_l.reshape(-1)[node],
+            big_r.reshape(-1)[node],
             tol=tol,
             max_iter=3,  # from a converged neighbour: converges at once, or lies past the fold
         )
         iterations = max(iterations, it)
-        sel = (fk[ok], fi[ok], pj[ok])
-        q[sel], res[sel], jac[sel], converged[sel] = qr[ok], fr[ok], jr[ok], True
-        det[sel] = det_signs(jr[ok])
-    unfolded = det == sign0[..., None]
-    good = converged & unfolded
-    # on the sheet: connected to the pitch row through good nodes of the column
-    up = np.cumprod(good[..., j0:], axis=-1).astype(bool)
-    down = np.flip(np.cumprod(np.flip(good[..., : j0 + 1], axis=-1), axis=-1), axis=-1)
-    connected = np.concatenate([down[..., :j0].astype(bool), up], axis=-1)
-    # the nodes: trimmed fold_trim_mm above the first bad node below the pitch row, column by
-    # column
-    first_bad = np.where(~connected & (h < h[j0]), height, -np.inf).max(axis=-1)
-    margin = np.where(np.isfinite(first_bad), fold_trim_mm, 0.0)
-    trimmed = height >= (first_bad + margin)[..., None]
+        sel = node[ok]
+        q.reshape(-1, 3)[sel], res.reshape(-1, 3)[sel] = qr[ok], fr[ok]
+        jac.reshape(-1, 3, 3)[sel], converged.reshape(-1)[sel] = jr[ok], True
+        det.reshape(-1)[sel] = det_signs(jr[ok])
+    # on the sheet: connected to the pitch row through good nodes of the column; trimmed
+    # fold_trim_mm above the first bad node below the pitch row, column by column
+    unfolded, connected, trimmed, top = sheet_nodes(converged, det, sign0, nodes, fold_trim_mm)
     within = np.asarray(family.within_tool(q, flank), bool)
     # the generated boundary, continuous: the fold solved, trimmed by fold_trim_mm
-    fold = _fold_profiles(family, q, connected, sign0, s, h, (cg, sg), j0, taper, tol)
+    fold = _fold_profiles(family, q, top, sign0, s, h, (cg, sg), taper, tol)
     limit = fold + fold_trim_mm  # -inf without a fold
     above = h[None, None, :] >= limit[..., None]
     lowest = _lowest_profiles(
@@ -367,8 +361,8 @@ def solve_envelope(
         (s, (cg, sg), taper, tol),
     )
     return EnvelopeSolution(
-        face_mm=s,
-        profile_mm=h,
+        face_mm=s.copy(),  # (writable, not the shared grid's)
+        profile_mm=h.copy(),
         pitch_angle_rad=pitch_angle_rad,
         q=q,
         residual=res,
@@ -420,18 +414,17 @@ def _bisected(
     return up
 
 
-def _fold_profiles(family, q, connected, sign0, s, h, cos_sin, j0, taper, tol) -> NDArray:
+def _fold_profiles(family, q, top, sign0, s, h, cos_sin, taper, tol) -> NDArray:
     """``(k, n_f)`` the profile coordinate of each column's fold: the lowest point of the
     envelope's sheet through the pitch row, between the first node below the pitch row off
     it (folded, or Newton failed) and the node above it (:func:`_bisected`: Newton converges
-    with the meshing Jacobian's sign unchanged); -inf where the column has no such node."""
-    k, n_f, n_p = connected.shape
-    below = ~connected & (np.arange(n_p) < j0)
-    fold = np.full((k, n_f), -np.inf)
-    fk, fi = np.nonzero(below.any(axis=-1))
+    with the meshing Jacobian's sign unchanged); -inf where the column has no such node
+    (``top`` ``(k, n_f)``: the highest node below the pitch row off the sheet, -1 none)."""
+    fold = np.full(top.shape, -np.inf)
+    fk, fi = np.nonzero(top >= 0)
     if not fk.size:
         return fold
-    jb = n_p - 1 - np.argmax(below[fk, fi, ::-1], axis=-1)  # the highest node off the sheet
+    jb = top[fk, fi]
     sheet = sign0[fk, fi]
 
     def on_sheet(qm, jac, flank):
@@ -691,19 +684,21 @@ def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
     return out
 
 
-def _extend_below(values: NDArray, mask: NDArray) -> NDArray:
-    """Replace each column's values below its lowest ``mask`` node by the quadratic through
-    that node and the two above it, so that a spline through all nodes stays smooth at the edge
-    of the generated region (the envelope's values past the fold are a different sheet)."""
-    n_f, n_p = mask.shape
-    j = np.arange(n_p)
-    low = np.where(mask.any(axis=1), np.argmax(mask, axis=1), n_p - 3)
-    low = np.minimum(low, n_p - 3)[:, None]
-    rows = np.arange(n_f)[:, None]
-    p0, p1, p2 = values[rows, low], values[rows, low + 1], values[rows, low + 2]
-    t = (j[None, :] - low).astype(float)
-    quadratic = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
-    return np.where(j[None, :] < low, quadratic, values)
+def extended_geometry(family: GeneratingFamily, solution: EnvelopeSolution, indices=None):
+    """``(polar, point, normal)`` ``(m, n_f, n_p[, 3])`` of flanks ``indices`` (None: all) of a
+    solution as generated, for :func:`flank_map`, in one batch: the polar angle unwrapped along
+    the face and extended below the sheet (:func:`gearopt.flank.extended_below`), the points
+    off the flank moved onto that extended surface (finite, smooth for the spline)."""
+    k = slice(None) if indices is None else np.asarray(indices)
+    flank = np.arange(solution.q.shape[0])[k]
+    geo = family.geometry(solution.q[k], flank[:, None, None])
+    point, normal = geo["point"], geo["normal"]
+    polar = unwrapped_along_face(np.arctan2(point[..., 1], point[..., 0]))
+    polar = extended_below(polar, solution.sheet[k])
+    point, off = np.array(point, float), ~solution.mask[k]
+    radius = np.hypot(point[..., 0][off], point[..., 1][off])
+    point[off, 0], point[off, 1] = radius * np.cos(polar[off]), radius * np.sin(polar[off])
+    return polar, point, normal
 
 
 def require_flank(solution: EnvelopeSolution, index: int, *, member: str, flank: str) -> None:
@@ -727,24 +722,24 @@ def flank_map(
     turn_rad: float = 0.0,
     notes: tuple[str, ...] = (),
     tooth: int = 0,
+    geometry: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> FlankMap:
     """FlankMap of flank ``index`` of a solution: right-hand as generated, turned by
     ``turn_rad`` about the member axis, then mirrored if ``hand`` is left (as
     :meth:`FlankMap.rotated` and :meth:`FlankMap.mirrored` would, the map made once);
-    ``tooth``: the index of the tooth it is on."""
-    q = solution.q[index]
-    mask, sheet = solution.mask[index], solution.sheet[index]
-    geo = family.geometry(q, np.full(q.shape[:-1], index))
-    point, normal = geo["point"], geo["normal"]
-    polar = np.unwrap(np.arctan2(point[..., 1], point[..., 0]), axis=0)
-    polar = _extend_below(polar, sheet)
-    # nodes off the generated flank: the extended surface (finite, smooth for the spline)
-    radius = np.hypot(point[..., 0], point[..., 1])
-    point = np.where(
-        mask[..., None],
-        point,
-        np.stack([radius * np.cos(polar), radius * np.sin(polar), point[..., 2]], axis=-1),
-    )
+    ``tooth``: the index of the tooth it is on. ``geometry``: :func:`extended_geometry` of
+    the solution when the caller has it (made once for all flanks), else made here."""
+    q, mask = solution.q[index], solution.mask[index]
+    found = geometry or extended_geometry(family, solution, (index,))
+    polar, point, normal = (a[0 if geometry is None else index] for a in found)
+    # the surface's frame: EnvelopeSurface.transformed's arithmetic, the surface made once
+    sign, offset_rad = 1.0, 0.0
+    if turn_rad:
+        polar, point, normal = turned(polar, point, normal, turn_rad)
+        sign, offset_rad = 1.0 * sign, 1.0 * offset_rad + turn_rad
+    if hand == "left":
+        polar, point, normal = mirror_image(polar, point, normal)
+        sign, offset_rad = -1.0 * sign, -1.0 * offset_rad + 0.0
     surface = EnvelopeSurface(
         family=family,
         index=index,
@@ -753,14 +748,10 @@ def flank_map(
         profile_mm=solution.profile_mm,
         q=q,
         mask=mask,
+        sign=sign,
+        offset_rad=offset_rad,
         taper=solution.taper,
     )
-    if turn_rad:
-        polar, point, normal = turned(polar, point, normal, turn_rad)
-        surface = surface.transformed(offset_rad=turn_rad)
-    if hand == "left":
-        polar, point, normal = mirror_image(polar, point, normal)
-        surface = surface.transformed(sign=-1.0)
     return FlankMap(
         member=member,
         flank=flank,

@@ -53,8 +53,10 @@ __all__ = [
     "FLANKS",
     "HANDS",
     "check_member_and_flank",
+    "extended_below",
     "mirror_image",
     "turned",
+    "unwrapped_along_face",
     "warm_kernels",
 ]
 
@@ -76,6 +78,41 @@ def mirror_image(polar_rad: NDArray, points_mm: NDArray, normals: NDArray):
     (:meth:`FlankMap.mirrored`)."""
     flip = np.array([1.0, -1.0, 1.0])
     return -polar_rad, points_mm * flip, normals * flip
+
+
+def extended_below(values: NDArray, mask: NDArray) -> NDArray:
+    """``values`` ``(..., n_f, n_p)`` with each column's values (along the last axis) below
+    its lowest ``mask`` node replaced by the quadratic through that node and the two above it,
+    so that a spline through all nodes stays smooth at the edge of the generated region (the
+    envelope's values past the fold are a different sheet)."""
+    n_p = mask.shape[-1]
+    low = np.where(mask.any(axis=-1), np.argmax(mask, axis=-1), n_p - 3)
+    low = np.minimum(low, n_p - 3).reshape(-1)
+    out = np.array(values, float)
+    flat = out.reshape(-1)  # (a view: out is a new contiguous array)
+    # the nodes below (column c, node j): the quadratic's arithmetic there alone
+    c, j = np.nonzero(np.arange(n_p) < low[:, None])
+    at = c * n_p + low[c]
+    p0, p1, p2 = flat[at], flat[at + 1], flat[at + 2]
+    t = (j - low[c]).astype(float)
+    flat[c * n_p + j] = 0.5 * (t - 1) * (t - 2) * p0 - t * (t - 2) * p1 + 0.5 * t * (t - 1) * p2
+    return out
+
+
+def unwrapped_along_face(p: NDArray) -> NDArray:
+    """``np.unwrap(p, axis=-2)`` of ``(..., n_f, n_p)``: numpy's operations without its set-up,
+    the correction's sum only where a step reaches pi."""
+    dd = p[..., 1:, :] - p[..., :-1, :]
+    up = p.copy()
+    if (np.abs(dd) < math.pi).all():
+        up[..., 1:, :] += 0.0  # (p + a sum of zeros: -0.0 made 0.0 as there)
+        return up
+    ddmod = np.mod(dd - (-math.pi), 2 * math.pi) + (-math.pi)
+    np.copyto(ddmod, math.pi, where=(ddmod == -math.pi) & (dd > 0))
+    correction = ddmod - dd
+    np.copyto(correction, 0, where=np.abs(dd) < math.pi)
+    up[..., 1:, :] = p[..., 1:, :] + correction.cumsum(axis=-2)
+    return up
 
 
 def check_member_and_flank(member: str, flank: str) -> None:

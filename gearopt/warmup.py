@@ -17,7 +17,7 @@ import sys
 import threading
 import time
 
-from gearopt import determinants, flank, jit
+from gearopt import determinants, envelope_nodes, flank, jit
 from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
@@ -43,7 +43,7 @@ def _stages() -> dict[str, tuple]:
     from the cache where the helper compiled it). The groups' compile times are about equal
     (50-60 s of CPU each on the example's machine)."""
     return {
-        "probe": (flank.warm_kernels, determinants.warm_kernels),
+        "probe": (flank.warm_kernels, determinants.warm_kernels, envelope_nodes.warm_kernels),
         "main": (contact_kernels.warm_engine, _models),
         "helper": (
             contact_kernels.warm_zones,

@@ -69,6 +69,7 @@ LAYERS = (
             "gearopt.flank",
             "gearopt.flank_jet",
             "gearopt.envelope",
+            "gearopt.envelope_nodes",
             "gearopt.blank",
             "gearopt.iso23509",
             "gearopt.thickness",

@@ -38,6 +38,7 @@ __all__ = [
     "family",
     "meshing_jacobian",
     "pitch_line_start",
+    "pitch_line_starts",
 ]
 
 
@@ -319,3 +320,34 @@ def pitch_line_start(b: BladeSystem, cone_distance_mm):
     xd = rc * np.sin(phi) + md * math.cos(q2)
     yd = -rc * np.cos(phi) + md * math.sin(q2)
     return np.zeros_like(s), theta, -np.arctan2(yd, xd)
+
+
+def pitch_line_starts(blades, cone_distance_mm) -> NDArray:
+    """``(len(blades), n, 3)``: :func:`pitch_line_start` of each blade system at the cone
+    distances ``(n,)``, stacked, in one batch of numpy calls (the same operations on the same
+    values: the same bits)."""
+    s = np.asarray(cone_distance_mm, dtype=float)
+    # per system (k, 1), each constant as pitch_line_start's Python arithmetic makes it
+    md2, rc2, den, e, phase, rc, minus_rc, xc, yc = np.array(
+        [
+            [
+                b.machine_distance_mm**2,
+                b.cutter_radius_mm**2,
+                2.0 * b.machine_distance_mm * b.cutter_radius_mm,
+                b.spiral_angle_rad - b.assembly_angle_rad,
+                b.phase_rad,
+                b.cutter_radius_mm,
+                -b.cutter_radius_mm,
+                b.machine_distance_mm * math.cos(b.cradle_angle_rad),
+                b.machine_distance_mm * math.sin(b.cradle_angle_rad),
+            ]
+            for b in blades
+        ],
+        dtype=float,
+    ).T[:, :, None]
+    q2 = np.array([[b.cradle_angle_rad] for b in blades], dtype=float)
+    phi = q2 + np.arcsin((s**2 - md2 - rc2) / den)
+    theta = phi - e + phase
+    xd = rc * np.sin(phi) + xc
+    yd = minus_rc * np.cos(phi) + yc
+    return np.stack([np.zeros_like(theta), theta, -np.arctan2(yd, xd)], axis=-1)

@@ -84,7 +84,7 @@ from numpy.typing import NDArray
 
 from gearopt.blank import Blank
 from gearopt.design import MEMBERS
-from gearopt.envelope import flank_map, require_flank, solve_envelope
+from gearopt.envelope import extended_geometry, flank_map, require_flank, solve_envelope
 from gearopt.errors import SettingsError
 from gearopt.flank import FlankGrid, FlankMap
 from gearopt_plugins.face_hobbing import kernels
@@ -93,7 +93,7 @@ from gearopt_plugins.face_hobbing.family import (
     components,
     edge,
     meshing_jacobian,
-    pitch_line_start,
+    pitch_line_starts,
 )
 from gearopt_plugins.face_hobbing.settings import CutterDisk, WorkSettings
 
@@ -141,6 +141,10 @@ class FaceHobbingFamily:
     def _table(self) -> NDArray:
         return kernels.system_table(self.blades)
 
+    @cached_property
+    def _limit(self) -> NDArray:
+        return np.asarray(self.max_step, dtype=float)
+
     def _compiled(self, q) -> bool:
         """Whether the compiled kernels evaluate ``q`` (real parameters; the numpy functions of
         :mod:`~gearopt_plugins.face_hobbing.family` take complex steps and run without numba)."""
@@ -187,7 +191,7 @@ class FaceHobbingFamily:
             np.ascontiguousarray(big_l, dtype=float),
             np.ascontiguousarray(big_r, dtype=float),
             float(self.scale_mm),
-            np.asarray(self.max_step, dtype=float),
+            self._limit,
             float(tol),
             int(max_iter),
             int(give_up[0]),
@@ -217,7 +221,7 @@ class FaceHobbingFamily:
             np.ascontiguousarray(upper, dtype=float),
             np.asarray(cos_sin, dtype=float),
             float(self.scale_mm),
-            np.asarray(self.max_step, dtype=float),
+            self._limit,
             float(tol),
             int(bisections),
             sheet is not None,
@@ -228,9 +232,7 @@ class FaceHobbingFamily:
         return out
 
     def pitch_row(self, cone_distance_mm):
-        return np.stack(
-            [np.stack(pitch_line_start(b, cone_distance_mm), axis=-1) for b in self.blades]
-        )
+        return pitch_line_starts(self.blades, cone_distance_mm)
 
     def geometry(self, q, flank) -> dict[str, NDArray]:
         if self._compiled(q):
@@ -264,7 +266,7 @@ class FaceHobbingFamily:
         """Height y_c of the edge point (eqs 2-8) above the cradle plane, toward the tip."""
         if self._compiled(u):
             u = np.asarray(u, float)
-            ff = np.array(np.broadcast_to(flank, u.shape), dtype=np.intp).ravel()
+            ff = _flank_indices(flank, u.shape)
             out = np.empty(u.size)
             kernels.blade_heights(self._table, ff, np.ascontiguousarray(u).ravel(), out)
             return out.reshape(u.shape)
@@ -280,9 +282,16 @@ def _flat(q, flank):
     q = np.asarray(q, float)
     shape = q.shape[:-1]
     flat = np.ascontiguousarray(q.reshape(-1, 3))
-    # a writable copy: a read-only one is another type to numba, another compilation
-    flank = np.array(np.broadcast_to(flank, shape), dtype=np.intp).reshape(-1)
-    return flat, flank, shape
+    return flat, _flank_indices(flank, shape), shape
+
+
+def _flank_indices(flank, shape) -> NDArray:
+    """``(n,)`` the flank indices ``flank`` broadcast to ``shape``, flattened: a writable copy
+    (a read-only one is another type to numba, another compilation), made without
+    ``np.broadcast_to``'s cost."""
+    out = np.empty(shape, dtype=np.intp)
+    out[...] = flank
+    return out.reshape(-1)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -446,9 +455,11 @@ def _generated(blank, member, teeth, systems, turns_rad, grid, tool_pass, notes)
         grid=grid,
         where=f"{member} flanks {', '.join(flanks)}",
     )
-    out = {}
     for k, flank in enumerate(flanks):
         require_flank(solution, k, member=member, flank=flank)
+    geometry = extended_geometry(family_, solution)  # both flanks at once
+    out = {}
+    for k, flank in enumerate(flanks):
         out[flank] = flank_map(
             family_,
             solution,
@@ -460,5 +471,6 @@ def _generated(blank, member, teeth, systems, turns_rad, grid, tool_pass, notes)
             turn_rad=turns_rad[flank],
             notes=notes.get(flank, ()),
             tooth=tool_pass if blank.hand[index] == "right" else -tool_pass,
+            geometry=geometry,
         )
     return out

@@ -1,0 +1,160 @@
+"""The nodes of :func:`gearopt.envelope.solve_envelope`'s grid: their face and profile
+coordinates, heights and axial-plane targets (L, R) for every flank, made once per grid and
+remembered (:func:`grid_nodes`): a study regenerates a member on one blank, so on the same
+nodes, and their set-up was a fifth of the solver's numpy calls. And the nodes' sheet
+(:func:`sheet_nodes`, compiled): which are on the envelope's sheet through the pitch row,
+which are trimmed off above a fold, where each column leaves the sheet.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gearopt.flank import DepthTaper, FlankGrid
+from gearopt.jit import compiled
+
+__all__ = ["GridNodes", "grid_nodes", "sheet_nodes", "warm_kernels"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GridNodes:
+    """The nodes ``(s_i, t_j)`` of ``n_flanks`` grids ``(n_f, n_p)``, shared by every solve on
+    the grid: read, never written. The arrays the compiled kernels take (``big_l``, ``big_r``,
+    ``row_l``, ``row_r``) stay writable (a read-only array is another type to numba, another
+    compilation); the others are read-only."""
+
+    face_mm: NDArray  # (n_f,) cone distances s
+    profile_mm: NDArray  # (n_p,) profile coordinates t (= h on uniform depth)
+    height_mm: NDArray  # (n_f, n_p) heights h above the pitch cone
+    flank: NDArray  # (k, n_f, n_p) each node's flank index (broadcast)
+    big_l: NDArray  # (k, n_f, n_p) axial positions L of the nodes, contiguous
+    big_r: NDArray  # (k, n_f, n_p) radii R
+    row_l: NDArray  # (k n_f,) L on the pitch line (h = 0), flank by flank
+    row_r: NDArray  # (k n_f,) R there
+    row_flank: NDArray  # (k n_f,) their flank indices
+    cos_sin: tuple[float, float]  # of the pitch angle
+    pitch_row: int  # j0: the profile node nearest the pitch line
+    neighbour: NDArray  # (n_p,) each node's neighbour toward the pitch row (j0 its own)
+
+
+def grid_nodes(
+    cone_distances_mm,
+    heights_mm,
+    pitch_angle_rad: float,
+    grid: FlankGrid,
+    taper: DepthTaper | None,
+    n_flanks: int,
+) -> GridNodes:
+    """The :class:`GridNodes` of a grid (``solve_envelope``'s arguments), from the last few
+    grids' when they are the same."""
+    return _nodes(
+        tuple(float(v) for v in cone_distances_mm),
+        tuple(float(v) for v in heights_mm),
+        float(pitch_angle_rad),
+        grid,
+        taper,
+        int(n_flanks),
+    )
+
+
+def _read_only(a: NDArray) -> NDArray:
+    a.setflags(write=False)
+    return a
+
+
+@functools.lru_cache(maxsize=8)
+def _nodes(cone_distances_mm, heights_mm, pitch_angle_rad, grid, taper, k) -> GridNodes:
+    s = np.linspace(*cone_distances_mm, grid.n_face)
+    h = np.linspace(*heights_mm, grid.n_profile)
+    n_f, n_p = grid.shape
+    cg, sg = math.cos(pitch_angle_rad), math.sin(pitch_angle_rad)
+    # the nodes' heights above the pitch cone (n_f, n_p): h in every column for uniform depth
+    if taper is None:
+        height = np.broadcast_to(h[None, :], (n_f, n_p))
+    else:
+        height = taper.height_mm(s[:, None], h[None, :])
+    flank = np.broadcast_to(np.arange(k)[:, None, None], (k, n_f, n_p))
+    j0 = int(np.argmin(np.abs(h)))
+    return GridNodes(
+        face_mm=_read_only(s),
+        profile_mm=_read_only(h),
+        height_mm=_read_only(np.array(height)),
+        flank=flank,
+        big_l=np.array(np.broadcast_to(s[:, None] * cg - height * sg, (k, n_f, n_p))),
+        big_r=np.array(np.broadcast_to(s[:, None] * sg + height * cg, (k, n_f, n_p))),
+        row_l=np.tile(s * cg, k),
+        row_r=np.tile(s * sg, k),
+        row_flank=_read_only(flank[:, :, 0].ravel()),
+        cos_sin=(cg, sg),
+        pitch_row=j0,
+        neighbour=_read_only(np.arange(n_p) + np.sign(j0 - np.arange(n_p))),
+    )
+
+
+def sheet_nodes(converged: NDArray, det: NDArray, sign0: NDArray, nodes: GridNodes, trim_mm):
+    """``(unfolded, connected, trimmed, top)`` of a solve on ``nodes``: from the nodes'
+    convergence and Jacobian determinants' signs ``det`` ``(k, n_f, n_p)`` and the pitch row's
+    ``sign0`` ``(k, n_f)``, the nodes whose sign is the pitch row's (unfolded), those connected
+    to the pitch row through converged unfolded nodes of their column (the sheet), those at
+    least ``trim_mm`` above the column's highest node below the pitch row off the sheet
+    (trimmed; every node where there is none), and ``top`` ``(k, n_f)``, that highest node
+    below the pitch row off the sheet (-1: none)."""
+    k, n_f, n_p = converged.shape
+    unfolded, connected = np.empty((k, n_f, n_p), bool), np.empty((k, n_f, n_p), bool)
+    trimmed, top = np.empty((k, n_f, n_p), bool), np.empty((k, n_f), np.intp)
+    _sheet_kernel(
+        converged,
+        det,
+        sign0,
+        nodes.height_mm,
+        nodes.profile_mm,
+        nodes.pitch_row,
+        float(trim_mm),
+        unfolded,
+        connected,
+        trimmed,
+        top,
+    )
+    return unfolded, connected, trimmed, top
+
+
+@compiled
+def _sheet_kernel(converged, det, sign0, height, h, j0, trim_mm, unfolded, connected, trimmed, top):
+    """:func:`sheet_nodes` column by column (into the last four arguments)."""
+    k, n_f, n_p = converged.shape
+    for f in range(k):
+        for i in range(n_f):
+            for j in range(n_p):
+                unfolded[f, i, j] = det[f, i, j] == sign0[f, i]
+            on = True
+            for j in range(j0, n_p):
+                on = on and converged[f, i, j] and unfolded[f, i, j]
+                connected[f, i, j] = on
+            on = True
+            for j in range(j0, -1, -1):
+                on = on and converged[f, i, j] and unfolded[f, i, j]
+                connected[f, i, j] = on
+            first_bad, highest = -math.inf, -1
+            for j in range(n_p):
+                if not connected[f, i, j]:
+                    if h[j] < h[j0] and height[i, j] > first_bad:
+                        first_bad = height[i, j]
+                    if j < j0:
+                        highest = j
+            limit = first_bad + (trim_mm if math.isfinite(first_bad) else 0.0)
+            for j in range(n_p):
+                trimmed[f, i, j] = height[i, j] >= limit
+            top[f, i] = highest
+
+
+def warm_kernels() -> None:
+    """Compile :func:`sheet_nodes`' kernel, or load it from numba's disk cache, with the
+    argument types the solver passes (a grid's read-only heights)."""
+    nodes = grid_nodes((1.0, 2.0), (-1.0, 1.0), 0.5, FlankGrid(n_face=4, n_profile=4), None, 1)
+    shape = (1, 4, 4)
+    sheet_nodes(np.ones(shape, bool), np.ones(shape), np.ones((1, 4)), nodes, 0.3)
