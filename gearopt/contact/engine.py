@@ -37,9 +37,12 @@ def remembered_tables(kind: str, flanks: tuple, make):
     """``make()``, or what it gave for the same ``kind`` and the same flanks (FlankMaps, by
     identity: a FlankMap is never changed in place) among the last few: tables of the flanks
     alone, which a study's evaluations of one design (aligned, misaligned: only the placement
-    differs) would otherwise build again for every placement."""
-    for known, key, value in _REMEMBERED:
+    differs) would otherwise build again for every placement. The last used first: a gear's
+    tables outlive the trials' pinions."""
+    for i, (known, key, value) in enumerate(_REMEMBERED):
         if known == kind and len(key) == len(flanks) and all(map(operator.is_, key, flanks)):
+            if i:
+                _REMEMBERED.insert(0, _REMEMBERED.pop(i))
             return value
     value = make()
     _REMEMBERED.insert(0, (kind, tuple(flanks), value))
@@ -88,6 +91,7 @@ def node_tables(pinion) -> dict:
     pts = pinion.points_mm.reshape(-1, 3)[nodes]
     nrm = pinion.normals.reshape(-1, 3)[nodes]
     profile = np.asarray(pinion.profile_mm, float)
+    dp = float(np.mean(np.diff(profile)))
     fine = boundary_cells(pinion)
     keep = mask.copy()
     for _ in range(0 if fine else 2):
@@ -102,7 +106,6 @@ def node_tables(pinion) -> dict:
     if lowest is None:
         generated[~pinion.cells.generated, 0] = 2.0
     else:
-        dp = float(np.mean(np.diff(profile)))
         with np.errstate(invalid="ignore"):
             b0 = (lowest[:-1, None] - profile[None, :-1]) / dp
             b1 = (lowest[1:, None] - profile[None, :-1]) / dp
@@ -127,10 +130,7 @@ def node_tables(pinion) -> dict:
         "keep": keep.ravel(),
         "cells": limits,
         "generated": generated,
-        "cell_mm": (
-            float(np.mean(np.diff(pinion.face_mm))),
-            float(np.mean(np.diff(profile))),
-        ),
+        "cell_mm": (float(np.mean(np.diff(pinion.face_mm))), dp),
     }
 
 
@@ -191,8 +191,9 @@ def _stacked_tables(fields) -> dict:
     kernel_band = pinion_band.copy()
     kernel_band[:, 0] = np.where(pinion_band[:, 0] >= 0.0, pinion_band[:, 0] + n_own, -1.0)
     gear_cells = first.gear.cells.generated.size
-    gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
-    gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+    gear_coef, gear_ok = remembered_tables(
+        "gear", tuple(f.gear for f in fields), lambda: _gear_tables(fields)
+    )
     # where the tangency point is inside the pinion flank
     pinion_generated = np.ascontiguousarray(np.concatenate([t["generated"] for t in tables]))
     return {
@@ -220,6 +221,16 @@ def _stacked_tables(fields) -> dict:
         "gear_ok": gear_ok,
         "pinion_generated": pinion_generated,
     }
+
+
+def _gear_tables(fields) -> tuple:
+    """The gear flanks' cell tables of :func:`_stacked_tables` (they depend on the gears alone:
+    a study's trials place new pinions against one gear): the coefficients and the generated
+    cells, concatenated over the fields. Shared by the engines that remember them: never
+    written."""
+    gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
+    gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+    return gear_coef, gear_ok
 
 
 class EngineRows:
