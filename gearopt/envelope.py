@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.determinants import det_signs
-from gearopt.envelope_nodes import grid_nodes, sheet_nodes
+from gearopt.envelope_nodes import bilinear, grid_nodes, sheet_nodes
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
@@ -42,6 +42,7 @@ from gearopt.flank import (
     turned,
     unwrapped_along_face,
 )
+from gearopt.jit import ENABLED
 
 __all__ = [
     "GeneratingFamily",
@@ -511,7 +512,8 @@ class EnvelopeSurface:
     def parameters_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` generation parameters at grid coordinates, by Newton from the grid."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
-        start = _bilinear(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
+        interpolate = bilinear if ENABLED else _bilinear  # (the same bits)
+        start = interpolate(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
         flank = np.full(s.size, self.index)
         q, _, jac, ok, _ = _newton(
             self.family,
@@ -666,7 +668,8 @@ def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
     """``(n, 3)`` bilinear interpolation of ``values`` ``(n_f, n_p, 3)`` on the grid at points
     ``(s, h)`` ``(n,)``, the edge cells' planes beyond the grid: the arithmetic of scipy's
     ``RegularGridInterpolator(method="linear", fill_value=None)``, the same bits, without its
-    set-up (a tenth of the cost on a few hundred points)."""
+    set-up (a tenth of the cost on a few hundred points); compiled:
+    :func:`gearopt.envelope_nodes.bilinear`."""
 
     def cell(grid, x):  # the cell's index along one axis and the point's fraction across it
         g = np.asarray(grid, float)
