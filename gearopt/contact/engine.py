@@ -69,7 +69,7 @@ def _keep_heap() -> None:
 
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
-    made): its generated nodes (flat indices), their points and normals (components apart),
+    made): its generated nodes (flat indices), their points and normals (``(3, n)`` each),
     the refinable nodes and cells (the generated ones, evaluated on the fine cells at the
     generated boundary, :func:`gearopt.contact.boundary.boundary_cells`: the flank's own
     interpolant is poor near the envelope's fold; on a flank without them, two cells above the
@@ -125,8 +125,8 @@ def node_tables(pinion) -> dict:
         "fine": fine,
         "nodes": nodes,
         "slot": slot,
-        "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
-        "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
+        "points": np.ascontiguousarray(pts.T),
+        "normals": np.ascontiguousarray(nrm.T),
         "keep": keep.ravel(),
         "cells": limits,
         "generated": generated,
@@ -159,15 +159,14 @@ def _stacked_tables(fields) -> dict:
     node_slot = np.stack(
         [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
     )
-    # (x, y) of each side's nodes and of their normals ``(2, K, count)``, z ``(K, count)``
-    node_xy, node_nxy = np.empty((2, len(tables), count)), np.empty((2, len(tables), count))
-    point_z, normal_z = np.empty((len(tables), count)), np.empty((len(tables), count))
+    # (x, y) of each side's nodes and of their normals ``(2, K, count)``, z ``(K, count)``:
+    # contiguous parts of one table of the components each
+    node_points, node_normals = np.empty((3, len(tables), count)), np.empty((3, len(tables), count))
     for i, (t, k) in enumerate(zip(tables, pad, strict=True)):
-        for a in range(2):
-            np.take(t["points"][a], k, out=node_xy[a, i])
-            np.take(t["normals"][a], k, out=node_nxy[a, i])
-        np.take(t["points"][2], k, out=point_z[i])
-        np.take(t["normals"][2], k, out=normal_z[i])
+        np.take(t["points"], k, axis=1, out=node_points[:, i])
+        np.take(t["normals"], k, axis=1, out=node_normals[:, i])
+    node_xy, node_nxy = node_points[:2], node_normals[:2]
+    point_z, normal_z = node_points[2], node_normals[2]
     points, normals = (node_xy[0], node_xy[1], point_z), (node_nxy[0], node_nxy[1], normal_z)
     # the refinable nodes and cells: the generated ones on the fine cells at the
     # generated boundary, else two cells above the lowest generated nodes (node_tables)
