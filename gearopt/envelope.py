@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.determinants import det_signs
-from gearopt.envelope_nodes import bilinear, grid_nodes, sheet_nodes
+from gearopt.envelope_nodes import bilinear, grid_nodes, nearest_start, sheet_nodes
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
@@ -547,14 +547,8 @@ class EnvelopeSurface:
         16-step continuation (:meth:`_continued`, a millisecond) only where this fails."""
         ds = float(np.ptp(self.face_mm)) / max(len(self.face_mm) - 1, 1)
         dh = float(np.ptp(self.profile_mm)) / max(len(self.profile_mm) - 1, 1)
-        bad, good = np.flatnonzero(~ok), np.flatnonzero(ok)
-        gap = ((face_mm[good][None, :] - face_mm[bad, None]) / ds) ** 2
-        gap += ((profile_mm[good][None, :] - profile_mm[bad, None]) / dh) ** 2
         # only from points no farther from the pitch line (as the solver's repair)
-        gap[np.abs(profile_mm[good])[None, :] > np.abs(profile_mm[bad])[:, None]] = np.inf
-        pick = np.argmin(gap, axis=1)
-        near = gap[np.arange(len(bad)), pick] <= reach * reach
-        bad, from_ = bad[near], good[pick[near]]
+        bad, from_ = nearest_start(face_mm, profile_mm, ok, ds, dh, reach)
         if not bad.size:
             return
         flank = np.full(bad.size, self.index)

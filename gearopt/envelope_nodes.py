@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from gearopt.flank import DepthTaper, FlankGrid
 from gearopt.jit import compiled
 
-__all__ = ["GridNodes", "bilinear", "grid_nodes", "sheet_nodes", "warm_kernels"]
+__all__ = ["GridNodes", "bilinear", "grid_nodes", "nearest_start", "sheet_nodes", "warm_kernels"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -202,10 +202,48 @@ def _bilinear_kernel(face, profile, flat, s, h, out):
             out[p, c] = v
 
 
+def nearest_start(face_mm, profile_mm, ok, ds, dh, reach):
+    """``(bad, from_)``: the points not ``ok`` (indices) that have a point ``ok`` no farther
+    from the pitch line (``|profile_mm|`` not greater) within ``reach`` grid cells (cell
+    sizes ``ds``, ``dh``; finite coordinates), and the nearest such point of each (the first
+    of equal distance): :meth:`gearopt.envelope.EnvelopeSurface.parameters_at`'s repair
+    starts, the squared distances as numpy's ``((a - b) / ds) ** 2 + ((c - d) / dh) ** 2``,
+    in one compiled pass over the pairs (no ``(bad, good)`` matrices)."""
+    bad = np.flatnonzero(~ok)
+    good = np.flatnonzero(ok)
+    face = np.ascontiguousarray(face_mm, dtype=float)
+    profile = np.ascontiguousarray(profile_mm, dtype=float)
+    pick = np.empty(len(bad), np.intp)
+    near = np.empty(len(bad), np.bool_)
+    _nearest_kernel(face, profile, bad, good, float(ds), float(dh), float(reach), pick, near)
+    return bad[near], good[pick[near]]
+
+
+@compiled
+def _nearest_kernel(face, profile, bad, good, ds, dh, reach, pick, near):
+    """:func:`nearest_start` into ``pick`` (the index into ``good``) and ``near``."""
+    for b in range(len(bad)):
+        fb, pb = face[bad[b]], profile[bad[b]]
+        best, at = math.inf, 0
+        for g in range(len(good)):
+            if abs(profile[good[g]]) > abs(pb):
+                continue
+            d_s = (face[good[g]] - fb) / ds
+            d_h = (profile[good[g]] - pb) / dh
+            gap = d_s * d_s
+            gap += d_h * d_h
+            if gap < best:
+                best, at = gap, g
+        pick[b] = at
+        near[b] = best <= reach * reach
+
+
 def warm_kernels() -> None:
-    """Compile :func:`sheet_nodes`' and :func:`bilinear`'s kernels, or load them from numba's
-    disk cache, with the argument types the solver passes (a grid's read-only heights)."""
+    """Compile :func:`sheet_nodes`', :func:`bilinear`'s and :func:`nearest_start`'s kernels,
+    or load them from numba's disk cache, with the argument types the solver passes (a
+    grid's read-only heights)."""
     nodes = grid_nodes((1.0, 2.0), (-1.0, 1.0), 0.5, FlankGrid(n_face=4, n_profile=4), None, 1)
     shape = (1, 4, 4)
     sheet_nodes(np.ones(shape, bool), np.ones(shape), np.ones((1, 4)), nodes, 0.3)
     bilinear(np.arange(2.0), np.arange(2.0), np.zeros((2, 2, 3)), np.zeros(1), np.zeros(1))
+    nearest_start(np.zeros(2), np.zeros(2), np.array([True, False]), 1.0, 1.0, 0.5)

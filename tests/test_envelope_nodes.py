@@ -1,7 +1,8 @@
 """The envelope solver's grid nodes (gearopt.envelope_nodes) against the numpy they replace:
 the remembered set-up of a grid, the compiled sheet of its nodes, and the batched numpy
 helpers of the generation (the unwrap and extension of gearopt.flank, the face-hobbing pitch
-row), and the compiled bilinear starts of points off the nodes: the same bits."""
+row), and the compiled bilinear starts of points off the nodes and their repair's nearest
+converged points: the same bits."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from gearopt.envelope_nodes import bilinear, grid_nodes, sheet_nodes
+from gearopt.envelope_nodes import bilinear, grid_nodes, nearest_start, sheet_nodes
 from gearopt.flank import DepthTaper, FlankGrid, extended_below, unwrapped_along_face
 from gearopt_plugins.face_hobbing.family import BladeSystem, pitch_line_start, pitch_line_starts
 
@@ -147,3 +148,20 @@ def test_the_compiled_bilinear_is_numpys():
     with np.errstate(invalid="ignore"):
         want = _numpy_bilinear(face, profile, values, s, h)
     assert _same(bilinear(face, profile, values, s, h), want)
+
+
+def test_the_compiled_nearest_start_is_numpys():
+    rng = np.random.default_rng(5)
+    face, profile = rng.uniform(0.0, 20.0, 300), rng.uniform(-6.0, 5.0, 300)
+    face[:40], profile[:40] = np.round(face[:40]), np.round(profile[:40])  # equal distances
+    ok = rng.uniform(size=300) < 0.7
+    ds, dh, reach = 0.8, 0.5, 0.5
+    bad, good = np.flatnonzero(~ok), np.flatnonzero(ok)
+    gap = ((face[good][None, :] - face[bad, None]) / ds) ** 2
+    gap += ((profile[good][None, :] - profile[bad, None]) / dh) ** 2
+    gap[np.abs(profile[good])[None, :] > np.abs(profile[bad])[:, None]] = np.inf
+    pick = np.argmin(gap, axis=1)
+    near = gap[np.arange(len(bad)), pick] <= reach * reach
+    got = nearest_start(face, profile, ok, ds, dh, reach)
+    assert 0 < near.sum() < len(bad)
+    assert _same(got[0], bad[near]) and _same(got[1], good[pick[near]])
