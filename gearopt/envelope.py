@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.determinants import det_signs
-from gearopt.envelope_nodes import grid_nodes, sheet_nodes
+from gearopt.envelope_nodes import bilinear, grid_nodes, nearest_start, sheet_nodes
 from gearopt.errors import GearoptError, SettingsError
 from gearopt.flank import (
     DepthTaper,
@@ -42,6 +42,7 @@ from gearopt.flank import (
     turned,
     unwrapped_along_face,
 )
+from gearopt.jit import ENABLED
 
 __all__ = [
     "GeneratingFamily",
@@ -511,7 +512,8 @@ class EnvelopeSurface:
     def parameters_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` generation parameters at grid coordinates, by Newton from the grid."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
-        start = _bilinear(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
+        interpolate = bilinear if ENABLED else _bilinear  # (the same bits)
+        start = interpolate(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
         flank = np.full(s.size, self.index)
         q, _, jac, ok, _ = _newton(
             self.family,
@@ -545,14 +547,8 @@ class EnvelopeSurface:
         16-step continuation (:meth:`_continued`, a millisecond) only where this fails."""
         ds = float(np.ptp(self.face_mm)) / max(len(self.face_mm) - 1, 1)
         dh = float(np.ptp(self.profile_mm)) / max(len(self.profile_mm) - 1, 1)
-        bad, good = np.flatnonzero(~ok), np.flatnonzero(ok)
-        gap = ((face_mm[good][None, :] - face_mm[bad, None]) / ds) ** 2
-        gap += ((profile_mm[good][None, :] - profile_mm[bad, None]) / dh) ** 2
         # only from points no farther from the pitch line (as the solver's repair)
-        gap[np.abs(profile_mm[good])[None, :] > np.abs(profile_mm[bad])[:, None]] = np.inf
-        pick = np.argmin(gap, axis=1)
-        near = gap[np.arange(len(bad)), pick] <= reach * reach
-        bad, from_ = bad[near], good[pick[near]]
+        bad, from_ = nearest_start(face_mm, profile_mm, ok, ds, dh, reach)
         if not bad.size:
             return
         flank = np.full(bad.size, self.index)
@@ -666,7 +662,8 @@ def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
     """``(n, 3)`` bilinear interpolation of ``values`` ``(n_f, n_p, 3)`` on the grid at points
     ``(s, h)`` ``(n,)``, the edge cells' planes beyond the grid: the arithmetic of scipy's
     ``RegularGridInterpolator(method="linear", fill_value=None)``, the same bits, without its
-    set-up (a tenth of the cost on a few hundred points)."""
+    set-up (a tenth of the cost on a few hundred points); compiled:
+    :func:`gearopt.envelope_nodes.bilinear`."""
 
     def cell(grid, x):  # the cell's index along one axis and the point's fraction across it
         g = np.asarray(grid, float)

@@ -3,7 +3,9 @@ coordinates, heights and axial-plane targets (L, R) for every flank, made once p
 remembered (:func:`grid_nodes`): a study regenerates a member on one blank, so on the same
 nodes, and their set-up was a fifth of the solver's numpy calls. And the nodes' sheet
 (:func:`sheet_nodes`, compiled): which are on the envelope's sheet through the pitch row,
-which are trimmed off above a fold, where each column leaves the sheet.
+which are trimmed off above a fold, where each column leaves the sheet. And the grid's
+values at points between its nodes (:func:`bilinear`, compiled: the solver's starts for points
+off the nodes).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from numpy.typing import NDArray
 from gearopt.flank import DepthTaper, FlankGrid
 from gearopt.jit import compiled
 
-__all__ = ["GridNodes", "grid_nodes", "sheet_nodes", "warm_kernels"]
+__all__ = ["GridNodes", "bilinear", "grid_nodes", "nearest_start", "sheet_nodes", "warm_kernels"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -152,9 +154,96 @@ def _sheet_kernel(converged, det, sign0, height, h, j0, trim_mm, unfolded, conne
             top[f, i] = highest
 
 
+def bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
+    """``(n, c)`` bilinear interpolation of ``values`` ``(n_f, n_p, c)`` on the grid
+    ``(face_mm, profile_mm)`` (ascending) at points ``(s, h)`` ``(n,)``, the edge cells'
+    planes beyond the grid: the arithmetic of scipy's
+    ``RegularGridInterpolator(method="linear", fill_value=None)``, the same bits, in one
+    compiled pass (a NaN coordinate takes the last cell, as numpy's ``searchsorted``)."""
+    face, profile = np.asarray(face_mm, float), np.asarray(profile_mm, float)
+    flat = np.ascontiguousarray(values, dtype=float).reshape(-1, values.shape[-1])
+    s, h = np.ascontiguousarray(s, dtype=float), np.ascontiguousarray(h, dtype=float)
+    out = np.empty((len(s), flat.shape[1]))
+    _bilinear_kernel(face, profile, flat, s, h, out)
+    return out
+
+
+@compiled
+def _cell(grid, x):
+    """The cell's index along one axis (numpy's ``searchsorted(side="right") - 1`` clipped
+    to the cells) and the point's fraction across it."""
+    n = len(grid)
+    lo, hi = 0, n
+    while lo < hi:  # the first node above x (NaN: none)
+        mid = (lo + hi) // 2
+        if x < grid[mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    k = min(max(lo - 1, 0), n - 2)
+    return k, (x - grid[k]) / (grid[k + 1] - grid[k])
+
+
+@compiled
+def _bilinear_kernel(face, profile, flat, s, h, out):
+    """:func:`bilinear` point by point into ``out`` (the corner terms in numpy's order)."""
+    n_p = len(profile)
+    for p in range(len(s)):
+        i, y0 = _cell(face, s[p])
+        j, y1 = _cell(profile, h[p])
+        a0, a1 = 1.0 - y0, 1.0 - y1
+        k = i * n_p + j
+        w00, w01, w10, w11 = a0 * a1, a0 * y1, y0 * a1, y0 * y1
+        for c in range(flat.shape[1]):
+            v = flat[k, c] * w00
+            v += flat[k + 1, c] * w01
+            v += flat[k + n_p, c] * w10
+            v += flat[k + n_p + 1, c] * w11
+            out[p, c] = v
+
+
+def nearest_start(face_mm, profile_mm, ok, ds, dh, reach):
+    """``(bad, from_)``: the points not ``ok`` (indices) that have a point ``ok`` no farther
+    from the pitch line (``|profile_mm|`` not greater) within ``reach`` grid cells (cell
+    sizes ``ds``, ``dh``; finite coordinates), and the nearest such point of each (the first
+    of equal distance): :meth:`gearopt.envelope.EnvelopeSurface.parameters_at`'s repair
+    starts, the squared distances as numpy's ``((a - b) / ds) ** 2 + ((c - d) / dh) ** 2``,
+    in one compiled pass over the pairs (no ``(bad, good)`` matrices)."""
+    bad = np.flatnonzero(~ok)
+    good = np.flatnonzero(ok)
+    face = np.ascontiguousarray(face_mm, dtype=float)
+    profile = np.ascontiguousarray(profile_mm, dtype=float)
+    pick = np.empty(len(bad), np.intp)
+    near = np.empty(len(bad), np.bool_)
+    _nearest_kernel(face, profile, bad, good, float(ds), float(dh), float(reach), pick, near)
+    return bad[near], good[pick[near]]
+
+
+@compiled
+def _nearest_kernel(face, profile, bad, good, ds, dh, reach, pick, near):
+    """:func:`nearest_start` into ``pick`` (the index into ``good``) and ``near``."""
+    for b in range(len(bad)):
+        fb, pb = face[bad[b]], profile[bad[b]]
+        best, at = math.inf, 0
+        for g in range(len(good)):
+            if abs(profile[good[g]]) > abs(pb):
+                continue
+            d_s = (face[good[g]] - fb) / ds
+            d_h = (profile[good[g]] - pb) / dh
+            gap = d_s * d_s
+            gap += d_h * d_h
+            if gap < best:
+                best, at = gap, g
+        pick[b] = at
+        near[b] = best <= reach * reach
+
+
 def warm_kernels() -> None:
-    """Compile :func:`sheet_nodes`' kernel, or load it from numba's disk cache, with the
-    argument types the solver passes (a grid's read-only heights)."""
+    """Compile :func:`sheet_nodes`', :func:`bilinear`'s and :func:`nearest_start`'s kernels,
+    or load them from numba's disk cache, with the argument types the solver passes (a
+    grid's read-only heights)."""
     nodes = grid_nodes((1.0, 2.0), (-1.0, 1.0), 0.5, FlankGrid(n_face=4, n_profile=4), None, 1)
     shape = (1, 4, 4)
     sheet_nodes(np.ones(shape, bool), np.ones(shape), np.ones((1, 4)), nodes, 0.3)
+    bilinear(np.arange(2.0), np.arange(2.0), np.zeros((2, 2, 3)), np.zeros(1), np.zeros(1))
+    nearest_start(np.zeros(2), np.zeros(2), np.array([True, False]), 1.0, 1.0, 0.5)

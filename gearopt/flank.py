@@ -636,11 +636,12 @@ def polar_gradient(theta, normals, radius_mm, pitch_angle_deg: float):
     g = math.radians(pitch_angle_deg)
     sg, cg = math.sin(g), math.cos(g)
     th, n = theta, normals
-    n_r = n[..., 0] * np.cos(th) + n[..., 1] * np.sin(th)
-    n_t = -n[..., 0] * np.sin(th) + n[..., 1] * np.cos(th)
-    n_t = np.where(np.abs(n_t) > 1e-12, n_t, 1e-12)
-    d_s = -(sg * n_r + cg * n[..., 2]) / (radius_mm * n_t)
-    d_h = -(cg * n_r - sg * n[..., 2]) / (radius_mm * n_t)
+    cos, sin = np.cos(th), np.sin(th)
+    n_r = n[..., 0] * cos + n[..., 1] * sin
+    n_t = -n[..., 0] * sin + n[..., 1] * cos
+    scale = radius_mm * np.where(np.abs(n_t) > 1e-12, n_t, 1e-12)
+    d_s = -(sg * n_r + cg * n[..., 2]) / scale
+    d_h = -(cg * n_r - sg * n[..., 2]) / scale
     return d_s, d_h
 
 
@@ -656,7 +657,7 @@ def hermite_coefficients(theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm)
     )
     if ENABLED:
         out = np.empty(((theta.shape[0] - 1) * (theta.shape[1] - 1), 16))
-        _hermite_kernel(theta, d_s, d_h, d_sh, a, b, HERMITE, out)
+        _hermite_kernel(theta, d_s, d_h, d_sh, a, b, out)
         return out
     f = np.empty(theta[:-1, :-1].shape + (4, 4))
     for di in (0, 1):
@@ -671,9 +672,14 @@ def hermite_coefficients(theta, d_s, d_h, d_sh, face_steps_mm, profile_steps_mm)
 
 
 @compiled
-def _hermite_kernel(theta, d_s, d_h, d_sh, a, b, m, out):
+def _hermite_kernel(theta, d_s, d_h, d_sh, a, b, out):
     """:func:`hermite_coefficients` cell by cell into ``out``: the corners' values and scaled
-    derivatives f, then ``m f m^T`` summed term by term in the order numpy's einsum sums."""
+    derivatives f, then ``HERMITE f HERMITE^T`` summed term by term in the order numpy's einsum
+    sums. Where f is finite (below 1e300: no product overflows) the terms with a zero factor
+    (a compile-time constant) are left out: each adds a signed zero to a sum that starts at +0
+    and is never -0 (a rounded sum is -0 only of two -0), so the sum is the same to the bit
+    with 100 of the 256 terms."""
+    m = HERMITE
     n_f, n_p = theta.shape
     f = np.empty((4, 4))
     for ci in range(n_f - 1):
@@ -685,13 +691,18 @@ def _hermite_kernel(theta, d_s, d_h, d_sh, a, b, m, out):
                     f[di, 2 + dj] = d_h[i, j] * b[cj]
                     f[2 + di, dj] = d_s[i, j] * a[ci]
                     f[2 + di, 2 + dj] = d_sh[i, j] * a[ci] * b[cj]
+            finite = True
+            for i in range(4):
+                for j in range(4):
+                    finite = finite and abs(f[i, j]) < 1e300
             k = ci * (n_p - 1) + cj
             for p in range(4):
                 for q in range(4):
                     total = 0.0
                     for i in range(4):
                         for j in range(4):
-                            total += (m[p, i] * f[i, j]) * m[q, j]
+                            if not finite or (m[p, i] != 0.0 and m[q, j] != 0.0):
+                                total += (m[p, i] * f[i, j]) * m[q, j]
                     out[k, 4 * p + q] = total
 
 

@@ -1,7 +1,8 @@
 """The envelope solver's grid nodes (gearopt.envelope_nodes) against the numpy they replace:
 the remembered set-up of a grid, the compiled sheet of its nodes, and the batched numpy
 helpers of the generation (the unwrap and extension of gearopt.flank, the face-hobbing pitch
-row): the same bits."""
+row), and the compiled bilinear starts of points off the nodes and their repair's nearest
+converged points: the same bits."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from gearopt.envelope_nodes import grid_nodes, sheet_nodes
+from gearopt.envelope_nodes import bilinear, grid_nodes, nearest_start, sheet_nodes
 from gearopt.flank import DepthTaper, FlankGrid, extended_below, unwrapped_along_face
 from gearopt_plugins.face_hobbing.family import BladeSystem, pitch_line_start, pitch_line_starts
 
@@ -117,3 +118,50 @@ def test_pitch_line_starts_are_pitch_line_start_stacked():
     s = np.linspace(50.0, 70.0, 25)
     want = np.stack([np.stack(pitch_line_start(b, s), axis=-1) for b in blades])
     assert _same(pitch_line_starts(blades, s), want)
+
+
+def _numpy_bilinear(face_mm, profile_mm, values, s, h):
+    """gearopt.envelope's numpy path of the bilinear starts (scipy's arithmetic)."""
+
+    def cell(grid, x):
+        k = np.clip(np.searchsorted(grid, x, side="right") - 1, 0, len(grid) - 2)
+        return k, (x - grid[k]) / (grid[k + 1] - grid[k])
+
+    (i, y0), (j, y1) = cell(face_mm, s), cell(profile_mm, h)
+    a0, a1 = 1.0 - y0, 1.0 - y1
+    n_p = values.shape[1]
+    flat, k = values.reshape(-1, values.shape[-1]), i * n_p + j
+    out = np.take(flat, k, axis=0) * (a0 * a1)[:, None]
+    out += np.take(flat, k + 1, axis=0) * (a0 * y1)[:, None]
+    out += np.take(flat, k + n_p, axis=0) * (y0 * a1)[:, None]
+    out += np.take(flat, k + n_p + 1, axis=0) * (y0 * y1)[:, None]
+    return out
+
+
+def test_the_compiled_bilinear_is_numpys():
+    rng = np.random.default_rng(3)
+    face, profile = np.sort(rng.uniform(0.0, 30.0, 25)), np.linspace(-5.0, 6.0, 21)
+    values = rng.normal(size=(25, 21, 3))
+    s, h = rng.uniform(-5.0, 35.0, 400), rng.uniform(-8.0, 9.0, 400)
+    s[:25], h[:21] = face, profile  # on the nodes, beyond the grid, not finite
+    s[30], h[31], s[32], h[33] = math.nan, math.nan, math.inf, -math.inf
+    with np.errstate(invalid="ignore"):
+        want = _numpy_bilinear(face, profile, values, s, h)
+    assert _same(bilinear(face, profile, values, s, h), want)
+
+
+def test_the_compiled_nearest_start_is_numpys():
+    rng = np.random.default_rng(5)
+    face, profile = rng.uniform(0.0, 20.0, 300), rng.uniform(-6.0, 5.0, 300)
+    face[:40], profile[:40] = np.round(face[:40]), np.round(profile[:40])  # equal distances
+    ok = rng.uniform(size=300) < 0.7
+    ds, dh, reach = 0.8, 0.5, 0.5
+    bad, good = np.flatnonzero(~ok), np.flatnonzero(ok)
+    gap = ((face[good][None, :] - face[bad, None]) / ds) ** 2
+    gap += ((profile[good][None, :] - profile[bad, None]) / dh) ** 2
+    gap[np.abs(profile[good])[None, :] > np.abs(profile[bad])[:, None]] = np.inf
+    pick = np.argmin(gap, axis=1)
+    near = gap[np.arange(len(bad)), pick] <= reach * reach
+    got = nearest_start(face, profile, ok, ds, dh, reach)
+    assert 0 < near.sum() < len(bad)
+    assert _same(got[0], bad[near]) and _same(got[1], good[pick[near]])

@@ -109,21 +109,20 @@ def local_theta(cells, coef, s, t):
         fj = int(min(max(y, 0.0), last_column))
         u, v = x - fi, y - fj
         c = coef[fi * columns + fj]
-        w = np.empty(4)
-        for a in range(4):
+        # Horner in v per power of u, then in u (scalars: no array per point)
+        value = 0.0
+        for a in range(3, -1, -1):
             acc = c[4 * a + 3] * v
             acc += c[4 * a + 2]
             acc *= v
             acc += c[4 * a + 1]
             acc *= v
             acc += c[4 * a]
-            w[a] = acc
-        value = w[3] * u
-        value += w[2]
-        value *= u
-        value += w[1]
-        value *= u
-        value += w[0]
+            if a == 3:
+                value = acc
+            else:
+                value *= u
+                value += acc
         out[p] = value
     return out
 

@@ -37,9 +37,12 @@ def remembered_tables(kind: str, flanks: tuple, make):
     """``make()``, or what it gave for the same ``kind`` and the same flanks (FlankMaps, by
     identity: a FlankMap is never changed in place) among the last few: tables of the flanks
     alone, which a study's evaluations of one design (aligned, misaligned: only the placement
-    differs) would otherwise build again for every placement."""
-    for known, key, value in _REMEMBERED:
+    differs) would otherwise build again for every placement. The last used first: a gear's
+    tables outlive the trials' pinions."""
+    for i, (known, key, value) in enumerate(_REMEMBERED):
         if known == kind and len(key) == len(flanks) and all(map(operator.is_, key, flanks)):
+            if i:
+                _REMEMBERED.insert(0, _REMEMBERED.pop(i))
             return value
     value = make()
     _REMEMBERED.insert(0, (kind, tuple(flanks), value))
@@ -66,7 +69,7 @@ def _keep_heap() -> None:
 
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
-    made): its generated nodes (flat indices), their points and normals (components apart),
+    made): its generated nodes (flat indices), their points and normals (``(3, n)`` each),
     the refinable nodes and cells (the generated ones, evaluated on the fine cells at the
     generated boundary, :func:`gearopt.contact.boundary.boundary_cells`: the flank's own
     interpolant is poor near the envelope's fold; on a flank without them, two cells above the
@@ -88,6 +91,7 @@ def node_tables(pinion) -> dict:
     pts = pinion.points_mm.reshape(-1, 3)[nodes]
     nrm = pinion.normals.reshape(-1, 3)[nodes]
     profile = np.asarray(pinion.profile_mm, float)
+    dp = float(np.mean(np.diff(profile)))
     fine = boundary_cells(pinion)
     keep = mask.copy()
     for _ in range(0 if fine else 2):
@@ -102,7 +106,6 @@ def node_tables(pinion) -> dict:
     if lowest is None:
         generated[~pinion.cells.generated, 0] = 2.0
     else:
-        dp = float(np.mean(np.diff(profile)))
         with np.errstate(invalid="ignore"):
             b0 = (lowest[:-1, None] - profile[None, :-1]) / dp
             b1 = (lowest[1:, None] - profile[None, :-1]) / dp
@@ -122,15 +125,12 @@ def node_tables(pinion) -> dict:
         "fine": fine,
         "nodes": nodes,
         "slot": slot,
-        "points": tuple(np.ascontiguousarray(pts[:, a]) for a in range(3)),
-        "normals": tuple(np.ascontiguousarray(nrm[:, a]) for a in range(3)),
+        "points": np.ascontiguousarray(pts.T),
+        "normals": np.ascontiguousarray(nrm.T),
         "keep": keep.ravel(),
         "cells": limits,
         "generated": generated,
-        "cell_mm": (
-            float(np.mean(np.diff(pinion.face_mm))),
-            float(np.mean(np.diff(profile))),
-        ),
+        "cell_mm": (float(np.mean(np.diff(pinion.face_mm))), dp),
     }
 
 
@@ -159,15 +159,14 @@ def _stacked_tables(fields) -> dict:
     node_slot = np.stack(
         [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
     )
-    # (x, y) of each side's nodes and of their normals ``(2, K, count)``, z ``(K, count)``
-    node_xy, node_nxy = np.empty((2, len(tables), count)), np.empty((2, len(tables), count))
-    point_z, normal_z = np.empty((len(tables), count)), np.empty((len(tables), count))
+    # (x, y) of each side's nodes and of their normals ``(2, K, count)``, z ``(K, count)``:
+    # contiguous parts of one table of the components each
+    node_points, node_normals = np.empty((3, len(tables), count)), np.empty((3, len(tables), count))
     for i, (t, k) in enumerate(zip(tables, pad, strict=True)):
-        for a in range(2):
-            np.take(t["points"][a], k, out=node_xy[a, i])
-            np.take(t["normals"][a], k, out=node_nxy[a, i])
-        np.take(t["points"][2], k, out=point_z[i])
-        np.take(t["normals"][2], k, out=normal_z[i])
+        np.take(t["points"], k, axis=1, out=node_points[:, i])
+        np.take(t["normals"], k, axis=1, out=node_normals[:, i])
+    node_xy, node_nxy = node_points[:2], node_normals[:2]
+    point_z, normal_z = node_points[2], node_normals[2]
     points, normals = (node_xy[0], node_xy[1], point_z), (node_nxy[0], node_nxy[1], normal_z)
     # the refinable nodes and cells: the generated ones on the fine cells at the
     # generated boundary, else two cells above the lowest generated nodes (node_tables)
@@ -191,8 +190,9 @@ def _stacked_tables(fields) -> dict:
     kernel_band = pinion_band.copy()
     kernel_band[:, 0] = np.where(pinion_band[:, 0] >= 0.0, pinion_band[:, 0] + n_own, -1.0)
     gear_cells = first.gear.cells.generated.size
-    gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
-    gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+    gear_coef, gear_ok = remembered_tables(
+        "gear", tuple(f.gear for f in fields), lambda: _gear_tables(fields)
+    )
     # where the tangency point is inside the pinion flank
     pinion_generated = np.ascontiguousarray(np.concatenate([t["generated"] for t in tables]))
     return {
@@ -220,6 +220,16 @@ def _stacked_tables(fields) -> dict:
         "gear_ok": gear_ok,
         "pinion_generated": pinion_generated,
     }
+
+
+def _gear_tables(fields) -> tuple:
+    """The gear flanks' cell tables of :func:`_stacked_tables` (they depend on the gears alone:
+    a study's trials place new pinions against one gear): the coefficients and the generated
+    cells, concatenated over the fields. Shared by the engines that remember them: never
+    written."""
+    gear_coef = np.concatenate([f.gear.cells.coefficients for f in fields])
+    gear_ok = np.concatenate([f.gear.cells.generated for f in fields])
+    return gear_coef, gear_ok
 
 
 class EngineRows:
