@@ -343,7 +343,8 @@ class Zones:
         k_rays = len(origins)
         start = np.searchsorted(ray[order], np.arange(k_rays + 1))
         rays = self.rays(origins, directions)
-        reach = np.array(np.broadcast_to(np.asarray(reach, float), (k_rays,)))  # (writable)
+        reach_mm, reach = reach, np.empty(k_rays)  # (writable)
+        reach[:] = reach_mm
         tau = np.empty((k_rays, len(SCAN)))  # (to the grid's edge or the reach: to_edge's)
         zone_kernels.ray_samples(rays, self.box, reach, np.ones(k_rays, bool), SCAN, SCAN, tau)
         out = np.empty(k_rays)
