@@ -1,8 +1,10 @@
 """Compiled kernels of the marking-compound zone (numba): the exits of rays from the pattern
-a side's zones sweep (:func:`swept_exits`) and from their union (:func:`union_exits`), for
-:class:`gearopt.mesh.zone.Zones`. The clearance at a pinion point is the contact engine's
-(:func:`gearopt.contact.kernels.pinion_at`, :func:`gearopt.contact.kernels.gap_of`), scaled by
-the zone's node factors into the separation (normal or circumferential) the compound measures.
+a side's zones sweep (:func:`swept_exits`) and from their union (:func:`union_exits`), and
+the outline's stations and rays (:func:`outline_stations`, :func:`outline_rays`: numpy's steps
+in numpy's order, the same bits), for :class:`gearopt.mesh.zone.Zones`. The clearance at a
+pinion point is the contact engine's (:func:`gearopt.contact.kernels.pinion_at`,
+:func:`gearopt.contact.kernels.gap_of`), scaled by the zone's node factors into the separation
+(normal or circumferential) the compound measures.
 
 Each kernel evaluates its points in its own loops, the tables unpacked once and read by the
 inlined :func:`_separation_of` before its one branch: a call taking the tables, or an inlined
