@@ -367,6 +367,79 @@ def test_ray_samples_are_to_edge_and_the_fractions_bit_for_bit(samples):
     assert bits > 200  # the NaN and zero cases met, not only clean rays
 
 
+def numpy_outline_rays(u, sep, compound, interval, contact, reach):
+    """:meth:`Zones.outline`'s stations and rays, numpy's steps (before the kernels)."""
+    on = (u >= interval[0] - 1e-9) & (u <= interval[1] + 1e-9)
+    inside = np.flatnonzero((sep <= compound) & on)
+    _, first = np.unique(np.round(u[inside] * 1e9), return_index=True)
+    station = inside[first]
+    if station.size > 12:
+        station = station[np.linspace(0, station.size - 1, 12).round().astype(np.intp)]
+    if station.size < 2:
+        return station, None
+    c = contact[station]
+    tangent = np.empty_like(c)
+    tangent[1:-1] = (c[2:] - c[:-2]) / 2.0
+    tangent[0], tangent[-1] = c[1] - c[0], c[-1] - c[-2]
+    tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
+    across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+    origins = np.concatenate([c, c, c[[0, -1]]])
+    directions = np.concatenate([across, -across, [-tangent[0], tangent[-1]]])
+    from_station = np.concatenate([np.arange(len(c))] * 2 + [[0, len(c) - 1]])
+    offset = np.abs(
+        (contact[None, :, 0] - c[:, None, 0]) * tangent[:, 0, None]
+        + (contact[None, :, 1] - c[:, None, 1]) * tangent[:, 1, None]
+    )
+    ray, near = np.nonzero(offset[from_station] <= reach)
+    return station, (origins, directions, ray, near)
+
+
+OUTLINES = [
+    (zone_kernels.outline_stations, zone_kernels.outline_rays),
+    tuple(
+        getattr(f, "py_func", None)
+        for f in (zone_kernels.outline_stations, zone_kernels.outline_rays)
+    ),
+]
+
+
+@pytest.mark.parametrize("kernel", [k for k in OUTLINES if k[0] is not None])
+def test_outline_stations_and_rays_are_the_numpy_steps(kernel):
+    """The outline's stations (inside, on the interval, one per rotation to a billionth, at
+    most twelve evenly) and rays (the path's tangents, the rays across and along it, the rows
+    near each station) as numpy's unique, linspace, gradient and nonzero give them, bit for
+    bit: repeated rotations, few and many stations."""
+    stations, rays = kernel
+    rng = np.random.default_rng(41)
+    many = 0
+    for _ in range(400):
+        n = int(rng.integers(0, 90))
+        u = np.round(rng.uniform(-1.0, 1.0, n), int(rng.integers(1, 4)))  # (repeats)
+        u[rng.random(n) < 0.1] += 3e-10  # (the same rotation to a billionth, or the next)
+        sep = rng.uniform(-0.005, 0.02, n)
+        interval = np.sort(rng.uniform(-1.2, 1.2, 2))
+        contact = rng.normal(size=(n, 2)) * rng.uniform(0.1, 20.0)
+        if rng.random() < 0.1:
+            contact[:, 1] = 0.0
+        reach = float(rng.uniform(0.0, 10.0))
+        want, want_rays = numpy_outline_rays(u, sep, 0.0065, interval, contact, reach)
+        got = np.empty(n, np.intp)
+        count = stations(u, sep, 0.0065, interval[0] - 1e-9, interval[1] + 1e-9, 12, got)
+        assert np.array_equal(got[:count], want)
+        if want_rays is None:
+            continue
+        many += count == 12
+        k = 2 * count + 2
+        origins, directions = np.empty((k, 2)), np.empty((k, 2))
+        ray, near = np.empty(k * n, np.intp), np.empty(k * n, np.intp)
+        found = rays(
+            np.ascontiguousarray(contact[want]), contact, reach, origins, directions, ray, near
+        )
+        for a, b in zip((origins, directions, ray[:found], near[:found]), want_rays, strict=True):
+            assert np.array_equal(a, b) and np.array_equal(np.signbit(a), np.signbit(b))
+    assert many > 30  # the evenly picked stations met, not only the few
+
+
 def python_keys(u, pitch) -> list:
     """Relative rotations as keys that match to a billionth of a pitch (numpy's round)."""
     return np.round(u / pitch * 1e9).tolist()

@@ -132,3 +132,6 @@ def warm_zones() -> None:
     zone_kernels.swept_exits(
         rows, pinion, gear, zone, start, pair_row, none, none, rays, tau, zoom, out
     )
+    two, index = np.zeros((2, 2)), np.zeros(6, ip)
+    zone_kernels.outline_stations(out, out, 1.0, 0.0, 1.0, 2, index)
+    zone_kernels.outline_rays(two, two[:1], 1.0, np.empty((6, 2)), np.empty((6, 2)), index, index)

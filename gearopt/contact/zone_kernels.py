@@ -1,8 +1,10 @@
 """Compiled kernels of the marking-compound zone (numba): the exits of rays from the pattern
-a side's zones sweep (:func:`swept_exits`) and from their union (:func:`union_exits`), for
-:class:`gearopt.mesh.zone.Zones`. The clearance at a pinion point is the contact engine's
-(:func:`gearopt.contact.kernels.pinion_at`, :func:`gearopt.contact.kernels.gap_of`), scaled by
-the zone's node factors into the separation (normal or circumferential) the compound measures.
+a side's zones sweep (:func:`swept_exits`) and from their union (:func:`union_exits`), and
+the outline's stations and rays (:func:`outline_stations`, :func:`outline_rays`: numpy's steps
+in numpy's order, the same bits), for :class:`gearopt.mesh.zone.Zones`. The clearance at a
+pinion point is the contact engine's (:func:`gearopt.contact.kernels.pinion_at`,
+:func:`gearopt.contact.kernels.gap_of`), scaled by the zone's node factors into the separation
+(normal or circumferential) the compound measures.
 
 Each kernel evaluates its points in its own loops, the tables unpacked once and read by the
 inlined :func:`_separation_of` before its one branch: a call taking the tables, or an inlined
@@ -21,6 +23,8 @@ from gearopt.contact.kernels import gap_of, pinion_at
 from gearopt.jit import compiled
 
 __all__ = [
+    "outline_rays",
+    "outline_stations",
     "ray_samples",
     "ring_clearances",
     "separations",
@@ -338,3 +342,81 @@ def ray_samples(rays, box, reach, spread, even, geometric, tau):
         fractions = even if spread[k] else geometric
         for j in range(tau.shape[1]):
             tau[k, j] = far * fractions[j]
+
+
+@compiled
+def outline_stations(u, sep, compound, low, high, most, out):
+    """The stations of :meth:`gearopt.mesh.zone.Zones.outline` into ``out`` ``(n,)``, their
+    count returned: the rows inside their own zones (``sep <= compound``) with relative
+    rotations ``u`` in ``[low, high]``, one per rotation rounded to 1e-9 (the first; numpy's
+    ``unique(rint(u * 1e9), return_index=True)``, by a stable insertion sort), in order of it,
+    at most ``most`` evenly (``linspace(0, n - 1, most)`` rounded, as numpy's)."""
+    n = u.shape[0]
+    index, key = np.empty(n, np.intp), np.empty(n)
+    m = 0
+    for i in range(n):
+        if sep[i] <= compound and u[i] >= low and u[i] <= high:
+            x, j = np.rint(u[i] * 1e9), m
+            while j > 0 and key[j - 1] > x:  # (stable: an equal key stays behind)
+                key[j], index[j] = key[j - 1], index[j - 1]
+                j -= 1
+            key[j], index[j] = x, i
+            m += 1
+    count = 0
+    for j in range(m):
+        if j == 0 or key[j] != key[j - 1]:
+            out[count] = index[j]
+            count += 1
+    if count > most:  # (the rounded steps exceed one: distinct and increasing, so in place)
+        step = (count - 1.0) / (most - 1)
+        for i in range(most):
+            at = float(count - 1) if i == most - 1 else i * step
+            out[i] = out[int(np.rint(at))]
+        count = most
+    return count
+
+
+@compiled
+def outline_rays(c, contact, reach, origins, directions, ray, near):
+    """The rays of :meth:`gearopt.mesh.zone.Zones.outline` from its stations ``c`` ``(n, 2)``
+    (``n >= 2``): the path's tangent at each (central differences, one-sided at the ends, as
+    numpy's ``gradient``; unit), rays across it either way from every station, then along
+    it outward from the first and the last, into ``origins`` and ``directions`` ``(2n + 2,
+    2)``; each ray's rows, those of ``contact`` ``(P, 2)`` within ``reach`` of its station
+    along the path, as ``(ray, near)`` pairs in numpy's ``nonzero`` order, their count
+    returned."""
+    n, p = c.shape[0], contact.shape[0]
+    tangent = np.empty((n, 2))
+    for i in range(n):
+        a, b = max(i - 1, 0), min(i + 1, n - 1)
+        for d in range(2):
+            if 0 < i < n - 1:
+                tangent[i, d] = (c[b, d] - c[a, d]) / 2.0
+            else:
+                tangent[i, d] = c[b, d] - c[a, d]
+        norm = np.hypot(tangent[i, 0], tangent[i, 1])
+        norm = norm if not norm < 1e-300 else 1e-300  # (numpy's maximum: NaN propagates)
+        tangent[i, 0], tangent[i, 1] = tangent[i, 0] / norm, tangent[i, 1] / norm
+    for i in range(2 * n + 2):
+        at = i % n if i < 2 * n else (0 if i == 2 * n else n - 1)
+        origins[i, 0], origins[i, 1] = c[at, 0], c[at, 1]
+        if i < n:
+            directions[i, 0], directions[i, 1] = -tangent[at, 1], tangent[at, 0]
+        elif i < 2 * n:
+            directions[i, 0], directions[i, 1] = tangent[at, 1], -tangent[at, 0]
+        elif i == 2 * n:
+            directions[i, 0], directions[i, 1] = -tangent[at, 0], -tangent[at, 1]
+        else:
+            directions[i, 0], directions[i, 1] = tangent[at, 0], tangent[at, 1]
+    count = 0
+    for i in range(2 * n + 2):
+        at = i % n if i < 2 * n else (0 if i == 2 * n else n - 1)
+        for j in range(p):
+            offset = abs(
+                (contact[j, 0] - c[at, 0]) * tangent[at, 0]
+                + (contact[j, 1] - c[at, 1]) * tangent[at, 1]
+            )
+            if offset <= reach:
+                ray[count], near[count] = i, j
+                count += 1
+    return count

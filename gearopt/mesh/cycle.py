@@ -6,6 +6,7 @@ Definitions: :mod:`gearopt.mesh`.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 from typing import Any
@@ -484,23 +485,19 @@ class MeshCycle:
         lines = [lines for lines, _ in parts]
         pinion = self.fields[0].pinion
         counts = [len(x["pattern_phi_rad"]) for x in lines]
+        sizes = [3 + n for n in counts]
         rows = ZoneRows(
-            side=np.concatenate(
-                [
-                    np.full(3 + n, side.index, np.intp)
-                    for side, n in zip(self.sides, counts, strict=True)
-                ]
-            ),
+            side=np.repeat(np.array([side.index for side in self.sides], np.intp), sizes),
             phi_rad=np.concatenate(
-                [np.concatenate([x["mean_phi_rad"], x["pattern_phi_rad"]]) for x in lines]
+                [a for x in lines for a in (x["mean_phi_rad"], x["pattern_phi_rad"])]
             ),
             lag_rad=np.concatenate(
-                [np.concatenate([x["mean_lag_rad"], x["pattern_lag_rad"]]) for x in lines]
+                [a for x in lines for a in (x["mean_lag_rad"], x["pattern_lag_rad"])]
             ),
             factor_mm=_gathered_factors(lines, counts),
         )
         zones = self.zones(rows)
-        first = np.cumsum([0] + [3 + n for n in counts])[:-1]
+        first = np.array([0, *itertools.accumulate(sizes)][:-1])
         mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])
         face, profile = pinion.face_mm, pinion.profile_mm

@@ -343,7 +343,8 @@ class Zones:
         k_rays = len(origins)
         start = np.searchsorted(ray[order], np.arange(k_rays + 1))
         rays = self.rays(origins, directions)
-        reach = np.array(np.broadcast_to(np.asarray(reach, float), (k_rays,)))  # (writable)
+        reach_mm, reach = reach, np.empty(k_rays)  # (writable)
+        reach[:] = reach_mm
         tau = np.empty((k_rays, len(SCAN)))  # (to the grid's edge or the reach: to_edge's)
         zone_kernels.ray_samples(rays, self.box, reach, np.ones(k_rays, bool), SCAN, SCAN, tau)
         out = np.empty(k_rays)
@@ -460,7 +461,8 @@ class Zones:
         rows = [np.asarray(side[0], np.intp) for side in sides]
         contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
         sep = self.point_separations(np.concatenate(rows), np.concatenate(contact))
-        sep = np.split(sep, np.cumsum([len(r) for r in rows])[:-1])
+        at = np.cumsum([0] + [len(r) for r in rows]).tolist()
+        sep = [sep[a:b] for a, b in zip(at[:-1], at[1:], strict=True)]
         found = [
             self._outline_rays(r, c, g, *side[2:])
             for r, c, g, side in zip(rows, contact, sep, sides, strict=True)
@@ -497,37 +499,39 @@ class Zones:
         """One side's rays of :meth:`outline` (``sep`` the separations at its contact points):
         ``(origins, directions, ray, rows, pairs, positions)`` as :meth:`pattern_exits` takes
         them, or None with fewer than two stations."""
-        u = np.asarray(u_rad, float)
-        on = (u >= interval[0] - 1e-9) & (u <= interval[1] + 1e-9)
-        inside = np.flatnonzero((sep <= self.compound_mm) & on)
-        _, first = np.unique(np.round(u[inside] * 1e9), return_index=True)
-        station = inside[first]  # (np.unique sorts by the rotation)
-        if station.size > STATIONS:  # evenly by rotation, both ends kept (steps above one:
-            # the rounded indices are distinct)
-            station = station[np.linspace(0, station.size - 1, STATIONS).round().astype(np.intp)]
-        if station.size < 2:
-            return None
-        c = contact[station]
-        if tangency:
-            c = self.tangency_points(rows[station], c)
-        tangent = np.empty_like(c)  # np.gradient's: central differences, one-sided at the ends
-        tangent[1:-1] = (c[2:] - c[:-2]) / 2.0
-        tangent[0], tangent[-1] = c[1] - c[0], c[-1] - c[-2]
-        tangent /= np.maximum(np.hypot(tangent[:, 0], tangent[:, 1]), 1e-300)[:, None]
-        across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
-        # rays: each station across either way, then the two ends along the path
-        origins = np.concatenate([c, c, c[[0, -1]]])
-        directions = np.concatenate([across, -across, [-tangent[0], tangent[-1]]])
-        from_station = np.concatenate([np.arange(len(c))] * 2 + [[0, len(c) - 1]])
-        offset = np.abs(
-            (contact[None, :, 0] - c[:, None, 0]) * tangent[:, 0, None]
-            + (contact[None, :, 1] - c[:, None, 1]) * tangent[:, 1, None]
+        u = np.ascontiguousarray(u_rad, float)
+        station = np.empty(len(u), np.intp)  # (one compiled pass: on, inside, one per rotation)
+        count = zone_kernels.outline_stations(
+            u,
+            sep,
+            self.compound_mm,
+            float(interval[0]) - 1e-9,
+            float(interval[1]) + 1e-9,
+            STATIONS,
+            station,
         )
-        ray, near = np.nonzero(offset[from_station] <= reach_mm)
-        return (
+        if count < 2:
+            return None
+        c = contact[station[:count]]
+        if tangency:
+            c = self.tangency_points(rows[station[:count]], c)
+        k = 2 * count + 2  # rays: each station across either way, the two ends along the path
+        origins, directions = np.empty((k, 2)), np.empty((k, 2))
+        ray, near = np.empty(k * len(u), np.intp), np.empty(k * len(u), np.intp)
+        found = zone_kernels.outline_rays(
+            np.ascontiguousarray(c, float),
+            np.ascontiguousarray(contact),
+            float(reach_mm),
             origins,
             directions,
             ray,
+            near,
+        )
+        near = near[:found]
+        return (
+            origins,
+            directions,
+            ray[:found],
             rows[near],
             np.asarray(pair)[near],
             np.asarray(position)[near],
