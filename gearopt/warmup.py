@@ -110,9 +110,10 @@ def warm_kernels(*, announce: bool = True) -> float:
     stages = _stages()
     helper = None
     try:
+        before = jit.compiled_here()  # (a process's count: earlier compiles stay in it)
         for stage in stages["probe"]:
             stage()
-        if jit.compiled_here():  # a first use: the helper's group compiled beside this one
+        if jit.compiled_here() > before:  # a first use: the helper's group compiled beside
             helper = _start_helper()
         for stage in stages["main"]:
             stage()
