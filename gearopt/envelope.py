@@ -42,7 +42,6 @@ from gearopt.flank import (
     turned,
     unwrapped_along_face,
 )
-from gearopt.jit import ENABLED
 
 __all__ = [
     "GeneratingFamily",
@@ -512,8 +511,7 @@ class EnvelopeSurface:
     def parameters_at(self, face_mm, profile_mm) -> NDArray:
         """``(..., 3)`` generation parameters at grid coordinates, by Newton from the grid."""
         s, h = np.broadcast_arrays(np.asarray(face_mm, float), np.asarray(profile_mm, float))
-        interpolate = bilinear if ENABLED else _bilinear  # (the same bits)
-        start = interpolate(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
+        start = bilinear(self.face_mm, self.profile_mm, self.q, s.ravel(), h.ravel())
         flank = np.full(s.size, self.index)
         q, _, jac, ok, _ = _newton(
             self.family,
@@ -656,29 +654,6 @@ class EnvelopeSurface:
         moved = q[:, None, None, :] + delta[None]
         geo = self.family.geometry(moved, np.full(moved.shape[:-1], self.index))
         return self._to_frame(geo["point"])
-
-
-def _bilinear(face_mm, profile_mm, values, s, h) -> NDArray:
-    """``(n, 3)`` bilinear interpolation of ``values`` ``(n_f, n_p, 3)`` on the grid at points
-    ``(s, h)`` ``(n,)``, the edge cells' planes beyond the grid: the arithmetic of scipy's
-    ``RegularGridInterpolator(method="linear", fill_value=None)``, the same bits, without its
-    set-up (a tenth of the cost on a few hundred points); compiled:
-    :func:`gearopt.envelope_nodes.bilinear`."""
-
-    def cell(grid, x):  # the cell's index along one axis and the point's fraction across it
-        g = np.asarray(grid, float)
-        k = np.clip(np.searchsorted(g, x, side="right") - 1, 0, len(g) - 2)
-        return k, (x - g[k]) / (g[k + 1] - g[k])
-
-    (i, y0), (j, y1) = cell(face_mm, s), cell(profile_mm, h)
-    a0, a1 = 1.0 - y0, 1.0 - y1
-    n_p = values.shape[1]
-    flat, k = values.reshape(-1, values.shape[-1]), i * n_p + j
-    out = np.take(flat, k, axis=0) * (a0 * a1)[:, None]
-    out += np.take(flat, k + 1, axis=0) * (a0 * y1)[:, None]
-    out += np.take(flat, k + n_p, axis=0) * (y0 * a1)[:, None]
-    out += np.take(flat, k + n_p + 1, axis=0) * (y0 * y1)[:, None]
-    return out
 
 
 def extended_geometry(family: GeneratingFamily, solution: EnvelopeSolution, indices=None):

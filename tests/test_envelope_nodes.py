@@ -121,7 +121,7 @@ def test_pitch_line_starts_are_pitch_line_start_stacked():
 
 
 def _numpy_bilinear(face_mm, profile_mm, values, s, h):
-    """gearopt.envelope's numpy path of the bilinear starts (scipy's arithmetic)."""
+    """The numpy form of the bilinear starts (scipy's arithmetic) that the compiled one replaced."""
 
     def cell(grid, x):
         k = np.clip(np.searchsorted(grid, x, side="right") - 1, 0, len(grid) - 2)
