@@ -338,7 +338,8 @@ def pinion_at(s, t, pinion, offset):
     band = pinion[15]
     first = band[cell, 0]
     level = (band[cell, 1] + v) * band[cell, 2]
-    row = min(max(math.floor(level), 0.0), band[cell, 3] - 1.0)
+    row = np.floor(level)  # (as float(math.floor(level)), without the two conversions)
+    row = min(row if row > 0.0 else 0.0, band[cell, 3] - 1.0)
     fine = first >= 0.0
     theta = _hermite(pinion[13], int(first + row) if fine else cell, u, level - row if fine else v)
     tapered = t + (s - pinion[8]) * (pinion[9] + pinion[10] * t)
