@@ -166,19 +166,19 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
     (0 off the mask) into ``out`` (``(3, n, nodes)``).
 
-    Row by row in three passes over the nodes, each its own compiled loop:
-    :func:`_node_lanes` (no table look-up, no scattered store: vectorised),
-    :func:`_node_cells` (the gear cells, the nodes facing the gear flank gathered) and
-    :func:`_node_gaps` (their clearance, without a branch)."""
+    Row by row in passes over the nodes, each its own compiled loop: :func:`_node_lanes`
+    (no table look-up, no scattered store: vectorised), :func:`_node_cells` (the gear cells,
+    the nodes facing the gear flank gathered), :func:`_node_angles` (their polar angles,
+    vectorised) and :func:`_node_gaps` (their clearance)."""
     kx, ky, turn, sense, offset, _ = rows
     lim0, lim1, n_cols, coef, ok = gear[2], gear[3], gear[4], gear[12], gear[13]
     n = out.shape[1]
     size = xy.shape[2]
-    # per node: the linear outputs o0, o1, the gear's unit coordinates, the normal factor,
-    # R2 and the polar angle; then per node facing the gear flank: (u, v), the polar angle,
-    # the gear cell and the grid index
-    lanes = np.empty((7, size))
-    faced = np.empty((3, size))
+    # per node: the linear outputs o0, o1, the gear's unit coordinates, the normal factor and
+    # R2; then per node facing the gear flank: (u, v), o0, o1, the polar angle, the gear cell
+    # and the grid index
+    lanes = np.empty((6, size))
+    faced = np.empty((5, size))
     cells = np.empty((2, size), np.intp)
     for r in range(n):
         k = side[r]
@@ -191,14 +191,15 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
         m = _node_cells(
             c, index[k], lanes, lim0, lim1, n_cols, offset[r], ok, factor, radii, faced, cells
         )
+        _node_angles(m, faced)
         _node_gaps(m, coef, faced, cells, turn[r], sense[r], clearance)
 
 
 @compiled
 def _node_lanes(c, r, k, kx, ky, xy, z, nxy, nz, gear, lanes):
     """:func:`node_fields`' first pass on row ``r`` over the ``c`` nodes of side ``k``:
-    ``lanes`` = o0, o1, the gear's unit coordinates (x, y), the normal factor, R2 and
-    :func:`_atan2_lanes` (as :func:`_gear_unit`; the taper applied in a loop of its own)."""
+    ``lanes`` = o0, o1, the gear's unit coordinates (x, y), the normal factor and R2 (as
+    :func:`_gear_unit`; the taper applied in a loop of its own)."""
     rho0, rho1, tapered, d0, inv_ia = gear[0], gear[1], gear[5], gear[6], gear[7]
     ib, h0, alpha, beta = gear[8], gear[9], gear[10], gear[11]
     x, y, nx, ny = xy[0, k], xy[1, k], nxy[0, k], nxy[1, k]
@@ -206,7 +207,7 @@ def _node_lanes(c, r, k, kx, ky, xy, z, nxy, nz, gear, lanes):
     kx0, kx1, kx2, kx3 = kx[0, r], kx[1, r], kx[2, r], kx[3, r]
     ky0, ky1, ky2, ky3 = ky[0, r], ky[1, r], ky[2, r], ky[3, r]
     o0s, o1s, gxs, gys = lanes[0], lanes[1], lanes[2], lanes[3]
-    factors, radii, thetas = lanes[4], lanes[5], lanes[6]
+    factors, radii = lanes[4], lanes[5]
     for j in range(c):
         o0 = kx0 * x[j] + ky0 * y[j] + z0[j]
         o1 = kx1 * x[j] + ky1 * y[j] + z1[j]
@@ -219,7 +220,6 @@ def _node_lanes(c, r, k, kx, ky, xy, z, nxy, nz, gear, lanes):
         m1 = kx1 * nx[j] + ky1 * ny[j] + nz1[j]
         factors[j] = abs(m1 * o0 - m0 * o1)
         radii[j] = radius
-        thetas[j] = _atan2_lanes(o1, o0)
         o0s[j], o1s[j] = o0, o1
     if tapered:
         for j in range(c):
@@ -231,11 +231,10 @@ def _node_lanes(c, r, k, kx, ky, xy, z, nxy, nz, gear, lanes):
 def _node_cells(c, g, lanes, lim0, lim1, n_cols, shift, ok, factor, radius, faced, cells):
     """:func:`node_fields`' second pass: the normal factor and R2 at the grid nodes ``g``
     (``factor``, ``radius``), the gear cells and of the nodes facing the gear flank (as
-    :func:`_gear_gap`, whose clearance is kept only there) their ``(u, v)``, polar angle
-    (libm's where :func:`_atan2_lanes` does not hold), cell and grid index gathered into
-    ``faced`` and ``cells``; returns how many."""
+    :func:`_gear_gap`, whose clearance is kept only there) their ``(u, v)``, o0, o1, cell
+    and grid index gathered into ``faced`` and ``cells``; returns how many."""
     o0s, o1s, gxs, gys = lanes[0], lanes[1], lanes[2], lanes[3]
-    factors, radii, thetas = lanes[4], lanes[5], lanes[6]
+    factors, radii = lanes[4], lanes[5]
     m = 0
     for j in range(c):
         factor[g[j]], radius[g[j]] = factors[j], radii[j]
@@ -245,21 +244,29 @@ def _node_cells(c, g, lanes, lim0, lim1, n_cols, shift, ok, factor, radius, face
         u = gxs[j] - a
         v = gys[j] - b
         if ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0:
-            o0, o1 = o0s[j], o1s[j]
-            theta = thetas[j]
-            if o0 == 0.0 or not (math.isfinite(o0) and math.isfinite(o1)):
-                theta = math.atan2(o1, o0)
-            faced[0, m], faced[1, m], faced[2, m] = u, v, theta
+            faced[0, m], faced[1, m], faced[2, m], faced[3, m] = u, v, o0s[j], o1s[j]
             cells[0, m], cells[1, m] = cell, g[j]
             m += 1
     return m
 
 
 @compiled
+def _node_angles(m, faced):
+    """:func:`node_fields`' third pass: the polar angles of the ``m`` nodes gathered by
+    :func:`_node_cells` (:func:`_atan2_lanes`; libm's where it does not hold)."""
+    o0, o1, theta = faced[2], faced[3], faced[4]
+    for i in range(m):
+        theta[i] = _atan2_lanes(o1[i], o0[i])
+    for i in range(m):
+        if o0[i] == 0.0 or not (math.isfinite(o0[i]) and math.isfinite(o1[i])):
+            theta[i] = math.atan2(o1[i], o0[i])
+
+
+@compiled
 def _node_gaps(m, coef, faced, cells, turn, sense, clearance):
-    """:func:`node_fields`' third pass: the clearance of the ``m`` nodes gathered by
+    """:func:`node_fields`' last pass: the clearance of the ``m`` nodes gathered by
     :func:`_node_cells` (as :func:`_gear_gap`)."""
-    u, v, theta = faced[0], faced[1], faced[2]
+    u, v, theta = faced[0], faced[1], faced[4]
     cell, at = cells[0], cells[1]
     for i in range(m):
         gap = _hermite(coef, cell[i], u[i], v[i]) - theta[i]
