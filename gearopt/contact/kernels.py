@@ -243,7 +243,7 @@ def _node_cells(c, g, lanes, lim0, lim1, n_cols, shift, ok, factor, radius, face
         cell = int(a * n_cols + b) + shift
         u = gxs[j] - a
         v = gys[j] - b
-        if ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0:
+        if ok[cell] & (u >= 0.0) & (u <= 1.0) & (v >= 0.0) & (v <= 1.0):  # (one branch)
             faced[0, m], faced[1, m], faced[2, m], faced[3, m] = u, v, o0s[j], o1s[j]
             cells[0, m], cells[1, m] = cell, g[j]
             m += 1
