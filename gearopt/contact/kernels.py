@@ -76,11 +76,12 @@ def _hermite(coef, k, u, v):
 @compiled(inline=True)
 def _corner(x, limit):
     """The cell's corner along one unit grid coordinate: ``trunc(fmin(fmax(x, 0), limit))``
-    (a NaN coordinate takes 0)."""
+    (a NaN coordinate takes 0; ``np.trunc`` of the finite ``a``, one instruction, is the
+    ``float(int(a))`` it replaces)."""
     a = x if x > 0.0 else 0.0
     if not a < limit:
         a = limit
-    return float(int(a))
+    return np.trunc(a)
 
 
 @compiled(inline=True)
@@ -133,27 +134,26 @@ _MOREBITS = 6.123233995736765886130e-17  # pi / 2 - its double
 
 
 @compiled(inline=True)
-def _atan2(y, x):
-    """atan2(y, x) for the node fields (Cephes' atan of y / x, then the quadrant)."""
-    if x == 0.0 or not (math.isfinite(x) and math.isfinite(y)):
-        return math.atan2(y, x)
+def _atan2_lanes(y, x):
+    """atan2(y, x) for the node fields where x != 0 and both are finite (elsewhere libm's
+    ``math.atan2``): Cephes' atan of y / x, then the quadrant, without a branch (the three
+    reductions selected, -(1 / a) as (-1) / a and a as a / 1: the same values), so that the
+    nodes' first pass vectorises."""
     a = y / x
     neg = a < 0.0
     a = -a if neg else a
-    if a > 2.41421356237309504880:
-        base, a, more = 0.5 * math.pi, -(1.0 / a), _MOREBITS
-    elif a <= 0.66:
-        base, more = 0.0, 0.0
-    else:
-        base, a, more = 0.25 * math.pi, (a - 1.0) / (a + 1.0), 0.5 * _MOREBITS
+    big = a > 2.41421356237309504880
+    small = a <= 0.66
+    a = (-1.0 if big else (a if small else a - 1.0)) / (a if big else (1.0 if small else a + 1.0))
+    base = 0.5 * math.pi if big else (0.0 if small else 0.25 * math.pi)
+    more = _MOREBITS if big else (0.0 if small else 0.5 * _MOREBITS)
     z = a * a
     p = (((_ATAN_P[0] * z + _ATAN_P[1]) * z + _ATAN_P[2]) * z + _ATAN_P[3]) * z + _ATAN_P[4]
     q = ((((z + _ATAN_Q[0]) * z + _ATAN_Q[1]) * z + _ATAN_Q[2]) * z + _ATAN_Q[3]) * z + _ATAN_Q[4]
     t = base + (a * (z * p / q) + a + more)
     t = -t if neg else t
-    if x > 0.0:
-        return t
-    return t + math.pi if y >= 0.0 else t - math.pi
+    turned = t + math.pi if y >= 0.0 else t - math.pi
+    return t if x > 0.0 else turned
 
 
 @compiled
@@ -162,19 +162,24 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
     row's field; n = ``out.shape[1]``) on the generated nodes of each row's side:
     ``count[k]`` nodes, grid indices ``index[k]``, coordinates ``xy`` (``(2, K, m)``), z
     terms ``z`` (``(4, K, m)``), normals' terms ``nxy``, ``nz`` (``(2, K, m)``); the nodes'
-    polar angles in the gear frame by :func:`_atan2`.
+    polar angles in the gear frame by :func:`_atan2_lanes`.
     Writes the clearance (+inf off the mask or off the gear flank), the normal factor and R2
     (0 off the mask) into ``out`` (``(3, n, nodes)``).
 
-    Row by row in two passes over the nodes: the linear outputs, R2, the normal factor and
-    the gear's unit coordinates (no table look-up, no scattered store: vectorised), then the
-    gear cells and, where the point faces the gear flank, the clearance."""
+    Row by row in passes over the nodes, each its own compiled loop: :func:`_node_lanes`
+    (no table look-up, no scattered store: vectorised), :func:`_node_cells` (the gear cells,
+    the nodes facing the gear flank gathered), :func:`_node_angles` (their polar angles,
+    vectorised) and :func:`_node_gaps` (their clearance)."""
     kx, ky, turn, sense, offset, _ = rows
-    rho0, rho1, lim0, lim1, n_cols, tapered, d0, inv_ia, ib, h0, alpha, beta, coef, ok = gear
+    lim0, lim1, n_cols, coef, ok = gear[2], gear[3], gear[4], gear[12], gear[13]
     n = out.shape[1]
     size = xy.shape[2]
-    o0s, o1s, gxs, gys = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
-    factors, radii_j = np.empty(size), np.empty(size)  # (the nodes' in order)
+    # per node: the linear outputs o0, o1, the gear's unit coordinates, the normal factor and
+    # R2; then per node facing the gear flank: (u, v), o0, o1, the polar angle, the gear cell
+    # and the grid index
+    lanes = np.empty((6, size))
+    faced = np.empty((5, size))
+    cells = np.empty((2, size), np.intp)
     for r in range(n):
         k = side[r]
         c = count[k]
@@ -182,41 +187,92 @@ def node_fields(rows, side, count, index, xy, z, nxy, nz, gear, out):
         clearance[:] = math.inf
         factor[:] = 0.0
         radii[:] = 0.0
-        x, y, nx, ny, g = xy[0, k], xy[1, k], nxy[0, k], nxy[1, k], index[k]
-        z0, z1, z2, z3, nz0, nz1 = z[0, k], z[1, k], z[2, k], z[3, k], nz[0, k], nz[1, k]
-        kx0, kx1, kx2, kx3 = kx[0, r], kx[1, r], kx[2, r], kx[3, r]
-        ky0, ky1, ky2, ky3 = ky[0, r], ky[1, r], ky[2, r], ky[3, r]
+        _node_lanes(c, r, k, kx, ky, xy, z, nxy, nz, gear, lanes)
+        m = _node_cells(
+            c, index[k], lanes, lim0, lim1, n_cols, offset[r], ok, factor, radii, faced, cells
+        )
+        _node_angles(m, faced)
+        _node_gaps(m, coef, faced, cells, turn[r], sense[r], clearance)
+
+
+@compiled
+def _node_lanes(c, r, k, kx, ky, xy, z, nxy, nz, gear, lanes):
+    """:func:`node_fields`' first pass on row ``r`` over the ``c`` nodes of side ``k``:
+    ``lanes`` = o0, o1, the gear's unit coordinates (x, y), the normal factor and R2 (as
+    :func:`_gear_unit`; the taper applied in a loop of its own)."""
+    rho0, rho1, tapered, d0, inv_ia = gear[0], gear[1], gear[5], gear[6], gear[7]
+    ib, h0, alpha, beta = gear[8], gear[9], gear[10], gear[11]
+    x, y, nx, ny = xy[0, k], xy[1, k], nxy[0, k], nxy[1, k]
+    z0, z1, z2, z3, nz0, nz1 = z[0, k], z[1, k], z[2, k], z[3, k], nz[0, k], nz[1, k]
+    kx0, kx1, kx2, kx3 = kx[0, r], kx[1, r], kx[2, r], kx[3, r]
+    ky0, ky1, ky2, ky3 = ky[0, r], ky[1, r], ky[2, r], ky[3, r]
+    o0s, o1s, gxs, gys = lanes[0], lanes[1], lanes[2], lanes[3]
+    factors, radii = lanes[4], lanes[5]
+    for j in range(c):
+        o0 = kx0 * x[j] + ky0 * y[j] + z0[j]
+        o1 = kx1 * x[j] + ky1 * y[j] + z1[j]
+        o2 = kx2 * x[j] + ky2 * y[j] + z2[j]
+        o3 = kx3 * x[j] + ky3 * y[j] + z3[j]
+        radius = math.sqrt(o0 * o0 + o1 * o1)
+        gxs[j] = o2 + rho0 * radius
+        gys[j] = o3 + rho1 * radius
+        m0 = kx0 * nx[j] + ky0 * ny[j] + nz0[j]
+        m1 = kx1 * nx[j] + ky1 * ny[j] + nz1[j]
+        factors[j] = abs(m1 * o0 - m0 * o1)
+        radii[j] = radius
+        o0s[j], o1s[j] = o0, o1
+    if tapered:
         for j in range(c):
-            o0 = kx0 * x[j] + ky0 * y[j] + z0[j]
-            o1 = kx1 * x[j] + ky1 * y[j] + z1[j]
-            o2 = kx2 * x[j] + ky2 * y[j] + z2[j]
-            o3 = kx3 * x[j] + ky3 * y[j] + z3[j]
-            radius = math.sqrt(o0 * o0 + o1 * o1)
-            gx = o2 + rho0 * radius  # (as _gear_unit)
-            gy = o3 + rho1 * radius
-            if tapered:
-                d = gx * inv_ia + d0
-                gy = (gy + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
-            o0s[j], o1s[j], gxs[j], gys[j] = o0, o1, gx, gy
-            m0 = kx0 * nx[j] + ky0 * ny[j] + nz0[j]
-            m1 = kx1 * nx[j] + ky1 * ny[j] + nz1[j]
-            factors[j] = abs(m1 * o0 - m0 * o1)
-            radii_j[j] = radius
-        # the polar angles only where the point faces the gear flank (as _gear_gap, whose
-        # clearance is kept only there)
-        shift, row_turn, row_sense = offset[r], turn[r], sense[r]
-        for j in range(c):
-            factor[g[j]], radii[g[j]] = factors[j], radii_j[j]
-            a = _corner(gxs[j], lim0)
-            b = _corner(gys[j], lim1)
-            cell = int(a * n_cols + b) + shift
-            u = gxs[j] - a
-            v = gys[j] - b
-            if ok[cell] and u >= 0.0 and u <= 1.0 and v >= 0.0 and v <= 1.0:
-                gap = _hermite(coef, cell, u, v) - _atan2(o1s[j], o0s[j])
-                gap += row_turn
-                gap -= np.rint(gap * _TO_TURNS) * _TURN
-                clearance[g[j]] = gap * row_sense
+            d = gxs[j] * inv_ia + d0
+            gys[j] = (gys[j] + ib * (h0 - d * alpha)) / (1.0 + d * beta) - ib * h0
+
+
+@compiled
+def _node_cells(c, g, lanes, lim0, lim1, n_cols, shift, ok, factor, radius, faced, cells):
+    """:func:`node_fields`' second pass: the normal factor and R2 at the grid nodes ``g``
+    (``factor``, ``radius``), the gear cells and of the nodes facing the gear flank (as
+    :func:`_gear_gap`, whose clearance is kept only there) their ``(u, v)``, o0, o1, cell
+    and grid index gathered into ``faced`` and ``cells``; returns how many."""
+    o0s, o1s, gxs, gys = lanes[0], lanes[1], lanes[2], lanes[3]
+    factors, radii = lanes[4], lanes[5]
+    m = 0
+    for j in range(c):
+        factor[g[j]], radius[g[j]] = factors[j], radii[j]
+        a = _corner(gxs[j], lim0)
+        b = _corner(gys[j], lim1)
+        cell = int(a * n_cols + b) + shift
+        u = gxs[j] - a
+        v = gys[j] - b
+        if ok[cell] & (u >= 0.0) & (u <= 1.0) & (v >= 0.0) & (v <= 1.0):  # (one branch)
+            faced[0, m], faced[1, m], faced[2, m], faced[3, m] = u, v, o0s[j], o1s[j]
+            cells[0, m], cells[1, m] = cell, g[j]
+            m += 1
+    return m
+
+
+@compiled
+def _node_angles(m, faced):
+    """:func:`node_fields`' third pass: the polar angles of the ``m`` nodes gathered by
+    :func:`_node_cells` (:func:`_atan2_lanes`; libm's where it does not hold)."""
+    o0, o1, theta = faced[2], faced[3], faced[4]
+    for i in range(m):
+        theta[i] = _atan2_lanes(o1[i], o0[i])
+    for i in range(m):
+        if o0[i] == 0.0 or not (math.isfinite(o0[i]) and math.isfinite(o1[i])):
+            theta[i] = math.atan2(o1[i], o0[i])
+
+
+@compiled
+def _node_gaps(m, coef, faced, cells, turn, sense, clearance):
+    """:func:`node_fields`' last pass: the clearance of the ``m`` nodes gathered by
+    :func:`_node_cells` (as :func:`_gear_gap`)."""
+    u, v, theta = faced[0], faced[1], faced[4]
+    cell, at = cells[0], cells[1]
+    for i in range(m):
+        gap = _hermite(coef, cell[i], u[i], v[i]) - theta[i]
+        gap += turn
+        gap -= np.rint(gap * _TO_TURNS) * _TURN
+        clearance[at[i]] = gap * sense
 
 
 @compiled
@@ -289,7 +345,8 @@ def pinion_at(s, t, pinion, offset):
     band = pinion[15]
     first = band[cell, 0]
     level = (band[cell, 1] + v) * band[cell, 2]
-    row = min(max(math.floor(level), 0.0), band[cell, 3] - 1.0)
+    row = np.floor(level)  # (as float(math.floor(level)), without the two conversions)
+    row = min(row if row > 0.0 else 0.0, band[cell, 3] - 1.0)
     fine = first >= 0.0
     theta = _hermite(pinion[13], int(first + row) if fine else cell, u, level - row if fine else v)
     tapered = t + (s - pinion[8]) * (pinion[9] + pinion[10] * t)
