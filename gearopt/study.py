@@ -394,7 +394,9 @@ class Coordinator:
         requeue = (
             self.opened.requeue if charge else Requeue(self.spec, self.opened.results, charge=False)
         )
-        fail_and_requeue(self.study, self.opened.storage, requeue, frozen, reason)
+        # (a worker's through its view, which keeps its copy of the trial as written)
+        storage = self.opened.view or self.opened.storage
+        fail_and_requeue(self.study, storage, requeue, frozen, reason)
         if self.role is not None:
             self.role.give()
 
