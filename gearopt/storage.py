@@ -2,7 +2,8 @@
 the checks before a study opens it (not SQLite in memory, a sound SQLite file, no one else's
 tables), Optuna's RDB
 storage made safe for coordinators starting together, SQLite tuned for many commits, and a
-worker's view of the storage that reads the study once per trial (:class:`WorkerStorage`)."""
+worker's view of the storage that reads the study once per trial at most
+(:class:`WorkerStorage`)."""
 
 from __future__ import annotations
 

@@ -126,7 +126,7 @@ class OpenStudy:
     requeue: Requeue
     #: the trials the study held when the run opened it, given designs waiting excluded
     previous: int = 0
-    #: a supervised worker's view of the storage (its study's: one read per ask and tell)
+    #: a supervised worker's view of the storage (its study's: one read per ask at most)
     view: WorkerStorage | None = None
 
 
