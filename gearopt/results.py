@@ -152,17 +152,16 @@ def _insert_sql(table: sa.Table, dialect: sa.engine.Dialect) -> tuple[str, bool]
     return str(compiled), bool(order) and list(order) == [c.name for c in table.columns]
 
 
-def _insert_many(con: sa.Connection, table: sa.Table, key: tuple, tuples: list) -> None:
-    """Insert a trial's rows of ``table`` (``key``: study and trial number, then ``tuples`` of
-    the other columns in the table's order) through the driver's ``executemany``:
-    SQLAlchemy's per-row parameter handling cost more than SQLite's inserts (a trial's few
-    hundred curve points). Positional drivers (SQLite's ``?``) are given the tuples as they
-    are, named ones (psycopg's ``%(name)s``) dicts."""
-    sql, positional = _insert_sql(table, con.dialect)
+def _insert_params(dialect: sa.engine.Dialect, table: sa.Table, key: tuple, tuples: list):
+    """The insert of a trial's rows of ``table`` (``key``: study and trial number, then
+    ``tuples`` of the other columns in the table's order) and its parameters for the driver's
+    ``executemany``: SQLAlchemy's per-row parameter handling cost more than SQLite's inserts
+    (a trial's few hundred curve points). Positional drivers (SQLite's ``?``) are given the
+    tuples as they are, named ones (psycopg's ``%(name)s``) dicts."""
+    sql, positional = _insert_sql(table, dialect)
     if positional:
-        con.exec_driver_sql(sql, [(*key, *row) for row in tuples])
-    else:
-        con.exec_driver_sql(sql, _rows(table, key, tuples))
+        return sql, [(*key, *row) for row in tuples]
+    return sql, _rows(table, key, tuples)
 
 
 def _utcnow() -> dt.datetime:
@@ -249,19 +248,20 @@ class ResultsStore:
             curves_t: outcome.curves,
             patterns_t: outcome.patterns,
         }
-        with self.engine.begin() as con:
+        # (made before the transaction, which holds the database's write lock from its first
+        # insert: a worker of the run waiting to write waits the inserts alone)
+        inserts = [_insert_params(self.engine.dialect, t, key, v) for t, v in rows.items() if v]
+        try:
+            with self.engine.begin() as con:
+                for sql, params in inserts:  # (the trial's row first: it is there or not)
+                    con.exec_driver_sql(sql, params)
+        except sa.exc.IntegrityError:
             # rows of this trial written before (a tell that failed after them) are replaced;
-            # the common case, none, costs one look rather than a delete per table
-            written = con.execute(
-                sa.select(trials_t.c.trial_number).where(
-                    trials_t.c.study == study, trials_t.c.trial_number == outcome.number
-                )
-            ).first()
-            if written is not None:
+            # the common case, none, costs no look
+            with self.engine.begin() as con:
                 self._delete(con, study, [outcome.number])
-            for table, values in rows.items():
-                if values:
-                    _insert_many(con, table, key, values)
+                for sql, params in inserts:
+                    con.exec_driver_sql(sql, params)
 
     def forget(self, study: str, numbers: Iterable[int]) -> None:
         """Remove the rows of trials that were failed."""

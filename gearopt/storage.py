@@ -2,7 +2,8 @@
 the checks before a study opens it (not SQLite in memory, a sound SQLite file, no one else's
 tables), Optuna's RDB
 storage made safe for coordinators starting together, SQLite tuned for many commits, and a
-worker's view of the storage that reads the study once per trial (:class:`WorkerStorage`)."""
+worker's view of the storage that reads the study once per trial at most
+(:class:`WorkerStorage`)."""
 
 from __future__ import annotations
 
@@ -38,6 +39,7 @@ __all__ = [
     "check_own_tables",
     "check_storage_url",
     "create_sqlite",
+    "data_version",
     "default_storage_url",
     "fast_sqlite",
     "held_reads",
@@ -295,8 +297,13 @@ def _schema_race(exc: Exception) -> bool:
 
 
 def _engine_kwargs(url: str) -> dict:
-    """SQLite: wait for a lock rather than fail at once (a second reader, a dashboard)."""
-    return {"connect_args": {"timeout": 30.0}} if url.startswith("sqlite") else {}
+    """SQLite: wait for a lock rather than fail at once (a second reader, a dashboard); a
+    file's pool hands out the connection returned last, so that a process that uses one at a
+    time does so on one connection (and :func:`data_version` sees only others' writes)."""
+    if not url.startswith("sqlite"):
+        return {}
+    memory = sa.engine.make_url(url).database in (None, "", ":memory:")
+    return {"connect_args": {"timeout": 30.0}, **({} if memory else {"pool_use_lifo": True})}
 
 
 def fast_sqlite(engine: sa.Engine) -> None:
@@ -364,6 +371,18 @@ def release(rdb: optuna.storages.RDBStorage) -> None:
     rdb.engine.dispose()
 
 
+def data_version(engine: sa.Engine) -> tuple | None:
+    """SQLite: a pooled connection of ``engine`` and its ``PRAGMA data_version``, which changes
+    when another connection (another process's, or another of the pool's) has committed to
+    the database since the connection last looked, and not for the connection's own commits.
+    Two equal versions say that nothing was written but through that connection between
+    them. None for other dialects."""
+    if engine.dialect.name != "sqlite":
+        return None
+    with engine.connect() as con:
+        return con.connection.dbapi_connection, con.exec_driver_sql("PRAGMA data_version").scalar()
+
+
 def held_reads(view: WorkerStorage | None):
     """``view``'s :meth:`WorkerStorage.hold`, or nothing (None: not a supervised worker)."""
     return view.hold() if view is not None else contextlib.nullcontext()
@@ -386,6 +405,12 @@ class WorkerStorage(optuna.storages.BaseStorage):
     worker's writes are seen at the next hold, as Optuna's cached storage sees them at its
     next read. Outside a hold every read goes to Optuna's cached storage as before.
 
+    On SQLite a hold whose database no other connection has written to since the last read
+    (:func:`data_version`: one pragma) reads nothing: the last read with this process's trials
+    is what the database holds (its finished trials are kept in memory until a read of the
+    database holds them). One worker alone, that is most asks: Optuna's read of the trials
+    finished since its last look cost about as much as the trial's creation.
+
     Not thread-safe: one coordinator's thread uses it. It has no heartbeat of its own (the
     coordinator records them on the RDB storage): a worker does not fail other coordinators'
     stale trials, its supervisor does.
@@ -393,9 +418,14 @@ class WorkerStorage(optuna.storages.BaseStorage):
 
     def __init__(self, rdb: optuna.storages.RDBStorage) -> None:
         self.inner = optuna.storages.get_storage(rdb)
-        #: this process's unfinished trials by id: a copy, or None until first read
+        self.engine = rdb.engine
+        #: this process's trials by id (a copy, or None until first read): its unfinished
+        #: ones, and its finished ones until a read of the database holds them
         self.own: dict[int, optuna.trial.FrozenTrial | None] = {}
         self.read: dict[int, list] = {}  # the hold's read of each study's trials
+        #: each study's last read of the database and the data version it was read at
+        #: (:func:`data_version`; SQLite only)
+        self.synced: dict[int, tuple[tuple, list]] = {}
         self.holding = 0
         #: a trial being sampled before it is written (:meth:`draft`), under :data:`DRAFT_ID`
         self.drafted: optuna.trial.FrozenTrial | None = None
@@ -413,9 +443,10 @@ class WorkerStorage(optuna.storages.BaseStorage):
             if not self.holding:
                 self.read.clear()
                 self.unwritten.clear()  # (a trial given back without its parameters)
-                self.own = {
-                    k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
-                }
+                if not self.synced:  # (no read is served again: the next one holds them)
+                    self.own = {
+                        k: t for k, t in self.own.items() if t is None or not t.state.is_finished()
+                    }
 
     def draft(self, draft: optuna.trial.FrozenTrial) -> None:
         """Hold ``draft`` (a RUNNING trial made with ``trial_id`` :data:`DRAFT_ID`) in memory
@@ -465,7 +496,9 @@ class WorkerStorage(optuna.storages.BaseStorage):
     def write_params(self, trial_id: int) -> None:
         """Write the parameters of a trial written by :meth:`write_draft` (through the cached
         storage, which knows their distributions: in the template each would cost two more
-        queries, its trial's and the study's distribution of the name)."""
+        queries, its trial's and the study's distribution of the name; measured again, the
+        example study's trial written whole took a worker 17.3 ms of CPU, against 9.5 + 6.5
+        for the trial and then its four parameters, each in a transaction of its own)."""
         draft = self.unwritten.pop(trial_id)
         for name, value in draft.params.items():
             distribution = draft.distributions[name]
@@ -476,8 +509,24 @@ class WorkerStorage(optuna.storages.BaseStorage):
 
     def refresh(self) -> None:
         """The hold's next read of the study goes to the database again: for a read that must
-        count the trials other processes created since the hold's first one."""
+        count the trials other processes created since the hold's first one (served by the
+        last read only when nothing was written since, as :meth:`get_all_trials` says)."""
         self.read.clear()
+
+    def _read(self, study_id: int) -> bool:
+        """The hold's read of the study's trials: Optuna's cached storage's, or on SQLite the
+        last read again when no other connection has committed to the database since it
+        (:func:`data_version`: then only this process wrote, and its trials are in memory).
+        True when read from the database."""
+        version = data_version(self.engine)
+        last = self.synced.get(study_id)
+        if last is not None and version is not None and last[0] == version:
+            self.read[study_id] = last[1]
+            return False
+        self.read[study_id] = self.inner.get_all_trials(study_id, deepcopy=False)
+        if version is not None:
+            self.synced[study_id] = (version, self.read[study_id])
+        return True
 
     def _mine(self, trial_id: int) -> optuna.trial.FrozenTrial:
         trial = self.own[trial_id]
@@ -500,16 +549,14 @@ class WorkerStorage(optuna.storages.BaseStorage):
     def get_all_trials(self, study_id, deepcopy=True, states=None) -> list:
         if not self.holding:
             return self.inner.get_all_trials(study_id, deepcopy=deepcopy, states=states)
-        fresh = study_id not in self.read
-        if fresh:
-            self.read[study_id] = self.inner.get_all_trials(study_id, deepcopy=False)
+        fresh = study_id not in self.read and self._read(study_id)
         trials = {t.number: t for t in self.read[study_id]}
         for trial_id in list(self.own):
             number = self._mine(trial_id).number
             if self.inner.get_trial_id_from_study_id_trial_number(study_id, number) != trial_id:
                 continue  # another study's
             if fresh and number in trials and trials[number].state.is_finished():
-                del self.own[trial_id]  # finished by another process (its recovery)
+                del self.own[trial_id]  # the database's (finished here, or by another process)
             else:
                 trials[number] = self.own[trial_id]
         found = [trials[n] for n in sorted(trials) if states is None or trials[n].state in states]

@@ -126,7 +126,7 @@ class OpenStudy:
     requeue: Requeue
     #: the trials the study held when the run opened it, given designs waiting excluded
     previous: int = 0
-    #: a supervised worker's view of the storage (its study's: one read per ask and tell)
+    #: a supervised worker's view of the storage (its study's: one read per ask at most)
     view: WorkerStorage | None = None
 
 
@@ -394,7 +394,9 @@ class Coordinator:
         requeue = (
             self.opened.requeue if charge else Requeue(self.spec, self.opened.results, charge=False)
         )
-        fail_and_requeue(self.study, self.opened.storage, requeue, frozen, reason)
+        # (a worker's through its view, which keeps its copy of the trial as written)
+        storage = self.opened.view or self.opened.storage
+        fail_and_requeue(self.study, storage, requeue, frozen, reason)
         if self.role is not None:
             self.role.give()
 
