@@ -77,6 +77,10 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
+# a pinion point (pinion_at's) before the first row's: each loop evaluates it at one call site
+# (every inlined copy of it costs compile time), where a row's cell offset (none is -1) differs
+_NO_POINT = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
 # the stages of a ray in swept_exits: the scan (pair by pair until one is inside); the whole
 # field at the first sample out, at the one before and the one before that; the finer scan of
 # the bracket (through a flank's boundary); the whole field at its sample out and its last in
@@ -138,8 +142,7 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                 have[a:b] = False
                 s = rays[k, 0] + x * rays[k, 2]
                 t = rays[k, 1] + x * rays[k, 3]
-                offset = offsets[pair_row[hint]]
-                point = pinion_at(s, t, pinion, offset)  # (the rows of one cell offset)
+                offset, point = -1, _NO_POINT  # (the point at the first row's offset)
                 at = _zone_at(s, t, grid)
                 value = 1.0
                 for n in range(-1, b - a):
@@ -173,8 +176,7 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                 if not kept:  # the least swept one
                     s = rays[k, 0] + x * rays[k, 2]
                     t = rays[k, 1] + x * rays[k, 3]
-                    offset = offsets[pair_row[a]]
-                    point = pinion_at(s, t, pinion, offset)
+                    offset, point = -1, _NO_POINT
                     at = _zone_at(s, t, grid)
                     for q in range(a, b):
                         r = pair_row[q]
