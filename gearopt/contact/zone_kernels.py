@@ -104,7 +104,10 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
     sample (``f``, ``have``; ``kept``: known from the last sample, there). A ray's samples
     are taken in one loop, stage by stage, each separation evaluated in it (a call taking
     the tables would reference and release each of their arrays, and an inlined helper
-    taking them, across its branches: :mod:`gearopt.contact.kernels`)."""
+    taking them, across its branches: :mod:`gearopt.contact.kernels`): while scanning, the
+    pairs tried until one is inside (its own separation first: its swept one is no more, so
+    inside where it is); at the other stages every pair's separation in a loop of its own
+    (none evaluated where the sample found out holds them all), then the least swept one."""
     lag, factor, s0, ds, t0, dt, last0, last1, c = zone
     grid = (s0, ds, t0, dt, last0, last1)
     cells, offsets = pinion[14], rows[5]
