@@ -77,6 +77,10 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
+# a pinion point (pinion_at's) before the first row's: each loop evaluates it at one call site
+# (every inlined copy of it costs compile time), where a row's cell offset (none is -1) differs
+_NO_POINT = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
 # the stages of a ray in swept_exits: the scan (pair by pair until one is inside); the whole
 # field at the first sample out, at the one before and the one before that; the finer scan of
 # the bracket (through a flank's boundary); the whole field at its sample out and its last in
@@ -100,7 +104,10 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
     sample (``f``, ``have``; ``kept``: known from the last sample, there). A ray's samples
     are taken in one loop, stage by stage, each separation evaluated in it (a call taking
     the tables would reference and release each of their arrays, and an inlined helper
-    taking them, across its branches: :mod:`gearopt.contact.kernels`)."""
+    taking them, across its branches: :mod:`gearopt.contact.kernels`): while scanning, the
+    pairs tried until one is inside (its own separation first: its swept one is no more, so
+    inside where it is); at the other stages every pair's separation in a loop of its own
+    (none evaluated where the sample found out holds them all), then the least swept one."""
     lag, factor, s0, ds, t0, dt, last0, last1, c = zone
     grid = (s0, ds, t0, dt, last0, last1)
     cells, offsets = pinion[14], rows[5]
@@ -133,39 +140,63 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                 x, kept = zb, not inside
             else:
                 x = za
-            # the pattern at x
-            if not kept:
+            # the pattern at x: while scanning, the pairs tried until one is inside
+            if searching:
                 have[a:b] = False
-            s = rays[k, 0] + x * rays[k, 2]
-            t = rays[k, 1] + x * rays[k, 3]
-            offset = offsets[pair_row[hint if searching else a]]
-            point = pinion_at(s, t, pinion, offset)  # (the rows of one pinion cell offset)
-            at = _zone_at(s, t, grid)
-            value = 1.0 if searching else math.inf
-            for n in range(-1 if searching else 0, b - a):
-                p = hint if n < 0 else a + n
-                for q in (prev[p], p, nxt[p]):
-                    if q >= 0 and not have[q]:
+                s = rays[k, 0] + x * rays[k, 2]
+                t = rays[k, 1] + x * rays[k, 3]
+                offset, point = -1, _NO_POINT  # (the point at the first row's offset)
+                at = _zone_at(s, t, grid)
+                value = 1.0
+                for n in range(-1, b - a):
+                    p = hint if n < 0 else a + n
+                    for q in (p, prev[p], nxt[p]):
+                        if q >= 0 and not have[q]:
+                            r = pair_row[q]
+                            if offsets[r] != offset:
+                                offset = offsets[r]
+                                point = pinion_at(s, t, pinion, offset)
+                            f[q] = _separation_of(rows, r, point, at, gear, cells, lag, factor)
+                            have[q] = True
+                        if f[p] < c:  # (inside: its swept separation is no more)
+                            break
+                    swept = f[p]
+                    if swept < c:
+                        hint = p
+                        value = -1.0
+                        break
+                    if prev[p] >= 0 and nxt[p] >= 0:
+                        fa, fd = f[prev[p]], f[nxt[p]]
+                        curv = fa - 2.0 * swept + fd
+                        finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
+                        if finite and swept <= fa and swept <= fd and curv > 0.0:
+                            swept = swept - 0.125 * (fd - fa) ** 2 / curv
+                    if swept < c:
+                        hint = p
+                        value = -1.0
+                        break
+            else:  # every pair's separation (known where kept: the sample found out), then
+                if not kept:  # the least swept one
+                    s = rays[k, 0] + x * rays[k, 2]
+                    t = rays[k, 1] + x * rays[k, 3]
+                    offset, point = -1, _NO_POINT
+                    at = _zone_at(s, t, grid)
+                    for q in range(a, b):
                         r = pair_row[q]
                         if offsets[r] != offset:
                             offset = offsets[r]
                             point = pinion_at(s, t, pinion, offset)
                         f[q] = _separation_of(rows, r, point, at, gear, cells, lag, factor)
-                        have[q] = True
-                swept = f[p]
-                if prev[p] >= 0 and nxt[p] >= 0:
-                    fa, fd = f[prev[p]], f[nxt[p]]
-                    curv = fa - 2.0 * swept + fd
-                    finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
-                    if finite and swept <= fa and swept <= fd and curv > 0.0:
-                        swept = swept - 0.125 * (fd - fa) ** 2 / curv
-                if not searching:
+                value = math.inf
+                for p in range(a, b):
+                    swept = f[p]
+                    if prev[p] >= 0 and nxt[p] >= 0:
+                        fa, fd = f[prev[p]], f[nxt[p]]
+                        curv = fa - 2.0 * swept + fd
+                        finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
+                        if finite and swept <= fa and swept <= fd and curv > 0.0:
+                            swept = swept - 0.125 * (fd - fa) ** 2 / curv
                     value = min(value, swept)
-                elif swept < c:
-                    hint = p
-                    value = -1.0
-                    break
-            if not searching:
                 value -= c
             # the next stage
             if stage == _SCAN:
