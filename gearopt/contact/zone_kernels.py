@@ -77,6 +77,21 @@ def _crossing(t0, f0, t1, f1, t2, f2):
     return linear
 
 
+@compiled(inline=True)
+def _swept(f, p, prev, nxt):
+    """Pair ``p``'s swept separation: its own ``f[p]``, less the dip of the parabola through
+    it and its neighbours' (``prev[p]``, ``nxt[p]``) where it is their finite minimum and
+    the parabola opens upward (:func:`swept_exits`)."""
+    swept = f[p]
+    if prev[p] >= 0 and nxt[p] >= 0:
+        fa, fd = f[prev[p]], f[nxt[p]]
+        curv = fa - 2.0 * swept + fd
+        finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
+        if finite and swept <= fa and swept <= fd and curv > 0.0:
+            swept = swept - 0.125 * (fd - fa) ** 2 / curv
+    return swept
+
+
 # a pinion point (pinion_at's) before the first row's: each loop evaluates it at one call site
 # (every inlined copy of it costs compile time), where a row's cell offset (none is -1) differs
 _NO_POINT = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -160,17 +175,11 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                             have[q] = True
                         if f[p] < c:  # (inside: its swept separation is no more)
                             break
-                    swept = f[p]
-                    if swept < c:
+                    if f[p] < c:
                         hint = p
                         value = -1.0
                         break
-                    if prev[p] >= 0 and nxt[p] >= 0:
-                        fa, fd = f[prev[p]], f[nxt[p]]
-                        curv = fa - 2.0 * swept + fd
-                        finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
-                        if finite and swept <= fa and swept <= fd and curv > 0.0:
-                            swept = swept - 0.125 * (fd - fa) ** 2 / curv
+                    swept = _swept(f, p, prev, nxt)
                     if swept < c:
                         hint = p
                         value = -1.0
@@ -189,14 +198,7 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                         f[q] = _separation_of(rows, r, point, at, gear, cells, lag, factor)
                 value = math.inf
                 for p in range(a, b):
-                    swept = f[p]
-                    if prev[p] >= 0 and nxt[p] >= 0:
-                        fa, fd = f[prev[p]], f[nxt[p]]
-                        curv = fa - 2.0 * swept + fd
-                        finite = math.isfinite(fa) and math.isfinite(swept) and math.isfinite(fd)
-                        if finite and swept <= fa and swept <= fd and curv > 0.0:
-                            swept = swept - 0.125 * (fd - fa) ** 2 / curv
-                    value = min(value, swept)
+                    value = min(value, _swept(f, p, prev, nxt))
                 value -= c
             # the next stage
             if stage == _SCAN:
