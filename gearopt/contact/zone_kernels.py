@@ -155,13 +155,14 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                 x, kept = zb, not inside
             else:
                 x = za
-            # the pattern at x: while scanning, the pairs tried until one is inside
+            # the pattern at x (the point's pinion terms at the first row's offset): while
+            # scanning, the pairs tried until one is inside
+            s = rays[k, 0] + x * rays[k, 2]
+            t = rays[k, 1] + x * rays[k, 3]
+            offset, point = -1, _NO_POINT
+            at = _zone_at(s, t, grid)
             if searching:
                 have[a:b] = False
-                s = rays[k, 0] + x * rays[k, 2]
-                t = rays[k, 1] + x * rays[k, 3]
-                offset, point = -1, _NO_POINT  # (the point at the first row's offset)
-                at = _zone_at(s, t, grid)
                 value = 1.0
                 for n in range(-1, b - a):
                     p = hint if n < 0 else a + n
@@ -175,21 +176,12 @@ def swept_exits(rows, pinion, gear, zone, start, pair_row, prev, nxt, rays, tau,
                             have[q] = True
                         if f[p] < c:  # (inside: its swept separation is no more)
                             break
-                    if f[p] < c:
-                        hint = p
-                        value = -1.0
-                        break
-                    swept = _swept(f, p, prev, nxt)
-                    if swept < c:
+                    if f[p] < c or _swept(f, p, prev, nxt) < c:
                         hint = p
                         value = -1.0
                         break
             else:  # every pair's separation (known where kept: the sample found out), then
                 if not kept:  # the least swept one
-                    s = rays[k, 0] + x * rays[k, 2]
-                    t = rays[k, 1] + x * rays[k, 3]
-                    offset, point = -1, _NO_POINT
-                    at = _zone_at(s, t, grid)
                     for q in range(a, b):
                         r = pair_row[q]
                         if offsets[r] != offset:
