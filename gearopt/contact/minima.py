@@ -66,48 +66,58 @@ def minima_starts(
     n_p = profile.shape[0]
     at = np.empty(n, np.intp)
     chosen = 0
-    for r in range(n):  # numpy's argmin: the first least, or the first NaN
-        at[r] = 0
-        least = field[r, 0]
-        for g in range(1, size):
-            if least != least:
-                break
-            v = field[r, g]
-            if v < least or v != v:
-                least, at[r] = v, g
-        out[0, r] = field[r, at[r]]
-        out[1, r] = face[at[r] // n_p]
-        out[2, r] = profile[at[r] % n_p]
+    for r in range(n):
         if refined[r]:
             chosen += 1
     m = near_sh.shape[1] if with_near else 0
     take = np.empty(chosen, np.intp)
-    q = 0
-    for r in range(n):
-        if refined[r]:
-            take[q] = r
-            q += 1
     width = min(candidates, size)
     pick = np.empty((chosen, width), np.intp)
     values = np.empty((chosen, width))
-    for q in range(chosen):  # each row's ``width`` least refinable nodes, none twice
-        # (one pass, an insertion into the sorted list: the first of equal values first, as
-        # ``width`` passes each taking the first least of the nodes not yet picked)
-        r = take[q]
-        for c in range(width):
-            pick[q, c] = 0
-            values[q, c] = math.inf
-        for g in range(size):
-            v = field[r, g]
-            if not (v < values[q, width - 1] and keep[side[r], g]):
-                continue
-            c = width - 1
-            while c > 0 and v < values[q, c - 1]:
-                pick[q, c] = pick[q, c - 1]
-                values[q, c] = values[q, c - 1]
-                c -= 1
-            pick[q, c] = g
-            values[q, c] = v
+    q = 0
+    for r in range(n):
+        # numpy's argmin (the first least, or the first NaN): the first least of the
+        # numbers, the NaNs looked for after; with, on a refined row, its ``width`` least
+        # refinable nodes, none twice (an insertion into the sorted list: the first of equal
+        # values first, as ``width`` passes each taking the first least of the nodes not yet
+        # picked)
+        least, a, nan = field[r, 0], 0, False
+        if refined[r]:
+            take[q] = r
+            for c in range(width):
+                pick[q, c] = 0
+                values[q, c] = math.inf
+            own, cut = side[r], math.inf
+            for g in range(size):
+                v = field[r, g]
+                if v < least:
+                    least, a = v, g
+                nan |= v != v
+                if not (v < cut and keep[own, g]):
+                    continue
+                c = width - 1
+                while c > 0 and v < values[q, c - 1]:
+                    pick[q, c] = pick[q, c - 1]
+                    values[q, c] = values[q, c - 1]
+                    c -= 1
+                pick[q, c] = g
+                values[q, c] = v
+                cut = values[q, width - 1]
+            q += 1
+        else:
+            for g in range(1, size):
+                v = field[r, g]
+                if v < least:
+                    least, a = v, g
+                nan |= v != v
+        if nan or least != least:
+            a = 0
+            while field[r, a] == field[r, a]:
+                a += 1
+        at[r] = a
+        out[0, r] = field[r, a]
+        out[1, r] = face[a // n_p]
+        out[2, r] = profile[a % n_p]
     starts = 0
     for q in range(chosen):
         for c in range(width):
