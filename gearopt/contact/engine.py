@@ -652,7 +652,7 @@ class ContactEngine:
         rows = row_constants(self._row_maker(), side_all, phi_all, angle_all)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
         gear, pinion, counts = self.kernel_tables
-        new = self.recalled.fill(side_all[:n], phi, angle_all[:n], out)
+        new = self.recalled.fill(side_all[:n], phi_all[:n], angle_all[:n], out)
         part = out if new is None else np.empty((3, len(new), out.shape[2]))
         if part.shape[1]:
             _kernels.node_fields(

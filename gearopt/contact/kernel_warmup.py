@@ -8,6 +8,7 @@ import numpy as np
 
 from gearopt.contact import boundary_kernels, kernels, zone_kernels
 from gearopt.contact.minima import minima_pick, minima_starts
+from gearopt.contact.recall import recall_rows
 from gearopt.contact.rows import row_constants
 
 __all__ = ["warm", "warm_engine", "warm_zones"]
@@ -45,7 +46,7 @@ def warm() -> None:
 
 def warm_engine() -> None:
     """:func:`warm` of the engine's kernels (:mod:`gearopt.contact.kernels`, the minima, the
-    rows' constants, the boundary cells), not the zones'."""
+    rows' constants, the recall, the boundary cells), not the zones'."""
     if not kernels.ENABLED:
         return
     ip = np.intp
@@ -109,6 +110,8 @@ def warm_engine() -> None:
         np.zeros((3, 1)),
         np.empty(1, np.bool_),
     )
+    fields = np.zeros((3, 1, 1))
+    recall_rows(side, np.zeros(1), np.zeros(1), side, np.zeros(1), np.zeros(1), fields, fields)
     boundary_kernels.warm()
 
 
