@@ -29,6 +29,8 @@ from gearopt.flank import hermite_cells
 __all__ = ["ContactEngine", "EngineRows", "node_tables", "remembered_tables"]
 
 _HEAP = {"kept": False}
+#: the near rows' start points of a sample without them (:func:`minima_starts` reads none)
+_NO_NEAR = np.empty((2, 0))
 #: the flank-only tables of the last few fields and engines (:func:`remembered_tables`)
 _REMEMBERED: list[tuple[str, tuple, object]] = []
 
@@ -313,6 +315,7 @@ class ContactEngine:
         constants a field settles while it places its gear, once the engine is built (its other
         tables do not change)."""
         self.turn0 = np.array([f.gear_offset_rad for f in fields], float)
+        self._maker = None  # (its turns changed: _row_maker)
         # mm of normal separation per rad of gear rotation, typical of each side (a fixed
         # tolerance in rad for the refinement's edge test)
         scale = np.array([f.node_factor_mm or 50.0 for f in fields])
@@ -457,15 +460,18 @@ class ContactEngine:
         return row_constants(self._row_maker(), side, phi, angle)
 
     def _row_maker(self) -> tuple:
-        """The engine's part of :func:`gearopt.contact.rows.row_constants`'s arguments."""
-        return (
-            self.rotation,
-            self.turn0,
-            self.gear_sense,
-            float(self.ratio),
-            int(self.gear_cells),
-            int(self.pinion_cells),
-        )
+        """The engine's part of :func:`gearopt.contact.rows.row_constants`'s arguments (made
+        once a placement, :meth:`place`)."""
+        if self._maker is None:
+            self._maker = (
+                self.rotation,
+                self.turn0,
+                self.gear_sense,
+                float(self.ratio),
+                int(self.gear_cells),
+                int(self.pinion_cells),
+            )
+        return self._maker
 
     def rows_of(self, side, phi, angle) -> EngineRows:
         """The per-row constants of rows (side, pinion angle, gear angle), broadcast to one
@@ -646,8 +652,9 @@ class ContactEngine:
         side_all, phi_all = np.empty(n + m, np.intp), np.empty(n + m)
         angle_all = np.zeros(n + m)
         side_all[:n], phi_all[:n], angle_all[:n] = side, phi, gear_angle_rad
-        sh = np.empty((2, m))
+        sh = _NO_NEAR
         if near is not None:
+            sh = np.empty((2, m))
             side_all[n:], phi_all[n:], sh[0], sh[1] = near
         rows = row_constants(self._row_maker(), side_all, phi_all, angle_all)
         out = np.empty((3, n, self.shape[0] * self.shape[1]))
@@ -672,7 +679,7 @@ class ContactEngine:
         point = np.empty((3, n))
         refined = np.empty(n, bool)
         refined[:] = refine
-        at, take, origin, which, s, h, best, caps, group, tol = minima_starts(
+        at, which, s, h, best, caps, group, tol = minima_starts(
             out[0],
             side_all,
             refined,
@@ -691,14 +698,14 @@ class ContactEngine:
             )
         edge = np.empty(n, bool)
         minima_pick(
-            out[1], side_all, at, take, origin, s, h, best, flags, self.tolerances, point, edge
+            out[1], side_all, refined, at, which, s, h, best, flags, self.tolerances, point, edge
         )
-        shape = (n,) + self.shape
+        fields = out.reshape((3, n) + self.shape)
         sample = FieldSample(
             phi_rad=phi,
-            clearance_rad=out[0].reshape(shape),
-            normal_factor_mm=out[1].reshape(shape),
-            radius_mm=out[2].reshape(shape),
+            clearance_rad=fields[0],
+            normal_factor_mm=fields[1],
+            radius_mm=fields[2],
             minimum_rad=point[0],
             contact_face_mm=point[1],
             contact_profile_mm=point[2],
@@ -706,7 +713,7 @@ class ContactEngine:
         )
         if near is None:
             return sample
-        k = len(origin)
+        k = len(s) - m
         return sample, (best[k:], s[k:], h[k:], flags[k:])
 
     def interval_end(self, side: int, phi_rad, face_mm, profile_mm, step_rad, steps=128, tol=1e-6):

@@ -93,15 +93,15 @@ def warm_engine() -> None:
     one, flag = np.zeros((1, 1)), np.ones(1, np.bool_)
     tolerances, grid = np.ones((2, 1)), (np.zeros(1), np.zeros(1))
     keep, point = flag.reshape(1, 1), np.empty((3, 1))
-    at, take, origin, *_ = minima_starts(
+    at, which, *_ = minima_starts(
         one, side, flag, keep, 2, np.zeros((2, 1)), False, tolerances, grid, point
     )
     minima_pick(
         one,
         side,
+        flag,
         at,
-        take,
-        origin,
+        which,
         np.zeros(1),
         np.zeros(1),
         np.zeros(1),

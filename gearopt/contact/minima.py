@@ -56,10 +56,11 @@ def minima_starts(
     Returns
     -------
     tuple
-        ``(at, take, origin, which, s, t, best, caps, group, tol)``: each row's least node
-        (flat index), the refined rows, each start's row (the near rows' starts last, without
-        one), then :func:`gearopt.contact.kernels.refine`'s arguments (each start's row
-        among the n + m; none to refine where ``s`` is empty).
+        ``(at, which, s, t, best, caps, group, tol)``: each row's least node (flat index),
+        then :func:`gearopt.contact.kernels.refine`'s arguments: each start's row among the
+        n + m (the refined rows' starts in their order, the near rows' last), the starts'
+        points, values (NaN: none yet), the groups' step caps, each start's group and
+        tolerance (none to refine where ``s`` is empty).
     """
     face, profile = grid
     n, size = field.shape
@@ -124,7 +125,7 @@ def minima_starts(
             if math.isfinite(values[q, c]):
                 starts += 1
     k = starts + m
-    origin = np.empty(starts, np.intp)
+    which = np.empty(k, np.intp)
     s, t, best = np.empty(k), np.empty(k), np.empty(k)
     tol = np.empty(k)
     group = np.zeros(k, np.intp)
@@ -133,7 +134,7 @@ def minima_starts(
         r = take[q]
         for c in range(width):
             if math.isfinite(values[q, c]):
-                origin[p] = r
+                which[p] = r
                 s[p] = face[pick[q, c] // n_p]
                 t[p] = profile[pick[q, c] % n_p]
                 best[p] = values[q, c]
@@ -145,22 +146,18 @@ def minima_starts(
         best[starts + j] = np.nan
         tol[starts + j] = tolerances[0, side[n + j]]
         group[starts + j] = 1 if chosen else 0
+        which[starts + j] = n + j
     if not chosen:
         caps = np.array([3], np.intp)
     elif with_near:
         caps = np.array([4, 3], np.intp)
     else:
         caps = np.array([4], np.intp)
-    # each start's row: its sampled row's, then the near rows'
-    which = np.empty(k, np.intp)
-    which[:starts] = origin
-    for j in range(m):
-        which[starts + j] = n + j
-    return at, take, origin, which, s, t, best, caps, group, tol
+    return at, which, s, t, best, caps, group, tol
 
 
 @compiled
-def minima_pick(factor, side, at, take, origin, s, t, best, flags, tolerances, out, edge):
+def minima_pick(factor, side, refined, at, which, s, t, best, flags, tolerances, out, edge):
     """Each refined row's least start (the first of equals; NaN after any number), then the
     edge test against its node minimum: a node minimum lower than that by more than the edge
     tolerance stands, flagged as edge contact (as the engine's refinement did).
@@ -171,7 +168,9 @@ def minima_pick(factor, side, at, take, origin, s, t, best, flags, tolerances, o
         ``(n, nodes)`` the rows' node normal factors.
     side
         ``(n,)`` each row's field.
-    at, take, origin
+    refined
+        ``(n,)`` True where a row's minimum is refined (as :func:`minima_starts` took it).
+    at, which
         As :func:`minima_starts` returned them.
     s, t, best, flags
         The starts refined (:func:`gearopt.contact.kernels.refine`): points, values, edge
@@ -185,13 +184,14 @@ def minima_pick(factor, side, at, take, origin, s, t, best, flags, tolerances, o
         ``(n,)`` out: the rows' edge flags.
     """
     edge[:] = False
-    starts = origin.shape[0]
+    starts = which.shape[0]  # (the near rows' starts, last, belong to no sampled row)
     p = 0
-    for q in range(take.shape[0]):
-        r = take[q]
+    for r in range(refined.shape[0]):
+        if not refined[r]:
+            continue
         value, ss, tt, flag = math.inf, out[1, r], out[2, r], False
         first = True
-        while p < starts and origin[p] == r:
+        while p < starts and which[p] == r:
             v = best[p]
             if first or v < value or (value != value and v == v):
                 value, ss, tt, flag = v, s[p], t[p], flags[p]
