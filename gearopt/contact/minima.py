@@ -82,19 +82,20 @@ def minima_starts(
         # refinable nodes, none twice (an insertion into the sorted list: the first of equal
         # values first, as ``width`` passes each taking the first least of the nodes not yet
         # picked)
-        least, a, nan = field[r, 0], 0, False
+        row = field[r]
+        least, a, nan = row[0], 0, False
         if refined[r]:
             take[q] = r
             for c in range(width):
                 pick[q, c] = 0
                 values[q, c] = math.inf
-            own, cut = side[r], math.inf
+            mine, cut = keep[side[r]], math.inf
             for g in range(size):
-                v = field[r, g]
+                v = row[g]
                 if v < least:
                     least, a = v, g
                 nan |= v != v
-                if not (v < cut and keep[own, g]):
+                if not (v < cut and mine[g]):
                     continue
                 c = width - 1
                 while c > 0 and v < values[q, c - 1]:
@@ -107,7 +108,7 @@ def minima_starts(
             q += 1
         else:
             for g in range(1, size):
-                v = field[r, g]
+                v = row[g]
                 if v < least:
                     least, a = v, g
                 nan |= v != v
