@@ -497,11 +497,11 @@ class MeshCycle:
             factor_mm=_gathered_factors(lines, counts),
         )
         zones = self.zones(rows)
-        first = np.array([0, *itertools.accumulate(sizes)][:-1])
-        mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
+        first = [0, *itertools.accumulate(sizes)][:-1]
+        mean_rows = np.array([f + j for f in first for j in range(3)], np.intp)
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])
-        face, profile = pinion.face_mm, pinion.profile_mm
-        reach = float((face.max() - face.min()) + (profile.max() - profile.min()))
+        face, profile = pinion.face_mm, pinion.profile_mm  # (ascending)
+        reach = float((face[-1] - face[0]) + (profile[-1] - profile[0]))
         major_dir = zones.axes(mean_rows, contact[:, 0], contact[:, 1])
         major, middle = zones.chords(mean_rows, contact, major_dir, np.full(len(contact), reach))
         major, middle, major_dir = (
@@ -523,10 +523,10 @@ class MeshCycle:
             near = np.flatnonzero(offset <= major[k, 0] + 1.0)
             if not near.size and offset.size:  # no pair near M along the path: the nearest
                 near = np.array([int(np.argmin(offset))])
-            at_m = ([int(first[k])], [-(10**6)], [0])  # zone M alone
+            at_m = ([first[k]], [-(10**6)], [0])  # zone M alone
             if near.size:
                 across_m = (
-                    (first[k] + 3 + near).tolist(),
+                    (near + (first[k] + 3)).tolist(),
                     x["pattern_pair"][near].tolist(),
                     x["pattern_position"][near].tolist(),
                 )
@@ -542,10 +542,10 @@ class MeshCycle:
         directions[:, 0], directions[:, 1] = minor_dir, -minor_dir
         directions[:, 2], directions[:, 3] = across, -across
         ends = zones.pattern_exits(
-            np.array(ray),
+            np.array(ray, np.intp),
             np.array(ray_rows, np.intp),
-            np.array(keys),
-            np.array(positions),
+            np.array(keys, np.int64),
+            np.array(positions, np.int64),
             origins,
             directions.reshape(-1, 2),
             np.array([False, False, True, True] * n_sides),

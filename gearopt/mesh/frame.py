@@ -23,7 +23,7 @@ __all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
 
 def as_list(values) -> list[float]:
     """The values of an array, flattened, as a list of floats (the results' JSON)."""
-    return [float(v) for v in np.asarray(values).ravel()]
+    return np.asarray(values).ravel().astype(float).tolist()
 
 
 @dataclass(frozen=True, kw_only=True)

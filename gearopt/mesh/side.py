@@ -95,12 +95,13 @@ class SideCycle:
         contact's: set by the driver before the first extra positions
         (:meth:`gearopt.mesh.cycle.MeshCycle.classify`).
     end_inside, end_outside
-        ``(2,)`` the ends' brackets (start, end): the last point in interior contact and the
-        first beyond; None without interior contact.
+        ``[start, end]`` the ends' brackets (floats): the last point in interior contact and
+        the first beyond; None without interior contact.
     end_open
-        ``(2,)`` True where an end's bracket is open (a sample beyond the interior run).
+        ``[start, end]`` True where an end's bracket is open (a sample beyond the interior
+        run).
     end_face, end_profile
-        ``(2,)`` the contact points (pinion grid) at ``end_inside``.
+        ``[start, end]`` the contact points (pinion grid) at ``end_inside``.
     contact_path
         ``(v, face, profile)`` of the samples in contact, sorted by v (:meth:`contact_at`);
         None until first needed.
@@ -181,11 +182,11 @@ class SideCycle:
         self.interval_flat = False
         self.centre_row: int | None = None
         self.point_contact = False
-        self.end_inside: NDArray | None = None
-        self.end_outside: NDArray | None = None
-        self.end_open: NDArray | None = None
-        self.end_face: NDArray | None = None
-        self.end_profile: NDArray | None = None
+        self.end_inside: list[float] | None = None
+        self.end_outside: list[float] | None = None
+        self.end_open: list[bool] | None = None
+        self.end_face: list[float] | None = None
+        self.end_profile: list[float] | None = None
         self.contact_path: tuple[NDArray, NDArray, NDArray] | None = None
         self.ho: HandOver | None = None
         self.v_star: float | None = None
@@ -215,28 +216,32 @@ class SideCycle:
         # first longest run when the least lag is itself at an edge
         order = np.argsort(v)
         lo_k, hi_k, spread = kernels.interior_run(order, inner, sample.minimum_rad)
-        v = v[order]
         if lo_k < 0:  # edge contact only: no interval, centred on the least lag
             gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
-            best = float(v[np.argmin(gs)])
+            best = float(v[order][np.argmin(gs)])
             self.interval, self.interval_done = (best, best), True
             return
+        last = len(v) - 1
         self.interval_flat = bool(spread < FLAT_ARCSEC / ARCSEC)
-        self.centre_row = int(order[(lo_k + hi_k) // 2])
-        self.end_inside = np.array([v[lo_k], v[hi_k]])
-        self.end_outside = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])
-        self.end_open = np.array([lo_k > 0, hi_k < len(v) - 1])
-        cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
-        self.end_face, self.end_profile = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-        self.interval = (float(self.end_inside[0]), float(self.end_inside[1]))
+        # (the rows of the ends and of the samples beyond them, as Python floats: the
+        # bisection's arithmetic on two ends is cheaper than numpy's on arrays of two)
+        at = order[[lo_k, hi_k, max(lo_k - 1, 0), min(hi_k + 1, last), (lo_k + hi_k) // 2]]
+        self.centre_row = int(at[4])
+        at = at[:4]
+        ends = v[at].tolist()
+        self.end_inside, self.end_outside = ends[:2], ends[2:]
+        self.end_open = [lo_k > 0, hi_k < last]
+        self.end_face = sample.contact_face_mm[at[:2]].tolist()
+        self.end_profile = sample.contact_profile_mm[at[:2]].tolist()
+        self.interval = (ends[0], ends[1])
         parts = 2**BISECTIONS
-        inside, outside = self.end_inside.tolist(), self.end_outside.tolist()
-        faces, profiles = self.end_face.tolist(), self.end_profile.tolist()
-        for e in np.flatnonzero(self.end_open).tolist():
-            a, b, s, h = inside[e], outside[e], faces[e], profiles[e]
-            self.requests += [
-                Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
-            ]
+        for e in (0, 1):
+            if self.end_open[e]:
+                a, b = ends[e], ends[2 + e]
+                s, h = self.end_face[e], self.end_profile[e]
+                self.requests += [
+                    Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
+                ]
 
     def interval_finish(self) -> None:
         """Bisect each open bracket on the answers of its candidate points, then move it to the
@@ -246,22 +251,26 @@ class SideCycle:
             return
         self.interval_done = True
         parts = 2**BISECTIONS
-        for e in np.flatnonzero(self.end_open):
-            a, b = self.end_inside[e], self.end_outside[e]
+        inside, outside = self.end_inside, self.end_outside
+        for e in (0, 1):
+            if not self.end_open[e]:
+                continue
+            a, b = inside[e], outside[e]
             ja, jb = 0, parts
             for _ in range(BISECTIONS):
                 m = (ja + jb) // 2
                 value, s1, h1, edge = self.answers[("ci", e, m)]
                 if math.isfinite(value) and not edge:
                     ja = m
-                    self.end_face[e], self.end_profile[e] = s1, h1
+                    self.end_face[e], self.end_profile[e] = float(s1), float(h1)
                 else:
                     jb = m
-            self.end_inside[e] = a + (b - a) * ja / parts
-            self.end_outside[e] = a + (b - a) * jb / parts
+            inside[e] = a + (b - a) * ja / parts
+            outside[e] = a + (b - a) * jb / parts
             self.tangency_end(e)
-        ends = np.where(self.end_open, 0.5 * (self.end_inside + self.end_outside), self.end_inside)
-        self.interval = (float(ends[0]), float(ends[1]))
+        self.interval = tuple(
+            0.5 * (inside[e] + outside[e]) if self.end_open[e] else inside[e] for e in (0, 1)
+        )
 
     def tangency_end(self, e: int) -> None:
         """Move end ``e``, bisected on the engine's edge flag, to where the tangency point
@@ -281,8 +290,8 @@ class SideCycle:
         """
         if self.interval_flat and not self.point_contact:
             return
-        a, b = float(self.end_inside[e]), float(self.end_outside[e])
-        start = (float(self.end_face[e]), float(self.end_profile[e]))
+        a, b = self.end_inside[e], self.end_outside[e]
+        start = (self.end_face[e], self.end_profile[e])
         found = self.field.interval_end(a, start, b - a)
         if found is not None:
             (
@@ -290,7 +299,7 @@ class SideCycle:
                 self.end_outside[e],
                 self.end_face[e],
                 self.end_profile[e],
-            ) = found
+            ) = (float(x) for x in found)
 
     # -- the hand-over ----------------------------------------------------------------------
 
@@ -336,7 +345,7 @@ class SideCycle:
     def ask_iteration(self, x) -> None:
         """Sample both pairs at ``x`` (a point, or the points of a step) for the iteration on
         the bracket."""
-        self.v_star = float(np.atleast_1d(x)[0])
+        self.v_star = float(x[0] if isinstance(x, list) else np.atleast_1d(x)[0])
         if self.ho.flat:
             self.requests += self.ho.flat_requests(x, self.pitch)
         else:
@@ -466,14 +475,15 @@ class SideCycle:
             return
         if len(self.peak_lags) < 3:
             return
-        g = np.array([self.peak_lags[k] for k in (-1, 0, 1)])
+        g = [self.peak_lags[k] for k in (-1, 0, 1)]
         curvature = g[0] - 2.0 * g[1] + g[2]
-        if not (np.all(np.isfinite(g)) and curvature > 0.0):
-            self.g_peak = float(np.min(np.where(np.isfinite(g), g, np.inf)))
+        finite = all(math.isfinite(x) for x in g)
+        if not (finite and curvature > 0.0):
+            self.g_peak = min(x if math.isfinite(x) else math.inf for x in g)
             return
         z = 0.5 * (g[0] - g[2]) / curvature
         if abs(z) > 4.0:
-            self.g_peak = float(g.min())
+            self.g_peak = min(g)
             return
         self.probes.append((self.peak_at + z * self.step / 8.0, ("pk", "vertex")))
 
