@@ -612,8 +612,9 @@ class SideCycle:
             )
             bias = float(cs[0] - cs[1])
         start, end = self.interval
-        handovers = self.v_star + p1 * np.arange(-12, 13)
-        handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
+        low, high = float(t[0]) - 1e-12, float(t[-1]) + 1e-12
+        handovers = [self.v_star + p1 * k for k in range(-12, 13)]
+        handovers = np.array([x for x in handovers if low <= x <= high], float)
         return lines, dict(
             side=name,
             phi1_deg=np.degrees(t),

@@ -223,7 +223,9 @@ class Zones:
         # the largest curvature's direction, 0.5 atan2(2 H_sh, H_ss - H_hh); the major axis
         # across it
         across = 0.5 * np.arctan2(2.0 * c[:, 3], c[:, 2] - c[:, 4])
-        return np.stack([-np.sin(across), np.cos(across)], axis=1)
+        major = np.empty((len(across), 2))  # (np.stack's columns, without its overhead)
+        major[:, 0], major[:, 1] = -np.sin(across), np.cos(across)
+        return major
 
     def tangency_points(self, r, contact_mm, steps: int = 4) -> NDArray:
         """``(K, 2)`` the tangency points of rows ``r`` (the clearance's minimum on the
