@@ -18,7 +18,7 @@ from gearopt.analysis_options import check_options
 from gearopt.contact import ClearanceField, FieldSample, JointField
 from gearopt.mesh import kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, as_list
-from gearopt.mesh.pattern import columns, sample_rows
+from gearopt.mesh.pattern import sample_rows
 from gearopt.mesh.side import FLAT_ARCSEC, SideCycle
 from gearopt.mesh.zone import ZoneRows, Zones
 
@@ -352,7 +352,7 @@ class MeshCycle:
         for side in self.sides:
             out = np.empty(2 * len(side.u))
             count = kernels.beyond_rows(
-                side.interval_sample.phi_rad * side.field.sense,
+                side.interval_v,
                 side.u,
                 side.carrying,
                 self.pitch,
@@ -374,7 +374,7 @@ class MeshCycle:
         centres, lower = np.zeros(len(self.fields)), []
         ext_side = np.array([r[0] for r in beyond], np.intp)
         for side in self.sides:
-            v = side.interval_sample.phi_rad * side.field.sense
+            v = side.interval_v
             g = side.interval_sample.minimum_rad
             if more is not None:
                 rows = ext_side == side.index
@@ -510,9 +510,13 @@ class MeshCycle:
         # the path's direction at M: the zones' middles a quarter step either side
         path = middle[:, 2] - middle[:, 1]
         norm = np.hypot(path[:, 0], path[:, 1])
-        path = np.where(norm[:, None] > 1e-9, path / np.maximum(norm, 1e-300)[:, None], [1.0, 0.0])
-        across = columns(-path[:, 1], path[:, 0])
-        minor_dir = columns(-major_dir[:, 0, 1], major_dir[:, 0, 0])
+        # (unit vectors on floats: a side's two components; along +face where too short)
+        path = np.array(
+            [
+                (p_s / n, p_h / n) if n > 1e-9 else (1.0, 0.0)
+                for (p_s, p_h), n in zip(path.tolist(), norm.tolist(), strict=True)
+            ]
+        )
         # one batch: the minor chord at M (zone M's reach either side of M) and the pattern
         # across the path at M: how far the pattern the positions' zones sweep runs either
         # side of M along the line across the path (the pairs whose contact points lie within
@@ -538,9 +542,15 @@ class MeshCycle:
                 keys += key
                 positions += pos
         origins = np.repeat(middle[:, 0], 4, axis=0)
-        directions = np.empty((n_sides, 4, 2))
-        directions[:, 0], directions[:, 1] = minor_dir, -minor_dir
-        directions[:, 2], directions[:, 3] = across, -across
+        # each side's minor axis (across the major), either way, and across the path, either way
+        directions = np.array(
+            [
+                ((-a_h, a_s), (a_h, -a_s), (-p_h, p_s), (p_h, -p_s))
+                for (a_s, a_h), (p_s, p_h) in zip(
+                    major_dir[:, 0].tolist(), path.tolist(), strict=True
+                )
+            ]
+        )
         ends = zones.pattern_exits(
             np.array(ray, np.intp),
             np.array(ray_rows, np.intp),

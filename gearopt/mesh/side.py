@@ -62,6 +62,8 @@ class SideCycle:
     ----------
     index, field, sample, interval_sample, u, ids, inv, t, pitch, step
         As given.
+    interval_v
+        The relative rotations of ``interval_sample``'s rows.
     g
         ``(n, pairs)`` the pairs' lags (least clearance; +inf without contact on the flanks).
     edge_all
@@ -140,6 +142,7 @@ class SideCycle:
         self.sample, self.interval_sample = sample, interval_sample
         self.u, self.ids, self.inv = u, ids, inv
         self.t, self.pitch, self.step = t, pitch, step
+        self.interval_v = interval_sample.phi_rad * field.sense
         shape = u.shape
         self.g, self.cs, self.ch = np.empty(shape), np.empty(shape), np.empty(shape)
         self.edge_all = np.empty(shape, bool)
@@ -208,8 +211,7 @@ class SideCycle:
         """Bracket the relative rotations between which a pair's contact stays inside the
         flanks (not at an edge) from the samples, and ask for the points a bisection of each
         open bracket can visit (warm-started Newton), all at once."""
-        sample = self.interval_sample
-        v = sample.phi_rad * self.field.sense
+        sample, v = self.interval_sample, self.interval_v
         inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
         self.interval_done = False
         # the unbroken run of interior samples around the least lag (the mesh centre), or the
@@ -332,8 +334,7 @@ class SideCycle:
     def crossing(self, lo, hi) -> float | None:
         """The crossing of the two pairs' lags interpolated through the interval samples
         (:func:`~gearopt.mesh.handover.lag_crossing`), or None."""
-        sample = self.interval_sample
-        v = sample.phi_rad * self.field.sense
+        sample, v = self.interval_sample, self.interval_v
         return lag_crossing(v, sample.minimum_rad, sample.edge, lo, hi, self.pitch, self.step)
 
     def ask_fit(self, x) -> None:
@@ -493,7 +494,7 @@ class SideCycle:
         if self.contact_path is None:
             sample = self.interval_sample
             ok = np.isfinite(sample.minimum_rad)
-            vs = sample.phi_rad[ok] * self.field.sense
+            vs = self.interval_v[ok]
             order = np.argsort(vs)
             self.contact_path = (
                 vs[order],
