@@ -202,7 +202,7 @@ class HandOver:
         one pair's lag steps and the other's is smooth across the bracket (:attr:`smooth`),
         only the stepping pair. The tags asked for are :attr:`asked`."""
         self.mode = "iterate"
-        self.xs = sorted({float(x) for x in (xs if isinstance(xs, list) else np.atleast_1d(xs))})
+        self.xs = sorted(set(map(float, xs if isinstance(xs, list) else np.atleast_1d(xs))))
         self.x = self.xs[0]
         smooth = int(self.state[_SMOOTH])  # (-1: none)
         pairs = [(pair, shift) for pair, shift in ((0, 0.0), (1, pitch)) if pair != smooth]

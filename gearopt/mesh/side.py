@@ -380,9 +380,10 @@ class SideCycle:
             else:
                 self.ask_iteration(x)
             return
-        if not all(tag in self.answers for tag in ho.asked):
+        answers = self.answers
+        if not all(map(answers.__contains__, ho.asked)):
             return
-        xs = ho.take_iteration({tag: float(self.answers.pop(tag)[0]) for tag in ho.asked})
+        xs = ho.take_iteration({tag: float(answers.pop(tag)[0]) for tag in ho.asked})
         if xs is None:
             self.v_star, self.g_hand = ho.x, ho.lag
         else:
