@@ -550,7 +550,7 @@ class SideCycle:
         g_hand = self.g_hand
         if g_hand is None:
             g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
-        g_min = float(min(ex.minimum_rad[2], lag.min()))
+        g_min = min(float(ex.minimum_rad[2]), float(lag.min()))
         if self.g_peak is not None:
             g_min = min(g_min, self.g_peak)
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
