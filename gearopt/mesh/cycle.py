@@ -137,7 +137,7 @@ class ToothContact:
                 "face_mm": as_list(self.path_face_mm),
                 "profile_mm": as_list(self.path_profile_mm),
             },
-            "edge": [bool(e) for e in self.edge],
+            "edge": np.asarray(self.edge, bool).tolist(),
             "pattern": {
                 "width_mm": float(self.width_mm),
                 "ellipse_major_axis_mm": float(self.ellipse_major_axis_mm),

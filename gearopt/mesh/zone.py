@@ -155,9 +155,10 @@ class Zones:
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
         self.last = (len(face_mm) - 2, len(profile_mm) - 2)
-        low = np.array([self.face0, self.profile0])
-        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
-        self.box = np.concatenate([low, high])  # the grid's edges (:meth:`to_edge`)
+        face_end = self.face0 + self.dface * (self.last[0] + 1)
+        profile_end = self.profile0 + self.dprofile * (self.last[1] + 1)
+        # the grid's edges (:meth:`to_edge`): low face, low profile, high face, high profile
+        self.box = np.array([self.face0, self.profile0, face_end, profile_end])
         self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
@@ -340,17 +341,22 @@ class Zones:
         farthest is the exit (:func:`gearopt.contact.zone_kernels.union_exits`).
         """
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
-        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         order = np.argsort(ray, kind="stable")
+        start = np.searchsorted(ray[order], np.arange(len(origins) + 1))
+        return self._union_exits(start, r[order], origins, directions, reach)
+
+    def _union_exits(self, start, r, origins, directions, reach) -> NDArray:
+        """:meth:`exits` on the pairs in order of their rays, ray k's
+        ``r[start[k]:start[k + 1]]``."""
+        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays = len(origins)
-        start = np.searchsorted(ray[order], np.arange(k_rays + 1))
         rays = self.rays(origins, directions)
         reach_mm, reach = reach, np.empty(k_rays)  # (writable)
         reach[:] = reach_mm
         tau = np.empty((k_rays, len(SCAN)))  # (to the grid's edge or the reach: to_edge's)
         zone_kernels.ray_samples(rays, self.box, reach, np.ones(k_rays, bool), SCAN, SCAN, tau)
         out = np.empty(k_rays)
-        zone_kernels.union_exits(*self.tables(), start, r[order], rays, tau, _ZOOM_FRACTIONS, out)
+        zone_kernels.union_exits(*self.tables(), start, r, rays, tau, _ZOOM_FRACTIONS, out)
         return out
 
     def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
@@ -586,9 +592,9 @@ class Zones:
         ``(length, middle)``, the middle ``(K, 2)``."""
         k = len(origins)
         both = np.concatenate([axes, -axes])
-        ends = self.exits(
-            np.arange(2 * k),
-            np.concatenate([r, r]),
+        ends = self._union_exits(  # (ray j: row r[j % k], one a ray: already in order)
+            np.arange(2 * k + 1),
+            np.concatenate([r, r]).astype(np.intp, copy=False),
             np.concatenate([origins, origins]),
             both,
             np.concatenate([reach, reach]),
