@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import ClearanceField, ContactError, FieldSample
-from gearopt.mesh import kernels
+from gearopt.mesh import kernels, side_kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, gear_path_angle
 from gearopt.mesh.handover import FIT_TAGS, ITERATION_TAGS, HandOver, Request, lag_crossing
 from gearopt.mesh.pattern import centroids, columns, separation_mm
@@ -545,7 +545,6 @@ class SideCycle:
         """
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
-        rows = np.arange(positions)
         lag, carrying = self.lag, self.carrying
         g_hand = self.g_hand
         if g_hand is None:
@@ -587,19 +586,39 @@ class SideCycle:
         pattern = out[:size].reshape(field.pinion.shape)
         path_s, path_h, te = out[size : size + 3 * positions].reshape(3, positions)
         pair_te = out[size + 3 * positions :].reshape(pairs, positions)
-        held = held[:count]
-        position = held // pairs
+        # the held entries' rows and the carrying pair's contact points, one compiled pass
+        ints, floats = np.empty((2, count), np.intp), np.empty(5 * count + 2 * positions)
+        edge = np.empty(positions, bool)
+        side_kernels.carried_rows(
+            held[:count],
+            pairs,
+            self.inv,
+            np.ascontiguousarray(self.sample.phi_rad),
+            lag,
+            self.cs.ravel(),
+            self.ch.ravel(),
+            self.ids.ravel(),
+            carrying,
+            self.edge_all.ravel(),
+            float(frame.toe_mm),
+            float(frame.root_mm),
+            ints,
+            floats,
+            edge,
+        )
+        position, sample_row = ints
+        pattern_phi, pattern_lag, pattern_pair = floats[: 3 * count].reshape(3, count)
         lines = dict(
             mean_phi_rad=ex.phi_rad[3:6],
             mean_lag_rad=ex.minimum_rad[3:6],
             mean_factor_mm=getattr(ex, kind)[3:6],
             mean_contact_mm=columns(ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]),
-            pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
-            pattern_lag_rad=lag[position],
-            pattern_factor_rows=(node_factor, self.inv[held]),
-            pattern_contact_mm=columns(self.cs.ravel()[held], self.ch.ravel()[held]),
+            pattern_phi_rad=pattern_phi,
+            pattern_lag_rad=pattern_lag,
+            pattern_factor_rows=(node_factor, sample_row),
+            pattern_contact_mm=floats[3 * count : 5 * count].reshape(count, 2),
             pattern_position=position,
-            pattern_pair=self.ids.ravel()[held],
+            pattern_pair=pattern_pair,
             interval=self.interval,
         )
         # bias: the contact line's extension along the face from the pair's entry into contact
@@ -627,9 +646,9 @@ class SideCycle:
             te_peak_to_peak_arcsec=float(peak_to_peak),
             path_face_mm=path_s,
             path_profile_mm=path_h,
-            contact_face_mm=self.cs[rows, carrying] - frame.toe_mm,
-            contact_profile_mm=self.ch[rows, carrying] - frame.root_mm,
-            edge=self.edge_all[rows, carrying],
+            contact_face_mm=floats[5 * count : 5 * count + positions],
+            contact_profile_mm=floats[5 * count + positions :],
+            edge=edge,
             separation_um=sep_um.reshape((positions, pairs) + field.pinion.shape),
             pattern_um=pattern,
             face_mm=face,
