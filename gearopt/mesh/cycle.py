@@ -271,6 +271,7 @@ class MeshCycle:
         ends of that range (a contact still inside the flanks there would cut the contact
         interval short), all sides in one call; the sides start anew on it."""
         t, p1, step = self.t, self.pitch, self.step
+        extend = step * EXTEND
         windows, rows_side, rows_u, start = [], [], [], 0
         for k in range(len(self.fields)):
             # (n, pairs): each pair's id and base-pair relative rotation; each distinct one's
@@ -283,7 +284,7 @@ class MeshCycle:
             )
             first = first[:count]
             uu = u.ravel()[first]
-            rows_u += [uu, uu.min() - step * EXTEND, uu.max() + step * EXTEND]
+            rows_u += [uu, uu.min() - extend, uu.max() + extend]
             windows.append((u, ids, inv, start, len(first)))
             start += len(first) + 2 * len(EXTEND)
             rows_side.append(np.full(len(first) + 2 * len(EXTEND), k, np.intp))

@@ -508,7 +508,8 @@ class SideCycle:
     def near_extras_sample(self, mean: FieldSample) -> FieldSample:
         """The extra positions' sample from their refined minima (answers ``("ex", j)``) and
         the node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
-        got = np.array([self.answers.pop(("ex", j)) for j in range(6)], float).T.copy()
+        rows = (self.answers.pop(("ex", j)) for j in range(6))
+        got = np.array(list(zip(*rows, strict=True)), float)
         fields = np.empty((3, 6) + mean.clearance_rad.shape[1:])
         fields[0, :3], fields[1:, :3] = np.inf, 1.0
         fields[0, 3:], fields[1, 3:], fields[2, 3:] = (
