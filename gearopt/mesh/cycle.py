@@ -565,19 +565,14 @@ class MeshCycle:
         outlines = _Outlines(
             zones,
             corner,
-            [
-                (
-                    first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
-                    x["pattern_contact_mm"],
-                    self.sense[k] * x["pattern_phi_rad"],
-                    x["pattern_pair"],
-                    x["pattern_position"],
-                    major[k, 0] + 1.0,
-                    x["interval"],
-                    self.sides[k].point_contact,
-                )
-                for k, x in enumerate(lines)
-            ],
+            partial(
+                _outline_sides,
+                lines,
+                first,
+                major[:, 0],
+                self.sense,
+                [side.point_contact for side in self.sides],
+            ),
         )
         out = []
         for k, (_, kw) in enumerate(parts):
@@ -621,10 +616,30 @@ def _gathered_factors(lines, counts) -> NDArray:
     return factor
 
 
+def _outline_sides(lines, first, major, sense, point_contact) -> list[tuple]:
+    """Each side's arguments of :meth:`gearopt.mesh.zone.Zones.outline` (``tangency`` last)
+    from :meth:`MeshCycle.contacts`' rows: the pattern's rows, their contact points, relative
+    rotations, pairs and positions, the reach (the major axis at M plus a mm), the contact
+    interval and whether the side is a point contact."""
+    return [
+        (
+            first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
+            x["pattern_contact_mm"],
+            sense[k] * x["pattern_phi_rad"],
+            x["pattern_pair"],
+            x["pattern_position"],
+            major[k] + 1.0,
+            x["interval"],
+            point_contact[k],
+        )
+        for k, x in enumerate(lines)
+    ]
+
+
 class _Outlines:
     """The sides' outlines (:meth:`gearopt.mesh.zone.Zones.outlines`) in pattern coordinates,
-    measured together when the first is asked for (``sides``: each side's arguments of
-    :meth:`~gearopt.mesh.zone.Zones.outline`, ``tangency`` last)."""
+    measured together when the first is asked for (``sides``: a callable making each side's
+    arguments of :meth:`~gearopt.mesh.zone.Zones.outline`, ``tangency`` last, then)."""
 
     def __init__(self, zones: Zones, corner, sides) -> None:
         self.zones, self.corner, self.sides = zones, corner, sides
@@ -632,7 +647,7 @@ class _Outlines:
 
     def __call__(self, k: int) -> NDArray:
         if self.found is None:
-            self.found = [o - self.corner for o in self.zones.outlines(self.sides)]
+            self.found = [o - self.corner for o in self.zones.outlines(self.sides())]
         return self.found[k]
 
 
