@@ -552,11 +552,12 @@ class MeshCycle:
                 )
             ]
         )
+        ray, ray_rows, keys, positions = np.array([ray, ray_rows, keys, positions], np.int64)
         ends = zones.pattern_exits(
-            np.array(ray, np.intp),
-            np.array(ray_rows, np.intp),
-            np.array(keys, np.int64),
-            np.array(positions, np.int64),
+            ray,
+            ray_rows,
+            keys,
+            positions,
             origins,
             directions.reshape(-1, 2),
             np.array([False, False, True, True] * n_sides),
