@@ -42,6 +42,7 @@ cent over a zone.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -469,7 +470,7 @@ class Zones:
         rows = [np.asarray(side[0], np.intp) for side in sides]
         contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
         sep = self.point_separations(np.concatenate(rows), np.concatenate(contact))
-        at = np.cumsum([0] + [len(r) for r in rows]).tolist()
+        at = list(itertools.accumulate([0] + [len(r) for r in rows]))
         sep = [sep[a:b] for a, b in zip(at[:-1], at[1:], strict=True)]
         found = [
             self._outline_rays(r, c, g, *side[2:])
@@ -477,7 +478,7 @@ class Zones:
         ]
         rays = [f for f in found if f is not None]
         if rays:
-            first = np.cumsum([0] + [len(f[0]) for f in rays])
+            first = list(itertools.accumulate([0] + [len(f[0]) for f in rays]))
             ends = self.pattern_exits(
                 np.concatenate([f[2] + k for f, k in zip(rays, first, strict=False)]),
                 *(np.concatenate([f[i] for f in rays]) for i in (3, 4, 5)),
