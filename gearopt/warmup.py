@@ -21,7 +21,7 @@ from gearopt import determinants, envelope_nodes, flank, jit
 from gearopt.contact import kernel_warmup as contact_kernels
 from gearopt.loaded import kernels as loaded_kernels
 from gearopt.loaded import lcp_kernels
-from gearopt.mesh import handover_kernels
+from gearopt.mesh import handover_kernels, side_kernels
 from gearopt.mesh import kernels as mesh_kernels
 from gearopt.plugins import machine_models
 
@@ -49,6 +49,7 @@ def _stages() -> dict[str, tuple]:
             contact_kernels.warm_zones,
             mesh_kernels.warm,
             handover_kernels.warm,
+            side_kernels.warm,
             loaded_kernels.warm,
             lcp_kernels.warm,
         ),
@@ -56,6 +57,7 @@ def _stages() -> dict[str, tuple]:
             contact_kernels.warm,
             mesh_kernels.warm,
             handover_kernels.warm,
+            side_kernels.warm,
             loaded_kernels.warm,
             lcp_kernels.warm,
         ),

@@ -38,12 +38,13 @@ def _compiled_kernels():
     study workers then load the cache rather than compile it side by side."""
     from gearopt.contact import kernel_warmup as contact_kernels
     from gearopt.loaded import kernels as loaded_kernels
-    from gearopt.mesh import handover_kernels
+    from gearopt.mesh import handover_kernels, side_kernels
     from gearopt.mesh import kernels as mesh_kernels
 
     contact_kernels.warm()
     mesh_kernels.warm()
     handover_kernels.warm()
+    side_kernels.warm()
     loaded_kernels.warm()
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from functools import cached_property, partial
+from functools import cached_property, lru_cache, partial
 from typing import Any
 
 import numpy as np
@@ -18,7 +18,7 @@ from gearopt.analysis_options import check_options
 from gearopt.contact import ClearanceField, FieldSample, JointField
 from gearopt.mesh import kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, as_list
-from gearopt.mesh.pattern import columns, sample_rows
+from gearopt.mesh.pattern import sample_rows
 from gearopt.mesh.side import FLAT_ARCSEC, SideCycle
 from gearopt.mesh.zone import ZoneRows, Zones
 
@@ -137,7 +137,7 @@ class ToothContact:
                 "face_mm": as_list(self.path_face_mm),
                 "profile_mm": as_list(self.path_profile_mm),
             },
-            "edge": [bool(e) for e in self.edge],
+            "edge": np.asarray(self.edge, bool).tolist(),
             "pattern": {
                 "width_mm": float(self.width_mm),
                 "ellipse_major_axis_mm": float(self.ellipse_major_axis_mm),
@@ -213,7 +213,7 @@ class MeshCycle:
         p1 = self.fields[0].pinion.pitch_rad
         self.pitch = p1
         self.sense = np.array([f.sense for f in self.fields], float)
-        self.t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
+        self.t = _positions(-0.5 * cycles * p1, 0.5 * cycles * p1, positions).copy()
         self.step = self.t[1] - self.t[0]
         self.offsets = np.arange(pairs) - (pairs - 1) // 2
         #: each side's window (pair offsets), :attr:`offsets` unless widened (:meth:`widen`)
@@ -271,6 +271,7 @@ class MeshCycle:
         ends of that range (a contact still inside the flanks there would cut the contact
         interval short), all sides in one call; the sides start anew on it."""
         t, p1, step = self.t, self.pitch, self.step
+        extend = step * EXTEND
         windows, rows_side, rows_u, start = [], [], [], 0
         for k in range(len(self.fields)):
             # (n, pairs): each pair's id and base-pair relative rotation; each distinct one's
@@ -283,7 +284,7 @@ class MeshCycle:
             )
             first = first[:count]
             uu = u.ravel()[first]
-            rows_u += [uu, uu.min() - step * EXTEND, uu.max() + step * EXTEND]
+            rows_u += [uu, uu.min() - extend, uu.max() + extend]
             windows.append((u, ids, inv, start, len(first)))
             start += len(first) + 2 * len(EXTEND)
             rows_side.append(np.full(len(first) + 2 * len(EXTEND), k, np.intp))
@@ -352,7 +353,7 @@ class MeshCycle:
         for side in self.sides:
             out = np.empty(2 * len(side.u))
             count = kernels.beyond_rows(
-                side.interval_sample.phi_rad * side.field.sense,
+                side.interval_v,
                 side.u,
                 side.carrying,
                 self.pitch,
@@ -374,7 +375,7 @@ class MeshCycle:
         centres, lower = np.zeros(len(self.fields)), []
         ext_side = np.array([r[0] for r in beyond], np.intp)
         for side in self.sides:
-            v = side.interval_sample.phi_rad * side.field.sense
+            v = side.interval_v
             g = side.interval_sample.minimum_rad
             if more is not None:
                 rows = ext_side == side.index
@@ -497,11 +498,11 @@ class MeshCycle:
             factor_mm=_gathered_factors(lines, counts),
         )
         zones = self.zones(rows)
-        first = np.array([0, *itertools.accumulate(sizes)][:-1])
-        mean_rows = (first[:, None] + np.arange(3)[None, :]).ravel()
+        first = [0, *itertools.accumulate(sizes)][:-1]
+        mean_rows = np.array([f + j for f in first for j in range(3)], np.intp)
         contact = np.concatenate([x["mean_contact_mm"] for x in lines])
-        face, profile = pinion.face_mm, pinion.profile_mm
-        reach = float((face.max() - face.min()) + (profile.max() - profile.min()))
+        face, profile = pinion.face_mm, pinion.profile_mm  # (ascending)
+        reach = float((face[-1] - face[0]) + (profile[-1] - profile[0]))
         major_dir = zones.axes(mean_rows, contact[:, 0], contact[:, 1])
         major, middle = zones.chords(mean_rows, contact, major_dir, np.full(len(contact), reach))
         major, middle, major_dir = (
@@ -510,9 +511,13 @@ class MeshCycle:
         # the path's direction at M: the zones' middles a quarter step either side
         path = middle[:, 2] - middle[:, 1]
         norm = np.hypot(path[:, 0], path[:, 1])
-        path = np.where(norm[:, None] > 1e-9, path / np.maximum(norm, 1e-300)[:, None], [1.0, 0.0])
-        across = columns(-path[:, 1], path[:, 0])
-        minor_dir = columns(-major_dir[:, 0, 1], major_dir[:, 0, 0])
+        # (unit vectors on floats: a side's two components; along +face where too short)
+        path = np.array(
+            [
+                (p_s / n, p_h / n) if n > 1e-9 else (1.0, 0.0)
+                for (p_s, p_h), n in zip(path.tolist(), norm.tolist(), strict=True)
+            ]
+        )
         # one batch: the minor chord at M (zone M's reach either side of M) and the pattern
         # across the path at M: how far the pattern the positions' zones sweep runs either
         # side of M along the line across the path (the pairs whose contact points lie within
@@ -523,10 +528,10 @@ class MeshCycle:
             near = np.flatnonzero(offset <= major[k, 0] + 1.0)
             if not near.size and offset.size:  # no pair near M along the path: the nearest
                 near = np.array([int(np.argmin(offset))])
-            at_m = ([int(first[k])], [-(10**6)], [0])  # zone M alone
+            at_m = ([first[k]], [-(10**6)], [0])  # zone M alone
             if near.size:
                 across_m = (
-                    (first[k] + 3 + near).tolist(),
+                    (near + (first[k] + 3)).tolist(),
                     x["pattern_pair"][near].tolist(),
                     x["pattern_position"][near].tolist(),
                 )
@@ -538,14 +543,21 @@ class MeshCycle:
                 keys += key
                 positions += pos
         origins = np.repeat(middle[:, 0], 4, axis=0)
-        directions = np.empty((n_sides, 4, 2))
-        directions[:, 0], directions[:, 1] = minor_dir, -minor_dir
-        directions[:, 2], directions[:, 3] = across, -across
+        # each side's minor axis (across the major), either way, and across the path, either way
+        directions = np.array(
+            [
+                ((-a_h, a_s), (a_h, -a_s), (-p_h, p_s), (p_h, -p_s))
+                for (a_s, a_h), (p_s, p_h) in zip(
+                    major_dir[:, 0].tolist(), path.tolist(), strict=True
+                )
+            ]
+        )
+        ray, ray_rows, keys, positions = np.array([ray, ray_rows, keys, positions], np.int64)
         ends = zones.pattern_exits(
-            np.array(ray),
-            np.array(ray_rows, np.intp),
-            np.array(keys),
-            np.array(positions),
+            ray,
+            ray_rows,
+            keys,
+            positions,
             origins,
             directions.reshape(-1, 2),
             np.array([False, False, True, True] * n_sides),
@@ -554,19 +566,14 @@ class MeshCycle:
         outlines = _Outlines(
             zones,
             corner,
-            [
-                (
-                    first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
-                    x["pattern_contact_mm"],
-                    self.sense[k] * x["pattern_phi_rad"],
-                    x["pattern_pair"],
-                    x["pattern_position"],
-                    major[k, 0] + 1.0,
-                    x["interval"],
-                    self.sides[k].point_contact,
-                )
-                for k, x in enumerate(lines)
-            ],
+            partial(
+                _outline_sides,
+                lines,
+                first,
+                major[:, 0],
+                self.sense,
+                [side.point_contact for side in self.sides],
+            ),
         )
         out = []
         for k, (_, kw) in enumerate(parts):
@@ -589,6 +596,13 @@ class MeshCycle:
         return out
 
 
+@lru_cache(maxsize=64)
+def _positions(start: float, end: float, positions: int) -> NDArray:
+    """``np.linspace(start, end, positions)``, made once per range and count (a study's trials
+    share them; callers take a copy)."""
+    return np.linspace(start, end, positions)
+
+
 def _gathered_factors(lines, counts) -> NDArray:
     """``(R, n_f, n_p)`` the sides' zone rows' node factors, M's rows then the pattern's of each
     side (:meth:`SideCycle.assemble`'s ``lines``), gathered in one copy."""
@@ -603,10 +617,30 @@ def _gathered_factors(lines, counts) -> NDArray:
     return factor
 
 
+def _outline_sides(lines, first, major, sense, point_contact) -> list[tuple]:
+    """Each side's arguments of :meth:`gearopt.mesh.zone.Zones.outline` (``tangency`` last)
+    from :meth:`MeshCycle.contacts`' rows: the pattern's rows, their contact points, relative
+    rotations, pairs and positions, the reach (the major axis at M plus a mm), the contact
+    interval and whether the side is a point contact."""
+    return [
+        (
+            first[k] + 3 + np.arange(len(x["pattern_phi_rad"])),
+            x["pattern_contact_mm"],
+            sense[k] * x["pattern_phi_rad"],
+            x["pattern_pair"],
+            x["pattern_position"],
+            major[k] + 1.0,
+            x["interval"],
+            point_contact[k],
+        )
+        for k, x in enumerate(lines)
+    ]
+
+
 class _Outlines:
     """The sides' outlines (:meth:`gearopt.mesh.zone.Zones.outlines`) in pattern coordinates,
-    measured together when the first is asked for (``sides``: each side's arguments of
-    :meth:`~gearopt.mesh.zone.Zones.outline`, ``tangency`` last)."""
+    measured together when the first is asked for (``sides``: a callable making each side's
+    arguments of :meth:`~gearopt.mesh.zone.Zones.outline`, ``tangency`` last, then)."""
 
     def __init__(self, zones: Zones, corner, sides) -> None:
         self.zones, self.corner, self.sides = zones, corner, sides
@@ -614,7 +648,7 @@ class _Outlines:
 
     def __call__(self, k: int) -> NDArray:
         if self.found is None:
-            self.found = [o - self.corner for o in self.zones.outlines(self.sides)]
+            self.found = [o - self.corner for o in self.zones.outlines(self.sides())]
         return self.found[k]
 
 

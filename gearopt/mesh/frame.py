@@ -9,6 +9,7 @@ toward the top.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,7 +24,7 @@ __all__ = ["ARCSEC", "ToothFrame", "as_list", "gear_path_angle", "path_angle"]
 
 def as_list(values) -> list[float]:
     """The values of an array, flattened, as a list of floats (the results' JSON)."""
-    return [float(v) for v in np.asarray(values).ravel()]
+    return np.asarray(values).ravel().astype(float).tolist()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -151,10 +152,26 @@ def gear_path_angle(field: ClearanceField, ex: FieldSample, frame: ToothFrame) -
     chord = (b[0] - a[0], b[1] - a[1], b[2] - a[2])
     s2, h2 = field.gear.to_grid(mid[2], math.hypot(mid[0], mid[1]))
     s2, h2 = float(s2), float(h2)
-    jet = FlankJet(field.gear)
+    cells, coefficients = _gear_jet(field.gear)
     root = math.radians(frame.gear_root_angle_deg)
-    cells = (jet.s0, jet.h0, jet.ds, jet.dh, jet.n_f, jet.n_p, jet.cells.columns, jet.sg, jet.cg)
     angle = path_kernels.root_line_angle
     if not (math.isfinite(s2) and math.isfinite(h2)):  # off the grid: the plain Python raises
         angle = getattr(angle, "py_func", angle)  # at the cell's floor, as FlankJet.polar
-    return _folded_degrees(angle(chord, mid, s2, h2, cells, jet.cells.coefficients, root))
+    return _folded_degrees(angle(chord, mid, s2, h2, cells, coefficients, root))
+
+
+#: each gear flank's :func:`_gear_jet`, while the flank lives
+_JETS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _gear_jet(gear) -> tuple[tuple, np.ndarray]:
+    """The gear flank's :class:`~gearopt.flank_jet.FlankJet` as
+    :func:`gearopt.mesh.path_kernels.root_line_angle` takes it, ``(jet, coefficients)``,
+    made once per flank map."""
+    found = _JETS.get(gear)
+    if found is None:
+        jet = FlankJet(gear)
+        grid = (jet.s0, jet.h0, jet.ds, jet.dh, jet.n_f, jet.n_p)
+        cells = (*grid, jet.cells.columns, jet.sg, jet.cg)
+        found = _JETS[gear] = (cells, jet.cells.coefficients)
+    return found

@@ -202,7 +202,7 @@ class HandOver:
         one pair's lag steps and the other's is smooth across the bracket (:attr:`smooth`),
         only the stepping pair. The tags asked for are :attr:`asked`."""
         self.mode = "iterate"
-        self.xs = sorted({float(x) for x in (xs if isinstance(xs, list) else np.atleast_1d(xs))})
+        self.xs = sorted(set(map(float, xs if isinstance(xs, list) else np.atleast_1d(xs))))
         self.x = self.xs[0]
         smooth = int(self.state[_SMOOTH])  # (-1: none)
         pairs = [(pair, shift) for pair, shift in ((0, 0.0), (1, pitch)) if pair != smooth]
@@ -226,12 +226,14 @@ class HandOver:
             ``("settled", x)`` (``lag`` set), ``("fit", x)``: check ``x`` next, or
             ``("iterate", x)``: start the iteration at ``x``.
         """
-        gl = np.array([got[0][0], ex.minimum_rad[0], got[1][0]])
-        gi = np.array([got[2][0], ex.minimum_rad[1], got[3][0]])
-        interior = np.all(np.isfinite(gl)) and np.all(np.isfinite(gi))
-        interior = interior and not (ex.edge[:2].any() or any(a[3] for a in got))
-        interior = interior and bool(np.all(np.isfinite(ex.minimum_rad)))
-        z = parabola_root(gl - gi) if interior else math.inf
+        # (on Python floats: three points a pair)
+        minimum = ex.minimum_rad.tolist()
+        gl = (float(got[0][0]), minimum[0], float(got[1][0]))
+        gi = (float(got[2][0]), minimum[1], float(got[3][0]))
+        interior = all(math.isfinite(g) for g in gl + gi)
+        interior = interior and not (bool(ex.edge[0] or ex.edge[1]) or any(a[3] for a in got))
+        interior = interior and all(math.isfinite(g) for g in minimum)
+        z = parabola_root([a - b for a, b in zip(gl, gi, strict=True)]) if interior else math.inf
         x = self.x + self.delta * z
         # the root within a tenth of a delta of the guess: the extra positions (M among them)
         # stand; further off: the root is evaluated anew once
@@ -273,7 +275,7 @@ class HandOver:
         for tag in self.asked:
             values[tag[2], tag[1]] = got[tag]
             asked[tag[2], tag[1]] = True
-        if self.trail.shape[0] < int(self.counts.max()) + k:  # (room for the step's points)
+        if self.trail.shape[0] < max(self.counts.tolist()) + k:  # (room for the step's points)
             self.grow(k)
         count = handover_kernels.iteration_step(
             self.state,

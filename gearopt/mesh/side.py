@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import ClearanceField, ContactError, FieldSample
-from gearopt.mesh import kernels
+from gearopt.mesh import kernels, side_kernels
 from gearopt.mesh.frame import ARCSEC, ToothFrame, gear_path_angle
 from gearopt.mesh.handover import FIT_TAGS, ITERATION_TAGS, HandOver, Request, lag_crossing
 from gearopt.mesh.pattern import centroids, columns, separation_mm
@@ -62,6 +62,8 @@ class SideCycle:
     ----------
     index, field, sample, interval_sample, u, ids, inv, t, pitch, step
         As given.
+    interval_v
+        The relative rotations of ``interval_sample``'s rows.
     g
         ``(n, pairs)`` the pairs' lags (least clearance; +inf without contact on the flanks).
     edge_all
@@ -95,12 +97,13 @@ class SideCycle:
         contact's: set by the driver before the first extra positions
         (:meth:`gearopt.mesh.cycle.MeshCycle.classify`).
     end_inside, end_outside
-        ``(2,)`` the ends' brackets (start, end): the last point in interior contact and the
-        first beyond; None without interior contact.
+        ``[start, end]`` the ends' brackets (floats): the last point in interior contact and
+        the first beyond; None without interior contact.
     end_open
-        ``(2,)`` True where an end's bracket is open (a sample beyond the interior run).
+        ``[start, end]`` True where an end's bracket is open (a sample beyond the interior
+        run).
     end_face, end_profile
-        ``(2,)`` the contact points (pinion grid) at ``end_inside``.
+        ``[start, end]`` the contact points (pinion grid) at ``end_inside``.
     contact_path
         ``(v, face, profile)`` of the samples in contact, sorted by v (:meth:`contact_at`);
         None until first needed.
@@ -139,6 +142,7 @@ class SideCycle:
         self.sample, self.interval_sample = sample, interval_sample
         self.u, self.ids, self.inv = u, ids, inv
         self.t, self.pitch, self.step = t, pitch, step
+        self.interval_v = interval_sample.phi_rad * field.sense
         shape = u.shape
         self.g, self.cs, self.ch = np.empty(shape), np.empty(shape), np.empty(shape)
         self.edge_all = np.empty(shape, bool)
@@ -181,11 +185,11 @@ class SideCycle:
         self.interval_flat = False
         self.centre_row: int | None = None
         self.point_contact = False
-        self.end_inside: NDArray | None = None
-        self.end_outside: NDArray | None = None
-        self.end_open: NDArray | None = None
-        self.end_face: NDArray | None = None
-        self.end_profile: NDArray | None = None
+        self.end_inside: list[float] | None = None
+        self.end_outside: list[float] | None = None
+        self.end_open: list[bool] | None = None
+        self.end_face: list[float] | None = None
+        self.end_profile: list[float] | None = None
         self.contact_path: tuple[NDArray, NDArray, NDArray] | None = None
         self.ho: HandOver | None = None
         self.v_star: float | None = None
@@ -207,36 +211,39 @@ class SideCycle:
         """Bracket the relative rotations between which a pair's contact stays inside the
         flanks (not at an edge) from the samples, and ask for the points a bisection of each
         open bracket can visit (warm-started Newton), all at once."""
-        sample = self.interval_sample
-        v = sample.phi_rad * self.field.sense
+        sample, v = self.interval_sample, self.interval_v
         inner = (~sample.edge) & np.isfinite(sample.minimum_rad)
         self.interval_done = False
         # the unbroken run of interior samples around the least lag (the mesh centre), or the
         # first longest run when the least lag is itself at an edge
         order = np.argsort(v)
         lo_k, hi_k, spread = kernels.interior_run(order, inner, sample.minimum_rad)
-        v = v[order]
         if lo_k < 0:  # edge contact only: no interval, centred on the least lag
             gs = np.where(np.isfinite(sample.minimum_rad), sample.minimum_rad, np.inf)[order]
-            best = float(v[np.argmin(gs)])
+            best = float(v[order][np.argmin(gs)])
             self.interval, self.interval_done = (best, best), True
             return
+        last = len(v) - 1
         self.interval_flat = bool(spread < FLAT_ARCSEC / ARCSEC)
-        self.centre_row = int(order[(lo_k + hi_k) // 2])
-        self.end_inside = np.array([v[lo_k], v[hi_k]])
-        self.end_outside = np.array([v[max(lo_k - 1, 0)], v[min(hi_k + 1, len(v) - 1)]])
-        self.end_open = np.array([lo_k > 0, hi_k < len(v) - 1])
-        cs, ch = sample.contact_face_mm[order], sample.contact_profile_mm[order]
-        self.end_face, self.end_profile = cs[[lo_k, hi_k]], ch[[lo_k, hi_k]]
-        self.interval = (float(self.end_inside[0]), float(self.end_inside[1]))
+        # (the rows of the ends and of the samples beyond them, as Python floats: the
+        # bisection's arithmetic on two ends is cheaper than numpy's on arrays of two)
+        at = order[[lo_k, hi_k, max(lo_k - 1, 0), min(hi_k + 1, last), (lo_k + hi_k) // 2]]
+        self.centre_row = int(at[4])
+        at = at[:4]
+        ends = v[at].tolist()
+        self.end_inside, self.end_outside = ends[:2], ends[2:]
+        self.end_open = [lo_k > 0, hi_k < last]
+        self.end_face = sample.contact_face_mm[at[:2]].tolist()
+        self.end_profile = sample.contact_profile_mm[at[:2]].tolist()
+        self.interval = (ends[0], ends[1])
         parts = 2**BISECTIONS
-        inside, outside = self.end_inside.tolist(), self.end_outside.tolist()
-        faces, profiles = self.end_face.tolist(), self.end_profile.tolist()
-        for e in np.flatnonzero(self.end_open).tolist():
-            a, b, s, h = inside[e], outside[e], faces[e], profiles[e]
-            self.requests += [
-                Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
-            ]
+        for e in (0, 1):
+            if self.end_open[e]:
+                a, b = ends[e], ends[2 + e]
+                s, h = self.end_face[e], self.end_profile[e]
+                self.requests += [
+                    Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
+                ]
 
     def interval_finish(self) -> None:
         """Bisect each open bracket on the answers of its candidate points, then move it to the
@@ -246,22 +253,26 @@ class SideCycle:
             return
         self.interval_done = True
         parts = 2**BISECTIONS
-        for e in np.flatnonzero(self.end_open):
-            a, b = self.end_inside[e], self.end_outside[e]
+        inside, outside = self.end_inside, self.end_outside
+        for e in (0, 1):
+            if not self.end_open[e]:
+                continue
+            a, b = inside[e], outside[e]
             ja, jb = 0, parts
             for _ in range(BISECTIONS):
                 m = (ja + jb) // 2
                 value, s1, h1, edge = self.answers[("ci", e, m)]
                 if math.isfinite(value) and not edge:
                     ja = m
-                    self.end_face[e], self.end_profile[e] = s1, h1
+                    self.end_face[e], self.end_profile[e] = float(s1), float(h1)
                 else:
                     jb = m
-            self.end_inside[e] = a + (b - a) * ja / parts
-            self.end_outside[e] = a + (b - a) * jb / parts
+            inside[e] = a + (b - a) * ja / parts
+            outside[e] = a + (b - a) * jb / parts
             self.tangency_end(e)
-        ends = np.where(self.end_open, 0.5 * (self.end_inside + self.end_outside), self.end_inside)
-        self.interval = (float(ends[0]), float(ends[1]))
+        self.interval = tuple(
+            0.5 * (inside[e] + outside[e]) if self.end_open[e] else inside[e] for e in (0, 1)
+        )
 
     def tangency_end(self, e: int) -> None:
         """Move end ``e``, bisected on the engine's edge flag, to where the tangency point
@@ -281,8 +292,8 @@ class SideCycle:
         """
         if self.interval_flat and not self.point_contact:
             return
-        a, b = float(self.end_inside[e]), float(self.end_outside[e])
-        start = (float(self.end_face[e]), float(self.end_profile[e]))
+        a, b = self.end_inside[e], self.end_outside[e]
+        start = (self.end_face[e], self.end_profile[e])
         found = self.field.interval_end(a, start, b - a)
         if found is not None:
             (
@@ -290,7 +301,7 @@ class SideCycle:
                 self.end_outside[e],
                 self.end_face[e],
                 self.end_profile[e],
-            ) = found
+            ) = (float(x) for x in found)
 
     # -- the hand-over ----------------------------------------------------------------------
 
@@ -323,8 +334,7 @@ class SideCycle:
     def crossing(self, lo, hi) -> float | None:
         """The crossing of the two pairs' lags interpolated through the interval samples
         (:func:`~gearopt.mesh.handover.lag_crossing`), or None."""
-        sample = self.interval_sample
-        v = sample.phi_rad * self.field.sense
+        sample, v = self.interval_sample, self.interval_v
         return lag_crossing(v, sample.minimum_rad, sample.edge, lo, hi, self.pitch, self.step)
 
     def ask_fit(self, x) -> None:
@@ -336,7 +346,7 @@ class SideCycle:
     def ask_iteration(self, x) -> None:
         """Sample both pairs at ``x`` (a point, or the points of a step) for the iteration on
         the bracket."""
-        self.v_star = float(np.atleast_1d(x)[0])
+        self.v_star = float(x[0] if isinstance(x, list) else np.atleast_1d(x)[0])
         if self.ho.flat:
             self.requests += self.ho.flat_requests(x, self.pitch)
         else:
@@ -370,9 +380,10 @@ class SideCycle:
             else:
                 self.ask_iteration(x)
             return
-        if not all(tag in self.answers for tag in ho.asked):
+        answers = self.answers
+        if not all(map(answers.__contains__, ho.asked)):
             return
-        xs = ho.take_iteration({tag: float(self.answers.pop(tag)[0]) for tag in ho.asked})
+        xs = ho.take_iteration({tag: float(answers.pop(tag)[0]) for tag in ho.asked})
         if xs is None:
             self.v_star, self.g_hand = ho.x, ho.lag
         else:
@@ -466,14 +477,15 @@ class SideCycle:
             return
         if len(self.peak_lags) < 3:
             return
-        g = np.array([self.peak_lags[k] for k in (-1, 0, 1)])
+        g = [self.peak_lags[k] for k in (-1, 0, 1)]
         curvature = g[0] - 2.0 * g[1] + g[2]
-        if not (np.all(np.isfinite(g)) and curvature > 0.0):
-            self.g_peak = float(np.min(np.where(np.isfinite(g), g, np.inf)))
+        finite = all(math.isfinite(x) for x in g)
+        if not (finite and curvature > 0.0):
+            self.g_peak = min(x if math.isfinite(x) else math.inf for x in g)
             return
         z = 0.5 * (g[0] - g[2]) / curvature
         if abs(z) > 4.0:
-            self.g_peak = float(g.min())
+            self.g_peak = min(g)
             return
         self.probes.append((self.peak_at + z * self.step / 8.0, ("pk", "vertex")))
 
@@ -483,7 +495,7 @@ class SideCycle:
         if self.contact_path is None:
             sample = self.interval_sample
             ok = np.isfinite(sample.minimum_rad)
-            vs = sample.phi_rad[ok] * self.field.sense
+            vs = self.interval_v[ok]
             order = np.argsort(vs)
             self.contact_path = (
                 vs[order],
@@ -496,7 +508,8 @@ class SideCycle:
     def near_extras_sample(self, mean: FieldSample) -> FieldSample:
         """The extra positions' sample from their refined minima (answers ``("ex", j)``) and
         the node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
-        got = np.array([self.answers.pop(("ex", j)) for j in range(6)], float).T.copy()
+        rows = (self.answers.pop(("ex", j)) for j in range(6))
+        got = np.array(list(zip(*rows, strict=True)), float)
         fields = np.empty((3, 6) + mean.clearance_rad.shape[1:])
         fields[0, :3], fields[1:, :3] = np.inf, 1.0
         fields[0, 3:], fields[1, 3:], fields[2, 3:] = (
@@ -533,12 +546,11 @@ class SideCycle:
         """
         field, ex, t, p1 = self.field, self.ex, self.t, self.pitch
         positions, pairs = self.u.shape
-        rows = np.arange(positions)
         lag, carrying = self.lag, self.carrying
         g_hand = self.g_hand
         if g_hand is None:
             g_hand = float(max(ex.minimum_rad[0], ex.minimum_rad[1]))
-        g_min = float(min(ex.minimum_rad[2], lag.min()))
+        g_min = min(float(ex.minimum_rad[2]), float(lag.min()))
         if self.g_peak is not None:
             g_min = min(g_min, self.g_peak)
         peak_to_peak = (max(g_hand, float(lag.max())) - g_min) * ARCSEC
@@ -575,19 +587,39 @@ class SideCycle:
         pattern = out[:size].reshape(field.pinion.shape)
         path_s, path_h, te = out[size : size + 3 * positions].reshape(3, positions)
         pair_te = out[size + 3 * positions :].reshape(pairs, positions)
-        held = held[:count]
-        position = held // pairs
+        # the held entries' rows and the carrying pair's contact points, one compiled pass
+        ints, floats = np.empty((2, count), np.intp), np.empty(5 * count + 2 * positions)
+        edge = np.empty(positions, bool)
+        side_kernels.carried_rows(
+            held[:count],
+            pairs,
+            self.inv,
+            np.ascontiguousarray(self.sample.phi_rad),
+            lag,
+            self.cs.ravel(),
+            self.ch.ravel(),
+            self.ids.ravel(),
+            carrying,
+            self.edge_all.ravel(),
+            float(frame.toe_mm),
+            float(frame.root_mm),
+            ints,
+            floats,
+            edge,
+        )
+        position, sample_row = ints
+        pattern_phi, pattern_lag, pattern_pair = floats[: 3 * count].reshape(3, count)
         lines = dict(
             mean_phi_rad=ex.phi_rad[3:6],
             mean_lag_rad=ex.minimum_rad[3:6],
             mean_factor_mm=getattr(ex, kind)[3:6],
             mean_contact_mm=columns(ex.contact_face_mm[3:6], ex.contact_profile_mm[3:6]),
-            pattern_phi_rad=self.sample.phi_rad[self.inv[held]],
-            pattern_lag_rad=lag[position],
-            pattern_factor_rows=(node_factor, self.inv[held]),
-            pattern_contact_mm=columns(self.cs.ravel()[held], self.ch.ravel()[held]),
+            pattern_phi_rad=pattern_phi,
+            pattern_lag_rad=pattern_lag,
+            pattern_factor_rows=(node_factor, sample_row),
+            pattern_contact_mm=floats[3 * count : 5 * count].reshape(count, 2),
             pattern_position=position,
-            pattern_pair=self.ids.ravel()[held],
+            pattern_pair=pattern_pair,
             interval=self.interval,
         )
         # bias: the contact line's extension along the face from the pair's entry into contact
@@ -602,8 +634,9 @@ class SideCycle:
             )
             bias = float(cs[0] - cs[1])
         start, end = self.interval
-        handovers = self.v_star + p1 * np.arange(-12, 13)
-        handovers = handovers[(handovers >= t[0] - 1e-12) & (handovers <= t[-1] + 1e-12)]
+        low, high = float(t[0]) - 1e-12, float(t[-1]) + 1e-12
+        handovers = [self.v_star + p1 * k for k in range(-12, 13)]
+        handovers = np.array([x for x in handovers if low <= x <= high], float)
         return lines, dict(
             side=name,
             phi1_deg=np.degrees(t),
@@ -614,9 +647,9 @@ class SideCycle:
             te_peak_to_peak_arcsec=float(peak_to_peak),
             path_face_mm=path_s,
             path_profile_mm=path_h,
-            contact_face_mm=self.cs[rows, carrying] - frame.toe_mm,
-            contact_profile_mm=self.ch[rows, carrying] - frame.root_mm,
-            edge=self.edge_all[rows, carrying],
+            contact_face_mm=floats[5 * count : 5 * count + positions],
+            contact_profile_mm=floats[5 * count + positions :],
+            edge=edge,
             separation_um=sep_um.reshape((positions, pairs) + field.pinion.shape),
             pattern_um=pattern,
             face_mm=face,

@@ -42,6 +42,7 @@ cent over a zone.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -155,9 +156,10 @@ class Zones:
         self.face0, self.dface = float(face_mm[0]), float(face_mm[1] - face_mm[0])
         self.profile0, self.dprofile = float(profile_mm[0]), float(profile_mm[1] - profile_mm[0])
         self.last = (len(face_mm) - 2, len(profile_mm) - 2)
-        low = np.array([self.face0, self.profile0])
-        high = low + np.array([self.dface * (self.last[0] + 1), self.dprofile * (self.last[1] + 1)])
-        self.box = np.concatenate([low, high])  # the grid's edges (:meth:`to_edge`)
+        face_end = self.face0 + self.dface * (self.last[0] + 1)
+        profile_end = self.profile0 + self.dprofile * (self.last[1] + 1)
+        # the grid's edges (:meth:`to_edge`): low face, low profile, high face, high profile
+        self.box = np.array([self.face0, self.profile0, face_end, profile_end])
         self._tables: tuple | None = None
 
     def clearance(self, r, s, h) -> tuple[NDArray, NDArray]:
@@ -223,7 +225,9 @@ class Zones:
         # the largest curvature's direction, 0.5 atan2(2 H_sh, H_ss - H_hh); the major axis
         # across it
         across = 0.5 * np.arctan2(2.0 * c[:, 3], c[:, 2] - c[:, 4])
-        return np.stack([-np.sin(across), np.cos(across)], axis=1)
+        major = np.empty((len(across), 2))  # (np.stack's columns, without its overhead)
+        major[:, 0], major[:, 1] = -np.sin(across), np.cos(across)
+        return major
 
     def tangency_points(self, r, contact_mm, steps: int = 4) -> NDArray:
         """``(K, 2)`` the tangency points of rows ``r`` (the clearance's minimum on the
@@ -338,17 +342,22 @@ class Zones:
         farthest is the exit (:func:`gearopt.contact.zone_kernels.union_exits`).
         """
         ray, r = np.asarray(ray, np.intp), np.asarray(r, np.intp)
-        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         order = np.argsort(ray, kind="stable")
+        start = np.searchsorted(ray[order], np.arange(len(origins) + 1))
+        return self._union_exits(start, r[order], origins, directions, reach)
+
+    def _union_exits(self, start, r, origins, directions, reach) -> NDArray:
+        """:meth:`exits` on the pairs in order of their rays, ray k's
+        ``r[start[k]:start[k + 1]]``."""
+        origins, directions = np.asarray(origins, float), np.asarray(directions, float)
         k_rays = len(origins)
-        start = np.searchsorted(ray[order], np.arange(k_rays + 1))
         rays = self.rays(origins, directions)
         reach_mm, reach = reach, np.empty(k_rays)  # (writable)
         reach[:] = reach_mm
         tau = np.empty((k_rays, len(SCAN)))  # (to the grid's edge or the reach: to_edge's)
         zone_kernels.ray_samples(rays, self.box, reach, np.ones(k_rays, bool), SCAN, SCAN, tau)
         out = np.empty(k_rays)
-        zone_kernels.union_exits(*self.tables(), start, r[order], rays, tau, _ZOOM_FRACTIONS, out)
+        zone_kernels.union_exits(*self.tables(), start, r, rays, tau, _ZOOM_FRACTIONS, out)
         return out
 
     def pattern_exits(self, ray, r, key, position, origins, directions, spread) -> NDArray:
@@ -461,7 +470,7 @@ class Zones:
         rows = [np.asarray(side[0], np.intp) for side in sides]
         contact = [np.asarray(side[1], float).reshape(-1, 2) for side in sides]
         sep = self.point_separations(np.concatenate(rows), np.concatenate(contact))
-        at = np.cumsum([0] + [len(r) for r in rows]).tolist()
+        at = list(itertools.accumulate([0] + [len(r) for r in rows]))
         sep = [sep[a:b] for a, b in zip(at[:-1], at[1:], strict=True)]
         found = [
             self._outline_rays(r, c, g, *side[2:])
@@ -469,7 +478,7 @@ class Zones:
         ]
         rays = [f for f in found if f is not None]
         if rays:
-            first = np.cumsum([0] + [len(f[0]) for f in rays])
+            first = list(itertools.accumulate([0] + [len(f[0]) for f in rays]))
             ends = self.pattern_exits(
                 np.concatenate([f[2] + k for f, k in zip(rays, first, strict=False)]),
                 *(np.concatenate([f[i] for f in rays]) for i in (3, 4, 5)),
@@ -584,9 +593,9 @@ class Zones:
         ``(length, middle)``, the middle ``(K, 2)``."""
         k = len(origins)
         both = np.concatenate([axes, -axes])
-        ends = self.exits(
-            np.arange(2 * k),
-            np.concatenate([r, r]),
+        ends = self._union_exits(  # (ray j: row r[j % k], one a ray: already in order)
+            np.arange(2 * k + 1),
+            np.concatenate([r, r]).astype(np.intp, copy=False),
             np.concatenate([origins, origins]),
             both,
             np.concatenate([reach, reach]),
