@@ -9,6 +9,8 @@ synthesises the settings from a ``[synthesis]`` table). The file's tables are li
 from __future__ import annotations
 
 import copy
+import datetime
+import weakref
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,6 +37,29 @@ __all__ = [
     "with_overrides",
     "load_standard_blank",
 ]
+
+
+#: the designs :func:`parse_design` made, by identity: their parsed tables are their source's, so
+#: a design derived from one (:func:`with_overrides`: a study's trial) takes the tables its
+#: overrides leave alone from it as parsed
+_PARSED: weakref.WeakValueDictionary[int, Design] = weakref.WeakValueDictionary()
+#: the values a TOML document holds besides tables and arrays (immutable: copies share them)
+_ATOMS = frozenset(
+    {str, int, float, bool, type(None), datetime.datetime, datetime.date, datetime.time}
+)
+
+
+def _copied(value: Any) -> Any:
+    """:func:`copy.deepcopy` of a parsed TOML document: tables (dicts) and arrays (lists)
+    copied, scalars shared, anything else deep-copied."""
+    kind = type(value)
+    if kind is dict:
+        return {key: _copied(item) for key, item in value.items()}
+    if kind is list:
+        return [_copied(item) for item in value]
+    if kind in _ATOMS:
+        return value
+    return copy.deepcopy(value)
 
 
 def _analysis_table(table: Mapping[str, Any]) -> dict[str, Any]:
@@ -81,6 +106,13 @@ def parse_design(
     among the registered plugins (``plugin_manager``, default: the built-ins and every installed
     plugin).
     """
+    return _parsed(data, plugin_manager, path, None, ())
+
+
+def _parsed(data, plugin_manager, path, base: Design | None, touched) -> Design:
+    """:func:`parse_design`; with ``base`` (a design it made from its source, of which ``data``
+    is a copy with the top-level tables ``touched`` changed) each table left alone is taken
+    from ``base`` as parsed (frozen, or copied), not parsed again: the same design."""
     if not isinstance(data, Mapping):
         raise DesignError("design", data, "must be a TOML document (a table of tables)")
     tables = {name: read_table(data, name, "") for name in SECTIONS}
@@ -89,7 +121,12 @@ def parse_design(
         raise DesignError("pair", rule="the [pair] table is required")
     if "machine" not in data:
         raise DesignError("machine", rule='the [machine] table is required (model = "...")')
-    pair, standard = pair_from_tables(tables["pair"], tables["blank"] if "blank" in data else None)
+    kept = set() if base is None else set(SECTIONS).difference(touched)
+    if {"pair", "blank"} <= kept:
+        pair, standard = base.pair, base.standard_blank
+    else:
+        blank = tables["blank"] if "blank" in data else None
+        pair, standard = pair_from_tables(tables["pair"], blank)
     machine_table = dict(tables["machine"])
     if "model" not in machine_table:
         raise DesignError("machine.model", rule="required key is missing")
@@ -101,22 +138,38 @@ def parse_design(
         machine = model.synthesize(machine_table, tables["synthesis"], pair)
     else:
         machine = model.parse_machine(machine_table, pair)
-    meta_table = tables["meta"]
-    check_keys(meta_table, ("name", "description", "source"), "meta")
-    return Design(
+    if "meta" not in kept:
+        check_keys(tables["meta"], ("name", "description", "source"), "meta")
+    design = Design(
         pair=pair,
         model=model.name,
         machine=machine,
-        misalignment=Misalignment.from_table(tables["misalignment"], "misalignment"),
-        compensation=Misalignment.from_table(tables["compensation"], "compensation"),
-        meta=Meta(**meta_table),
-        analysis=_analysis_table(tables["analysis"]),
-        load=_load_table(tables["load"]),
-        te_target=_te_target(tables["te_target"], pair) if "te_target" in data else None,
+        misalignment=(
+            base.misalignment
+            if "misalignment" in kept
+            else Misalignment.from_table(tables["misalignment"], "misalignment")
+        ),
+        compensation=(
+            base.compensation
+            if "compensation" in kept
+            else Misalignment.from_table(tables["compensation"], "compensation")
+        ),
+        meta=base.meta if "meta" in kept else Meta(**tables["meta"]),
+        analysis=dict(base.analysis) if "analysis" in kept else _analysis_table(tables["analysis"]),
+        load=dict(base.load) if "load" in kept else _load_table(tables["load"]),
+        te_target=(
+            base.te_target
+            if {"te_target", "pair", "blank"} <= kept
+            else _te_target(tables["te_target"], pair)
+            if "te_target" in data
+            else None
+        ),
         standard_blank=standard,
-        source=copy.deepcopy(dict(data)),
+        source=_copied(dict(data)),
         path=path,
     )
+    _PARSED[id(design)] = design
+    return design
 
 
 def loads_design(text: str, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
@@ -167,9 +220,11 @@ def with_overrides(
 ) -> Design:
     """Return a new design with dotted keys replaced, e.g.
     ``{"machine.pinion.inner_cutter_radius_mm": 76.0}``; the result is validated anew."""
-    data = copy.deepcopy(dict(design.source))
+    data = _copied(dict(design.source))
+    touched = set()
     for dotted, value in overrides.items():
         parts = dotted.split(".")
+        touched.add(parts[0])
         node = data
         for part in parts[:-1]:
             child = node.setdefault(part, {})
@@ -179,4 +234,5 @@ def with_overrides(
                 )
             node = child
         node[parts[-1]] = value
-    return parse_design(data, plugin_manager=plugin_manager, path=design.path)
+    base = design if _PARSED.get(id(design)) is design else None
+    return _parsed(data, plugin_manager, design.path, base, touched)

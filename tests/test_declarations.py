@@ -288,3 +288,34 @@ def test_a_third_party_evaluator_reaches_the_study_tables(toy_evaluator_site, tm
     assert len(patterns) == 2 * 2 * 4  # two trials, two sides, a box of four corners
     box = np.array([(p[3], p[4]) for p in patterns if p[0] == 0 and p[1] == "drive"])
     np.testing.assert_allclose(np.ptp(box, axis=0), [0.8 * face, 0.8 * depth], rtol=1e-12)
+
+
+def test_report_metrics_read_the_declared_places():
+    # the places are read once per evaluator, and again when its declarations change
+    from gearopt.declarations import Metric, report_metrics
+
+    class Toy:
+        section = "toy"
+        sections = {"drive": "toy", "coast": "toy_coast"}
+        metrics = (
+            Metric(name="a.1"),
+            Metric(name="flag"),
+            Metric(name="side_mm", per_side=True),
+            Metric(name="absent.0"),
+            Metric(name="a.7"),
+        )
+
+    toy = Toy()
+    report = {
+        "toy": {"a": [0.5, 2], "flag": True, "side_mm": np.float64(1.25)},
+        "toy_coast": {"side_mm": float("inf")},
+    }
+    expected = {"toy.a.1": 2.0, "toy.flag": 1.0, "toy.side_mm": 1.25}
+    assert report_metrics(toy, report) == expected
+    assert report_metrics(toy, report) == expected
+    toy.sections = {"drive": "toy_coast", "coast": "toy"}
+    assert report_metrics(toy, report) == {"toy.a.1": 2.0, "toy.flag": 1.0, "toy.side_mm": 1.25}
+    toy.metrics = (*Toy.metrics, Metric(name="a.0"))
+    assert report_metrics(toy, report)["toy.a.0"] == 0.5
+    toy.section = "toy_coast"
+    assert report_metrics(toy, report) == {"toy.side_mm": 1.25}

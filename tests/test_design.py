@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import pytest
@@ -34,6 +35,35 @@ def test_overrides_make_a_new_validated_design(table3_design):
     assert table3_design.machine.pinion.inner_cutter_radius_mm == 75.0
     with pytest.raises(UnknownKeyError):
         gearopt.with_overrides(table3_design, {"machine.pinion.inner_cutter_radius_in": 3.0})
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {"machine.pinion.inner_cutter_radius_mm": 80.0},
+        {"pair.face_width_mm": 24.0, "machine.gear.inner_cutter_radius_mm": 75.5},
+        {"misalignment.offset_mm": 0.1, "meta.name": "moved"},
+        {"analysis.positions": 17, "load.torque_nm": [100.0]},
+    ],
+)
+def test_overrides_equal_a_design_parsed_anew(table3_design, overrides):
+    # the tables an override leaves alone are taken from the base design as parsed: the same
+    # design as parsing the changed document, with a source of its own
+    changed = gearopt.with_overrides(table3_design, overrides)
+    data = copy.deepcopy(dict(table3_design.source))
+    for dotted, value in overrides.items():
+        *path, last = dotted.split(".")
+        node = data
+        for part in path:
+            node = node.setdefault(part, {})
+        node[last] = value
+    fresh = gearopt.parse_design(data)
+    assert changed == fresh
+    assert changed.source == fresh.source and changed.path == table3_design.path
+    again = gearopt.with_overrides(changed, {"machine.pinion.inner_cutter_radius_mm": 74.0})
+    assert again.pair == fresh.pair and again.misalignment == fresh.misalignment
+    changed.source["meta"]["name"] = "edited"  # (as gearopt.best writes it out)
+    assert table3_design.source.get("meta", {}).get("name") != "edited"
 
 
 def test_misalignment_and_compensation_tables(table3_text):
