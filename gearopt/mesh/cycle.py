@@ -419,11 +419,23 @@ class MeshCycle:
             f_side += [side.index] * len(angles)
             f_v += angles
             f_refine += refine
-        probes = [(side, v, tag) for side in self.sides for v, tag in side.take_probes()]
+        # each side's rows to sample, then the beyond rows (their answers filed by side, as
+        # the requests' are)
         first_probe = len(f_side)
-        f_side += [side.index for side, _, _ in probes] + [r[0] for r in beyond]
-        f_v += [v for _, v, _ in probes] + [r[1] for r in beyond]
-        f_refine += [True] * (len(probes) + len(beyond))
+        probed = []
+        for side in self.sides:
+            probes = side.take_probes()
+            if probes:
+                v, tags = zip(*probes, strict=True)
+                f_side += [side.index] * len(probes)
+                f_v += v
+                probed.append((side, tags))
+        n_probes = len(f_side) - first_probe
+        if beyond:
+            b_side, b_v = zip(*beyond, strict=True)
+            f_side += b_side
+            f_v += b_v
+        f_refine += [True] * (n_probes + len(beyond))
         n_side, n_v, n_s, n_h, owners = [], [], [], [], []
         for side in self.sides:
             requests = side.take_requests()
@@ -456,23 +468,18 @@ class MeshCycle:
             count = 3 if side.near_extras else 6
             side.take_extras(sample_rows(sample, slice(start, start + count)))
             start += count
-        if probes:  # filed like the requests' answers
-            at = slice(first_probe, first_probe + len(probes))
-            answers = zip(
-                *(
-                    a[at].tolist()
-                    for a in (
-                        sample.minimum_rad,
-                        sample.contact_face_mm,
-                        sample.contact_profile_mm,
-                        sample.edge,
-                    )
-                ),
+        if probed:  # filed like the requests' answers
+            at = slice(first_probe, first_probe + n_probes)
+            rows = zip(
+                sample.minimum_rad[at].tolist(),
+                sample.contact_face_mm[at].tolist(),
+                sample.contact_profile_mm[at].tolist(),
+                sample.edge[at].tolist(),
                 strict=True,
             )
-            for (side, _, tag), answer in zip(probes, answers, strict=True):
-                side.answers[tag] = answer
-        start += len(probes)
+            for side, tags in probed:
+                side.answers.update(zip(tags, rows, strict=False))
+        start += n_probes
         return sample_rows(sample, slice(start, None)) if beyond else None
 
     def contacts(self, parts) -> list[ToothContact]:

@@ -90,6 +90,10 @@ _WIDTH, _RISE, _STEPS, _SMOOTH = (
     handover_kernels.STEPS,
     handover_kernels.SMOOTH,
 )
+#: :attr:`HandOver.state` before its bracket is set (no smooth pair), and its first counts
+_START = np.zeros(len(STATE))
+_START[_SMOOTH] = -1.0
+_COUNTS = np.array([0, 0, 2], np.intp)
 
 
 class HandOver:
@@ -173,13 +177,13 @@ class HandOver:
         self.xs = []
         self.done = False
         self.asked = []
-        state = np.zeros(len(STATE))
+        state = _START.copy()
         state[:4] = lo, hi, d_lo, d_hi
-        state[_WIDTH], state[_RISE], state[_SMOOTH] = hi - lo, d_hi - d_lo, -1.0
+        state[_WIDTH], state[_RISE] = hi - lo, d_hi - d_lo
         self.state = state
         self.samples, self.trail = np.empty((2, ROWS, 2)), np.empty((ROWS, 2))
-        self.trail[0], self.trail[1] = (lo, d_lo), (hi, d_hi)
-        self.counts = np.array([0, 0, 2], np.intp)
+        self.trail[:2] = (lo, d_lo), (hi, d_hi)
+        self.counts = _COUNTS.copy()
         self.out = np.empty(SPREAD)
 
     def fit_requests(self, x, pitch: float) -> list[Request]:

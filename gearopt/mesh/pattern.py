@@ -9,16 +9,12 @@ than the marking compound; grids are the pattern coordinates ``face_mm`` ``(n_f,
 
 from __future__ import annotations
 
-from dataclasses import fields as dataclass_fields
-
 import numpy as np
 from numpy.typing import NDArray
 
 from gearopt.contact import FieldSample
 
 __all__ = ["centroids", "columns", "sample_rows", "separation_mm"]
-
-_SAMPLE_FIELDS = tuple(f.name for f in dataclass_fields(FieldSample))
 
 
 def columns(*cols) -> NDArray:
@@ -32,7 +28,16 @@ def columns(*cols) -> NDArray:
 
 def sample_rows(sample: FieldSample, rows) -> FieldSample:
     """The rows ``rows`` (a slice or an index array) of a sample."""
-    return FieldSample(**{name: getattr(sample, name)[rows] for name in _SAMPLE_FIELDS})
+    return FieldSample(
+        phi_rad=sample.phi_rad[rows],
+        clearance_rad=sample.clearance_rad[rows],
+        normal_factor_mm=sample.normal_factor_mm[rows],
+        radius_mm=sample.radius_mm[rows],
+        minimum_rad=sample.minimum_rad[rows],
+        contact_face_mm=sample.contact_face_mm[rows],
+        contact_profile_mm=sample.contact_profile_mm[rows],
+        edge=sample.edge[rows],
+    )
 
 
 def separation_mm(

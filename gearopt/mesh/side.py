@@ -22,6 +22,10 @@ __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 #: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
 FLAT_ARCSEC = 0.1
 BISECTIONS = 3  # contact-interval ends to an eighth of a position step
+#: the tags of the extra positions' requests (:meth:`SideCycle.extra_rows`)
+EX_TAGS = tuple(("ex", j) for j in range(6))
+#: the node fields (clearance, normal factor, radius) of an extra position without them
+_NO_FIELDS = np.array([np.inf, 1.0, 1.0]).reshape(3, 1, 1, 1)
 
 
 class SideCycle:
@@ -413,10 +417,7 @@ class SideCycle:
         self.near_extras = self.fit_mode()
         if self.near_extras:
             faces, profiles = self.contact_at(np.array(angles))
-            for j, (v, face, profile) in enumerate(
-                zip(angles, faces.tolist(), profiles.tolist(), strict=True)
-            ):
-                self.requests.append(Request(v, face, profile, ("ex", j)))
+            self.requests += map(Request, angles, faces.tolist(), profiles.tolist(), EX_TAGS)
             rows = angles[3:], [False] * 3
         else:
             rows = angles, [True] * 6
@@ -508,10 +509,10 @@ class SideCycle:
     def near_extras_sample(self, mean: FieldSample) -> FieldSample:
         """The extra positions' sample from their refined minima (answers ``("ex", j)``) and
         the node fields of M's rows (``mean``); the other rows have no node fields (+inf)."""
-        rows = (self.answers.pop(("ex", j)) for j in range(6))
-        got = np.array(list(zip(*rows, strict=True)), float)
+        pop = self.answers.pop
+        got = np.array([pop(tag) for tag in EX_TAGS], float).T.copy()
         fields = np.empty((3, 6) + mean.clearance_rad.shape[1:])
-        fields[0, :3], fields[1:, :3] = np.inf, 1.0
+        fields[:, :3] = _NO_FIELDS
         fields[0, 3:], fields[1, 3:], fields[2, 3:] = (
             mean.clearance_rad,
             mean.normal_factor_mm,
