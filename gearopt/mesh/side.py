@@ -7,6 +7,7 @@ Definitions: :mod:`gearopt.mesh`.
 from __future__ import annotations
 
 import math
+from itertools import repeat
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,6 +23,8 @@ __all__ = ["BISECTIONS", "FLAT_ARCSEC", "SideCycle"]
 #: lags that vary by less than this (arcsec) are flat: a line contact, or noise on one
 FLAT_ARCSEC = 0.1
 BISECTIONS = 3  # contact-interval ends to an eighth of a position step
+#: the tags of each contact-interval end's bisection requests (:meth:`SideCycle.start_interval`)
+CI_TAGS = tuple(tuple(("ci", e, j) for j in range(1, 2**BISECTIONS)) for e in (0, 1))
 #: the tags of the extra positions' requests (:meth:`SideCycle.extra_rows`)
 EX_TAGS = tuple(("ex", j) for j in range(6))
 #: the node fields (clearance, normal factor, radius) of an extra position without them
@@ -245,9 +248,8 @@ class SideCycle:
             if self.end_open[e]:
                 a, b = ends[e], ends[2 + e]
                 s, h = self.end_face[e], self.end_profile[e]
-                self.requests += [
-                    Request(a + (b - a) * j / parts, s, h, ("ci", e, j)) for j in range(1, parts)
-                ]
+                v = [a + (b - a) * j / parts for j in range(1, parts)]
+                self.requests += map(Request, v, repeat(s), repeat(h), CI_TAGS[e])
 
     def interval_finish(self) -> None:
         """Bisect each open bracket on the answers of its candidate points, then move it to the
