@@ -132,7 +132,41 @@ def _stacked_tables(fields) -> dict:
     )
     # where the tangency point is inside the pinion flank
     pinion_generated = np.ascontiguousarray(np.concatenate([t["generated"] for t in tables]))
-    return {
+    maps = _flank_maps(first)
+    (imax, jmax), n_cols = maps["gear_table"]
+    taper = maps["gear_taper"] or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    maps["gear_kernel"] = (
+        *(float(a) for a in maps["rho_coef"]),
+        float(imax),
+        float(jmax),
+        int(n_cols),
+        maps["gear_taper"] is not None,
+        *(float(a) for a in taper),
+        gear_coef,
+        np.ascontiguousarray(gear_ok),
+    )
+    (p0, ph0), (pia, pib) = (a[:, 0] for a in maps["pinion_unit"])
+    (pimax, pjmax), p_cols = maps["pinion_table"]
+    ptaper = maps["pinion_taper"]
+    maps["pinion_kernel"] = (
+        (
+            float(p0),
+            float(ph0),
+            float(pia),
+            float(pib),
+            float(pimax),
+            float(pjmax),
+            int(p_cols),
+            ptaper is not None,
+            *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
+        ),
+        (
+            kernel_coef,
+            np.ascontiguousarray(refine_cells),
+            np.ascontiguousarray(kernel_band),
+        ),
+    )
+    return maps | {
         "ds": ds,
         "dh": dh,
         "cell": cell,
@@ -156,6 +190,36 @@ def _stacked_tables(fields) -> dict:
         "gear_coef": gear_coef,
         "gear_ok": gear_ok,
         "pinion_generated": pinion_generated,
+    }
+
+
+def _flank_maps(first) -> dict:
+    """The parts of :meth:`ContactEngine._linear_maps` that depend on the grids alone (of the
+    first field; the fields share them): the gear's unit grid coordinates' R2 coefficients and
+    cell table's limits, its taper, the pinion's unit grid coordinates, cell table's limits,
+    taper and pitch angle's cosine and sine."""
+    gc, pc = first.gear.cells, first.pinion.cells
+    s0, h0, ia, ib = gc.face0_mm, gc.profile0_mm, gc.face_scale, gc.profile_scale
+    g = math.radians(first.gear.pitch_angle_deg)
+    cg, sg = math.cos(g), math.sin(g)
+    g1 = math.radians(first.pinion.pitch_angle_deg)
+    gear_taper = first.gear.taper
+    if gear_taper is not None:
+        # unit coordinates (x, y) of (s, h) -> y of (s, t): with d = s - pivot,
+        # y' = (y + ib (h0 - d alpha)) / (1 + d beta) - ib h0
+        gear_taper = (s0 - gear_taper.pivot_mm, 1.0 / ia, ib, h0, gear_taper.alpha, gear_taper.beta)
+    return {
+        "rho_coef": np.array([ia * sg, ib * cg]),
+        "gear_table": (np.array([gc.last_row, gc.last_column]), gc.columns),
+        "gear_taper": gear_taper,
+        "cos_sin_pitch": (math.cos(g1), math.sin(g1)),
+        "pinion_unit": (
+            np.array([[pc.face0_mm], [pc.profile0_mm]]),
+            np.array([[pc.face_scale], [pc.profile_scale]]),
+        ),
+        "pinion_table": (np.array([pc.last_row, pc.last_column]), pc.columns),
+        # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
+        "pinion_taper": first.pinion.taper,
     }
 
 
@@ -242,8 +306,6 @@ class ContactEngine:
         self.sense = np.array([f.sense for f in fields], float)
         self.gear_sense = -self.sense
         self.place(fields)
-        g = math.radians(first.pinion.pitch_angle_deg)
-        self.cos_sin_pitch = (math.cos(g), math.sin(g))
         flanks = tuple(m for f in fields for m in (f.pinion, f.gear))
         stacked = remembered_tables("engine", flanks, lambda: _stacked_tables(fields))
         for name, value in stacked.items():
@@ -279,7 +341,7 @@ class ContactEngine:
         """
         first = fields[0]
         b, c = first.b, first.c
-        gc, pc = first.gear.cells, first.pinion.cells
+        gc = first.gear.cells
         s0, h0, ia, ib = gc.face0_mm, gc.profile0_mm, gc.face_scale, gc.profile_scale
         g = math.radians(first.gear.pitch_angle_deg)
         cg, sg = math.cos(g), math.sin(g)
@@ -288,77 +350,31 @@ class ContactEngine:
         self.rotation = np.empty((8, 2))
         self.rotation[:4, 0], self.rotation[:4, 1] = lin[:, 0], lin[:, 1]
         self.rotation[4:, 0], self.rotation[4:, 1] = lin[:, 1], -lin[:, 0]
-        self.rho_coef = np.array([ia * sg, ib * cg])
-        self.gear_table = (np.array([gc.last_row, gc.last_column]), gc.columns)
         self.lin_z, self.const = np.ascontiguousarray(lin[:, 2]), const
         # the node tables: the z terms (with the constants) of every side's nodes; the
         # normals' z terms of qx, qy (no constants); their x, y: the flanks' (node_xy, node_nxy)
         self.node_z = lin[:, 2, None, None] * self.points[2] + const[:, None, None]
         self.node_nz = lin[:2, 2, None, None] * self.normals[2]
         # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
-        # z terms (z = L1 = s cos g1 - h sin g1)
+        # z terms (z = L1 = s cos g1 - h sin g1); the grids' parts: _flank_maps
         cg1, sg1 = self.cos_sin_pitch
-        self.pinion_unit = (
-            np.array([[pc.face0_mm], [pc.profile0_mm]]),
-            np.array([[pc.face_scale], [pc.profile_scale]]),
-        )
-        self.pinion_table = (np.array([pc.last_row, pc.last_column]), pc.columns)
         self.pinion_map = np.empty((5, 2))
         self.pinion_map[0] = sg1, cg1
         self.pinion_map[1:, 0], self.pinion_map[1:, 1] = lin[:, 2] * cg1, -lin[:, 2] * sg1
         self.pinion_const = np.zeros((5, 1))
         self.pinion_const[1:, 0] = const
-        # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
-        self.pinion_taper = first.pinion.taper
-        gear_taper = first.gear.taper
-        self.gear_taper = None
-        if gear_taper is not None:
-            # unit coordinates (x, y) of (s, h) -> y of (s, t): with d = s - pivot,
-            # y' = (y + ib (h0 - d alpha)) / (1 + d beta) - ib h0
-            self.gear_taper = (
-                s0 - gear_taper.pivot_mm,
-                1.0 / ia,
-                ib,
-                h0,
-                gear_taper.alpha,
-                gear_taper.beta,
-            )
 
     def _kernel_tables(self):
-        """The tables of :mod:`gearopt.contact.kernels` (gear, pinion) and the node counts."""
-        (imax, jmax), n_cols = self.gear_table
-        taper = self.gear_taper or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        gear = (
-            *(float(a) for a in self.rho_coef),
-            float(imax),
-            float(jmax),
-            int(n_cols),
-            self.gear_taper is not None,
-            *(float(a) for a in taper),
-            self.gear_coef,
-            np.ascontiguousarray(self.gear_ok),
-        )
-        (p0, ph0), (pia, pib) = (a[:, 0] for a in self.pinion_unit)
-        (pimax, pjmax), p_cols = self.pinion_table
-        ptaper = self.pinion_taper
+        """The tables of :mod:`gearopt.contact.kernels` (gear, pinion) and the node counts: the
+        grids' parts made with the stacked tables (:func:`_stacked_tables`), the placement's."""
+        head, tail = self.pinion_kernel
         pinion = (
-            float(p0),
-            float(ph0),
-            float(pia),
-            float(pib),
-            float(pimax),
-            float(pjmax),
-            int(p_cols),
-            ptaper is not None,
-            *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
+            *head,
             np.ascontiguousarray(self.pinion_map),
             np.ascontiguousarray(self.pinion_const[:, 0]),
-            self.kernel_coef,
-            np.ascontiguousarray(self.refine_cells),
-            np.ascontiguousarray(self.kernel_band),
+            *tail,
         )
-        counts = self.node_counts
-        return gear, pinion, counts
+        return self.gear_kernel, pinion, self.node_counts
 
     def untaper(self, xy) -> None:
         """Gear unit grid coordinates of (s, h) made those of (s, t), in place (tapered
