@@ -143,7 +143,8 @@ def exact_polar(pinion, point, normal, near, s_pts, t_pts):
     """The polar angle and its grid gradient ``(theta, d_s, d_h)`` of exact surface points
     ``point`` (normals ``normal``) at grid coordinates ``(s_pts, t_pts)``: the angle on the
     branch nearest ``near`` (the flank's own interpolant there), the gradient to grid
-    coordinates by the chain rule where the depth tapers."""
+    coordinates by the chain rule where the depth tapers. (The boundary cells take these from
+    :func:`gearopt.contact.boundary_kernels.exact_values`, the same bits in one pass.)"""
     th = np.arctan2(point[:, 1], point[:, 0]) - near
     th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
     g_s, g_h = polar_gradient(
