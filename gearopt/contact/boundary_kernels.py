@@ -145,7 +145,7 @@ def exact_values(point, normal, near, sin_cos_pitch):
         n0, n1, n2 = normal[p, 0], normal[p, 1], normal[p, 2]
         n_r = n0 * cos + n1 * sin
         n_t = -n0 * sin + n1 * cos
-        scale = math.hypot(x, y) * (n_t if abs(n_t) > 1e-12 else 1e-12)
+        scale = np.hypot(x, y) * (n_t if abs(n_t) > 1e-12 else 1e-12)  # (libm's, not Python's)
         out[0, p] = th
         out[1, p] = -(sg * n_r + cg * n2) / scale
         out[2, p] = -(cg * n_r - sg * n2) / scale
