@@ -4,13 +4,15 @@ version), and the cells reproduce the exact surface at their corners."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 import gearopt
 from gearopt.analysis import generated_flanks
 from gearopt.contact import boundary
-from gearopt.contact.boundary_kernels import ENABLED
+from gearopt.contact.boundary_kernels import ENABLED, exact_values
 from gearopt.flank import FlankGrid
 
 from . import numpy_boundary
@@ -41,6 +43,27 @@ def test_kernels_give_the_numpy_tables_bit_for_bit(pinion, flank):
     assert np.array_equal(band, ref_band)
     assert coef.shape == ref_coef.shape
     assert np.array_equal(coef, ref_coef)
+
+
+@pytest.mark.parametrize("flank", ["convex", "concave"])
+def test_exact_values_are_exact_polar_bit_for_bit(pinion, flank):
+    """The compiled polar angle and gradient of exact points (at the generated nodes, the
+    branch taken near the node angle turned by up to a turn and a half), with the taper's
+    chain rule as the boundary cells apply it, are :func:`gearopt.contact.boundary.exact_polar`'s
+    bit for bit."""
+    f = pinion[flank]
+    i, j = np.nonzero(f.mask)
+    s, t = f.face_mm[i], f.profile_mm[j]
+    geo = f.surface.geometry_at(s, t)
+    turns = np.random.default_rng(5).uniform(-1.5, 1.5, s.size)
+    near = f.polar_angle_rad[i, j] + 2.0 * math.pi * turns
+    g = math.radians(f.pitch_angle_deg)
+    got = exact_values(geo["point"], geo["normal"], near, (math.sin(g), math.cos(g)))
+    if f.taper is not None:
+        got[1] = got[1] + got[2] * f.taper.dheight_dface(t)
+        got[2] = got[2] * f.taper.dheight_dprofile(s)
+    ref = boundary.exact_polar(f, geo["point"], geo["normal"], near, s, t)
+    assert np.array_equal(got, np.stack(ref))
 
 
 @pytest.mark.parametrize("flank", ["convex", "concave"])

@@ -43,7 +43,12 @@ import weakref
 
 import numpy as np
 
-from gearopt.contact.boundary_kernels import fine_corners, fine_layout, local_theta
+from gearopt.contact.boundary_kernels import (
+    exact_values,
+    fine_corners,
+    fine_layout,
+    local_theta,
+)
 from gearopt.errors import GearoptError
 from gearopt.flank import hermite_cells, hermite_coefficients, polar_gradient
 
@@ -115,12 +120,16 @@ def _made(pinion):
         s_pts,
         t_pts,
     )
-    th, g_s, g_h = exact_polar(pinion, point, normal, near, s_pts, t_pts)
+    g = math.radians(pinion.pitch_angle_deg)
+    values = exact_values(point, normal, near, (math.sin(g), math.cos(g)))  # exact_polar's
+    if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
+        values[1] = values[1] + values[2] * pinion.taper.dheight_dface(t_pts)
+        values[2] = values[2] * pinion.taper.dheight_dprofile(s_pts)
     corners = fine_corners(
         len(face),
         cols,
         exact,
-        np.stack([th, g_s, g_h]),
+        values,
         step,
         (k, level0, top, rows),
         mask,
@@ -134,7 +143,8 @@ def exact_polar(pinion, point, normal, near, s_pts, t_pts):
     """The polar angle and its grid gradient ``(theta, d_s, d_h)`` of exact surface points
     ``point`` (normals ``normal``) at grid coordinates ``(s_pts, t_pts)``: the angle on the
     branch nearest ``near`` (the flank's own interpolant there), the gradient to grid
-    coordinates by the chain rule where the depth tapers."""
+    coordinates by the chain rule where the depth tapers. (The boundary cells take these from
+    :func:`gearopt.contact.boundary_kernels.exact_values`, the same bits in one pass.)"""
     th = np.arctan2(point[:, 1], point[:, 0]) - near
     th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
     g_s, g_h = polar_gradient(

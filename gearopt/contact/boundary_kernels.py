@@ -2,8 +2,9 @@
 
 :func:`fine_layout` places the fine rows (which face rows of cells have them, their levels,
 the exact surface's corners and the cell table's band), :func:`local_theta` evaluates the
-flank's own interpolant at the corners (the polar angle the exact ones are unwrapped to) and
-:func:`fine_corners` fills the corners' values and derivatives: the exact ones, the extension
+flank's own interpolant at the corners (the polar angle the exact ones are unwrapped to),
+:func:`exact_values` the exact corners' polar angle and its gradient and :func:`fine_corners`
+fills the corners' values and derivatives: the exact ones, the extension
 below them, the cross derivative by differences along the profile and the flank's own node
 data on each face row's top line. Each does numpy's operations of the module's first version
 in numpy's order (the same bits; checked by ``tests/test_boundary_cells.py``), without the
@@ -19,7 +20,7 @@ import numpy as np
 
 from gearopt.jit import ENABLED, compiled
 
-__all__ = ["ENABLED", "fine_corners", "fine_layout", "local_theta", "warm"]
+__all__ = ["ENABLED", "exact_values", "fine_corners", "fine_layout", "local_theta", "warm"]
 
 
 @compiled
@@ -128,6 +129,30 @@ def local_theta(cells, coef, s, t):
 
 
 @compiled
+def exact_values(point, normal, near, sin_cos_pitch):
+    """``(3, n)``: the polar angle and its gradient ``(theta, d_s, d_h)`` of exact surface
+    points ``point`` (unit normals ``normal``, each ``(n, 3)``) in cone coordinates (s, h), the
+    angle on the branch nearest ``near``: :func:`gearopt.contact.boundary.exact_polar` on
+    uniform depth (:func:`gearopt.flank.polar_gradient`), its operations in its order point by
+    point. ``sin_cos_pitch``: the pitch angle's sine and cosine (Python's)."""
+    sg, cg = sin_cos_pitch
+    out = np.empty((3, len(near)))
+    for p in range(len(near)):
+        x, y = point[p, 0], point[p, 1]
+        th = math.atan2(y, x) - near[p]
+        th = near[p] + (th + math.pi) % (2.0 * math.pi) - math.pi
+        cos, sin = math.cos(th), math.sin(th)
+        n0, n1, n2 = normal[p, 0], normal[p, 1], normal[p, 2]
+        n_r = n0 * cos + n1 * sin
+        n_t = -n0 * sin + n1 * cos
+        scale = np.hypot(x, y) * (n_t if abs(n_t) > 1e-12 else 1e-12)  # (libm's, not Python's)
+        out[0, p] = th
+        out[1, p] = -(sg * n_r + cg * n2) / scale
+        out[2, p] = -(cg * n_r - sg * n2) / scale
+    return out
+
+
+@compiled
 def fine_corners(n_f, cols, exact, values, step, layout, mask, node):
     """The fine cells' corner data ``(theta, d_s, d_h, d_sh)``, each ``(n_f, levels)``: the
     exact surface's ``values`` ``(3, points)`` (Theta, Theta_s, Theta_h at the ``exact``
@@ -196,6 +221,6 @@ def warm() -> None:
     )
     cells = (0.0, 1.0, 0.0, 0.0, 10.0, 1.0, 2)
     theta = local_theta(cells, np.zeros((2, 16)), s, t)
-    values = np.stack([theta, theta, theta])
+    values = exact_values(np.ones((len(s), 3)), np.ones((len(s), 3)), theta, (0.5, 0.5))
     node = np.zeros((4, 2, 3))
     fine_corners(2, cols, exact, values, 0.1, (k, level0, top, rows), mask, node)

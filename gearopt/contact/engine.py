@@ -18,8 +18,8 @@ import operator
 import numpy as np
 
 from gearopt.contact import kernels as _kernels
-from gearopt.contact.boundary import boundary_cells
 from gearopt.contact.minima import minima_pick, minima_starts
+from gearopt.contact.nodes import node_tables
 from gearopt.contact.recall import NodeFieldRecall
 from gearopt.contact.rows import row_constants
 from gearopt.contact.samples import FieldSample
@@ -52,6 +52,11 @@ def remembered_tables(kind: str, flanks: tuple, make):
     return value
 
 
+def _equal(a, b) -> bool:
+    """Whether grid arrays ``a`` and ``b`` are equal (the same array, often)."""
+    return a is b or np.array_equal(a, b)
+
+
 def _keep_heap() -> None:
     """Ask glibc (once per process) to keep freed memory for reuse: the analyses allocate and
     free arrays of a few hundred kB at every call, which with glibc's default thresholds
@@ -69,73 +74,6 @@ def _keep_heap() -> None:
     mallopt(-1, 64 << 20)  # M_TRIM_THRESHOLD: the heap's free top kept up to 64 MiB
 
 
-def node_tables(pinion) -> dict:
-    """The node tables of a field's pinion flank (a field keeps them: it is not changed once
-    made): its generated nodes (flat indices), their points and normals (``(3, n)`` each),
-    the refinable nodes and cells (the generated ones, evaluated on the fine cells at the
-    generated boundary, :func:`gearopt.contact.boundary.boundary_cells`: the flank's own
-    interpolant is poor near the envelope's fold; on a flank without them, two cells above the
-    lowest generated nodes), the generated cells, the fine cells' tables (``fine``), the
-    grid's cell size.
-
-    A cell's entry is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are in where
-    ``v >= c0 + c1 u`` (:func:`gearopt.contact.kernels.clearance_at`; ``(2, 0)``: none,
-    ``(0, 0)``: all). The generated cells (``generated``: where the tangency point is inside
-    the flank, and the zones' extent, :mod:`gearopt.mesh.zone`) end at the flank's lowest
-    generated profile coordinate, linear across the cell
-    (:attr:`gearopt.flank.FlankMap.lowest_profile_mm`, continuous: the envelope's fold
-    solved), so that the contact interval's ends and the pattern reach the generated
-    boundary wherever the grid's nodes lie; on a flank known to its nodes only, the cells of
-    four generated nodes.
-    """
-    mask = pinion.mask
-    nodes = np.flatnonzero(mask.ravel())
-    pts = pinion.points_mm.reshape(-1, 3)[nodes]
-    nrm = pinion.normals.reshape(-1, 3)[nodes]
-    profile = np.asarray(pinion.profile_mm, float)
-    dp = float(np.mean(np.diff(profile)))
-    fine = boundary_cells(pinion)
-    keep = mask.copy()
-    for _ in range(0 if fine else 2):
-        below = np.zeros_like(keep)
-        below[:, 1:] = keep[:, :-1]
-        keep &= below
-    cells = keep[:-1, :-1] & keep[1:, :-1] & keep[:-1, 1:] & keep[1:, 1:]
-    limits = np.zeros((cells.size, 2))
-    limits[~cells.ravel(), 0] = 2.0
-    generated = np.zeros_like(limits)
-    lowest = getattr(pinion, "lowest_profile_mm", None)
-    if lowest is None:
-        generated[~pinion.cells.generated, 0] = 2.0
-    else:
-        with np.errstate(invalid="ignore"):
-            b0 = (lowest[:-1, None] - profile[None, :-1]) / dp
-            b1 = (lowest[1:, None] - profile[None, :-1]) / dp
-        top = mask[:-1, 1:] & mask[1:, 1:]
-        on = top & np.isfinite(b0) & np.isfinite(b1) & (np.minimum(b0, b1) < 1.0)
-        full = on & (b0 <= 0.0) & (b1 <= 0.0)
-        part = on & ~full
-        generated[:, 0] = np.where(full, 0.0, np.where(part, b0, 2.0)).ravel()
-        generated[:, 1] = np.where(part, b1 - b0, 0.0).ravel()
-    if fine:
-        limits = generated  # the fine cells are accurate up to the generated boundary
-    else:
-        fine = (np.full((cells.size, 4), -1.0), np.zeros((1, 16)))
-    slot = np.full(mask.size, -1, np.intp)
-    slot[nodes] = np.arange(nodes.size)
-    return {
-        "fine": fine,
-        "nodes": nodes,
-        "slot": slot,
-        "points": np.ascontiguousarray(pts.T),
-        "normals": np.ascontiguousarray(nrm.T),
-        "keep": keep.ravel(),
-        "cells": limits,
-        "generated": generated,
-        "cell_mm": (float(np.mean(np.diff(pinion.face_mm))), dp),
-    }
-
-
 def _stacked_tables(fields) -> dict:
     """The tables of :class:`ContactEngine` that depend on its fields' flanks alone (not on the
     placement): the sides' pinion node tables, padded and stacked, the cell tables of both
@@ -150,25 +88,22 @@ def _stacked_tables(fields) -> dict:
     # apart, contiguous
     sizes = [t["nodes"].size for t in tables]
     count = max(sizes) + 1
-    pad = [np.arange(count) for _ in sizes]
-    for k, n in zip(pad, sizes, strict=True):
-        k[n:] = 0
-    node_index = np.empty((len(tables), count), np.intp)
-    for i, (t, k) in enumerate(zip(tables, pad, strict=True)):
-        np.take(t["nodes"], k, out=node_index[i])
+    k = len(tables)
+    node_index = np.empty((k, count), np.intp)
+    node_slot = np.empty((k, tables[0]["slot"].size), np.intp)
+    # points and normals ``(6, K, count)``: (x, y) of each side's nodes and of their normals
+    # ``(2, K, count)``, z ``(K, count)``, contiguous parts of one table
+    geometry = np.empty((6, k, count))
+    for i, (t, n) in enumerate(zip(tables, sizes, strict=True)):
+        node_index[i, :n] = t["nodes"]
+        node_index[i, n:] = t["nodes"][0]
+        geometry[:, i, :n] = t["geometry"]
+        geometry[:, i, n:] = t["geometry"][:, :1]
+        # each grid node's column in its side's node tables (off-mask: the padding after them)
+        node_slot[i] = t["slot"]
     node_real = np.arange(count)[None, :] < np.array(sizes)[:, None]
-    # each grid node's column in its side's node tables (off-mask: the padding after them)
-    node_slot = np.stack(
-        [np.where(t["slot"] < 0, n, t["slot"]) for t, n in zip(tables, sizes, strict=True)]
-    )
-    # (x, y) of each side's nodes and of their normals ``(2, K, count)``, z ``(K, count)``:
-    # contiguous parts of one table of the components each
-    node_points, node_normals = np.empty((3, len(tables), count)), np.empty((3, len(tables), count))
-    for i, (t, k) in enumerate(zip(tables, pad, strict=True)):
-        np.take(t["points"], k, axis=1, out=node_points[:, i])
-        np.take(t["normals"], k, axis=1, out=node_normals[:, i])
-    node_xy, node_nxy = node_points[:2], node_normals[:2]
-    point_z, normal_z = node_points[2], node_normals[2]
+    node_xy, node_nxy = geometry[:2], geometry[3:5]
+    point_z, normal_z = geometry[2], geometry[5]
     points, normals = (node_xy[0], node_xy[1], point_z), (node_nxy[0], node_nxy[1], normal_z)
     # the refinable nodes and cells: the generated ones on the fine cells at the
     # generated boundary, else two cells above the lowest generated nodes (node_tables)
@@ -197,7 +132,41 @@ def _stacked_tables(fields) -> dict:
     )
     # where the tangency point is inside the pinion flank
     pinion_generated = np.ascontiguousarray(np.concatenate([t["generated"] for t in tables]))
-    return {
+    maps = _flank_maps(first)
+    (imax, jmax), n_cols = maps["gear_table"]
+    taper = maps["gear_taper"] or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    maps["gear_kernel"] = (
+        *(float(a) for a in maps["rho_coef"]),
+        float(imax),
+        float(jmax),
+        int(n_cols),
+        maps["gear_taper"] is not None,
+        *(float(a) for a in taper),
+        gear_coef,
+        np.ascontiguousarray(gear_ok),
+    )
+    (p0, ph0), (pia, pib) = (a[:, 0] for a in maps["pinion_unit"])
+    (pimax, pjmax), p_cols = maps["pinion_table"]
+    ptaper = maps["pinion_taper"]
+    maps["pinion_kernel"] = (
+        (
+            float(p0),
+            float(ph0),
+            float(pia),
+            float(pib),
+            float(pimax),
+            float(pjmax),
+            int(p_cols),
+            ptaper is not None,
+            *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
+        ),
+        (
+            kernel_coef,
+            np.ascontiguousarray(refine_cells),
+            np.ascontiguousarray(kernel_band),
+        ),
+    )
+    return maps | {
         "ds": ds,
         "dh": dh,
         "cell": cell,
@@ -221,6 +190,36 @@ def _stacked_tables(fields) -> dict:
         "gear_coef": gear_coef,
         "gear_ok": gear_ok,
         "pinion_generated": pinion_generated,
+    }
+
+
+def _flank_maps(first) -> dict:
+    """The parts of :meth:`ContactEngine._linear_maps` that depend on the grids alone (of the
+    first field; the fields share them): the gear's unit grid coordinates' R2 coefficients and
+    cell table's limits, its taper, the pinion's unit grid coordinates, cell table's limits,
+    taper and pitch angle's cosine and sine."""
+    gc, pc = first.gear.cells, first.pinion.cells
+    s0, h0, ia, ib = gc.face0_mm, gc.profile0_mm, gc.face_scale, gc.profile_scale
+    g = math.radians(first.gear.pitch_angle_deg)
+    cg, sg = math.cos(g), math.sin(g)
+    g1 = math.radians(first.pinion.pitch_angle_deg)
+    gear_taper = first.gear.taper
+    if gear_taper is not None:
+        # unit coordinates (x, y) of (s, h) -> y of (s, t): with d = s - pivot,
+        # y' = (y + ib (h0 - d alpha)) / (1 + d beta) - ib h0
+        gear_taper = (s0 - gear_taper.pivot_mm, 1.0 / ia, ib, h0, gear_taper.alpha, gear_taper.beta)
+    return {
+        "rho_coef": np.array([ia * sg, ib * cg]),
+        "gear_table": (np.array([gc.last_row, gc.last_column]), gc.columns),
+        "gear_taper": gear_taper,
+        "cos_sin_pitch": (math.cos(g1), math.sin(g1)),
+        "pinion_unit": (
+            np.array([[pc.face0_mm], [pc.profile0_mm]]),
+            np.array([[pc.face_scale], [pc.profile_scale]]),
+        ),
+        "pinion_table": (np.array([pc.last_row, pc.last_column]), pc.columns),
+        # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
+        "pinion_taper": first.pinion.taper,
     }
 
 
@@ -283,13 +282,19 @@ class ContactEngine:
         _keep_heap()
         first = fields[0]
         for f in fields[1:]:
+            # (one placement gives the same b and c: a pair's fields share theirs)
             same = (
-                np.array_equal(f.pinion.face_mm, first.pinion.face_mm)
-                and np.array_equal(f.pinion.profile_mm, first.pinion.profile_mm)
-                and np.array_equal(f.gear.face_mm, first.gear.face_mm)
-                and np.array_equal(f.gear.profile_mm, first.gear.profile_mm)
-                and np.all(np.abs(f.b - first.b) <= 1e-8 + 1e-5 * np.abs(first.b))
-                and np.all(np.abs(f.c - first.c) <= 1e-8 + 1e-5 * np.abs(first.c))
+                _equal(f.pinion.face_mm, first.pinion.face_mm)
+                and _equal(f.pinion.profile_mm, first.pinion.profile_mm)
+                and _equal(f.gear.face_mm, first.gear.face_mm)
+                and _equal(f.gear.profile_mm, first.gear.profile_mm)
+                and (
+                    f.placement is first.placement
+                    or (
+                        np.all(np.abs(f.b - first.b) <= 1e-8 + 1e-5 * np.abs(first.b))
+                        and np.all(np.abs(f.c - first.c) <= 1e-8 + 1e-5 * np.abs(first.c))
+                    )
+                )
                 and f.ratio == first.ratio
             )
             if not same:
@@ -301,8 +306,6 @@ class ContactEngine:
         self.sense = np.array([f.sense for f in fields], float)
         self.gear_sense = -self.sense
         self.place(fields)
-        g = math.radians(first.pinion.pitch_angle_deg)
-        self.cos_sin_pitch = (math.cos(g), math.sin(g))
         flanks = tuple(m for f in fields for m in (f.pinion, f.gear))
         stacked = remembered_tables("engine", flanks, lambda: _stacked_tables(fields))
         for name, value in stacked.items():
@@ -338,7 +341,7 @@ class ContactEngine:
         """
         first = fields[0]
         b, c = first.b, first.c
-        gc, pc = first.gear.cells, first.pinion.cells
+        gc = first.gear.cells
         s0, h0, ia, ib = gc.face0_mm, gc.profile0_mm, gc.face_scale, gc.profile_scale
         g = math.radians(first.gear.pitch_angle_deg)
         cg, sg = math.cos(g), math.sin(g)
@@ -347,77 +350,31 @@ class ContactEngine:
         self.rotation = np.empty((8, 2))
         self.rotation[:4, 0], self.rotation[:4, 1] = lin[:, 0], lin[:, 1]
         self.rotation[4:, 0], self.rotation[4:, 1] = lin[:, 1], -lin[:, 0]
-        self.rho_coef = np.array([ia * sg, ib * cg])
-        self.gear_table = (np.array([gc.last_row, gc.last_column]), gc.columns)
         self.lin_z, self.const = np.ascontiguousarray(lin[:, 2]), const
         # the node tables: the z terms (with the constants) of every side's nodes; the
         # normals' z terms of qx, qy (no constants); their x, y: the flanks' (node_xy, node_nxy)
         self.node_z = lin[:, 2, None, None] * self.points[2] + const[:, None, None]
         self.node_nz = lin[:2, 2, None, None] * self.normals[2]
         # pinion grid coordinates (s, h) -> the pinion's unit grid coordinates, R1 and the
-        # z terms (z = L1 = s cos g1 - h sin g1)
+        # z terms (z = L1 = s cos g1 - h sin g1); the grids' parts: _flank_maps
         cg1, sg1 = self.cos_sin_pitch
-        self.pinion_unit = (
-            np.array([[pc.face0_mm], [pc.profile0_mm]]),
-            np.array([[pc.face_scale], [pc.profile_scale]]),
-        )
-        self.pinion_table = (np.array([pc.last_row, pc.last_column]), pc.columns)
         self.pinion_map = np.empty((5, 2))
         self.pinion_map[0] = sg1, cg1
         self.pinion_map[1:, 0], self.pinion_map[1:, 1] = lin[:, 2] * cg1, -lin[:, 2] * sg1
         self.pinion_const = np.zeros((5, 1))
         self.pinion_const[1:, 0] = const
-        # tapered depth: the grids' profile coordinate is t, not the height (DepthTaper)
-        self.pinion_taper = first.pinion.taper
-        gear_taper = first.gear.taper
-        self.gear_taper = None
-        if gear_taper is not None:
-            # unit coordinates (x, y) of (s, h) -> y of (s, t): with d = s - pivot,
-            # y' = (y + ib (h0 - d alpha)) / (1 + d beta) - ib h0
-            self.gear_taper = (
-                s0 - gear_taper.pivot_mm,
-                1.0 / ia,
-                ib,
-                h0,
-                gear_taper.alpha,
-                gear_taper.beta,
-            )
 
     def _kernel_tables(self):
-        """The tables of :mod:`gearopt.contact.kernels` (gear, pinion) and the node counts."""
-        (imax, jmax), n_cols = self.gear_table
-        taper = self.gear_taper or (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        gear = (
-            *(float(a) for a in self.rho_coef),
-            float(imax),
-            float(jmax),
-            int(n_cols),
-            self.gear_taper is not None,
-            *(float(a) for a in taper),
-            self.gear_coef,
-            np.ascontiguousarray(self.gear_ok),
-        )
-        (p0, ph0), (pia, pib) = (a[:, 0] for a in self.pinion_unit)
-        (pimax, pjmax), p_cols = self.pinion_table
-        ptaper = self.pinion_taper
+        """The tables of :mod:`gearopt.contact.kernels` (gear, pinion) and the node counts: the
+        grids' parts made with the stacked tables (:func:`_stacked_tables`), the placement's."""
+        head, tail = self.pinion_kernel
         pinion = (
-            float(p0),
-            float(ph0),
-            float(pia),
-            float(pib),
-            float(pimax),
-            float(pjmax),
-            int(p_cols),
-            ptaper is not None,
-            *((0.0, 0.0, 0.0) if ptaper is None else (ptaper.pivot_mm, ptaper.alpha, ptaper.beta)),
+            *head,
             np.ascontiguousarray(self.pinion_map),
             np.ascontiguousarray(self.pinion_const[:, 0]),
-            self.kernel_coef,
-            np.ascontiguousarray(self.refine_cells),
-            np.ascontiguousarray(self.kernel_band),
+            *tail,
         )
-        counts = self.node_counts
-        return gear, pinion, counts
+        return self.gear_kernel, pinion, self.node_counts
 
     def untaper(self, xy) -> None:
         """Gear unit grid coordinates of (s, h) made those of (s, t), in place (tapered
