@@ -14,13 +14,13 @@ __all__ = ["node_tables"]
 
 def node_tables(pinion) -> dict:
     """The node tables of a field's pinion flank (a field keeps them: it is not changed once
-    made): its generated nodes (flat indices), their points and normals (``(3, n)`` each,
-    parts of one table ``geometry`` ``(6, n)``), each grid node's column among them (``slot``;
-    off-mask nodes n), the refinable nodes and cells (the generated ones, evaluated on the
-    fine cells at the generated boundary, :func:`gearopt.contact.boundary.boundary_cells`: the
-    flank's own interpolant is poor near the envelope's fold; on a flank without them, two
-    cells above the lowest generated nodes), the generated cells, the fine cells' tables
-    (``fine``), the grid's cell size.
+    made): its generated nodes (flat indices), their points and normals (``geometry``
+    ``(6, n)``: the points' x, y, z, then the normals'), each grid node's column among them
+    (``slot``; off-mask nodes n), the refinable nodes and cells (the generated ones, evaluated
+    on the fine cells at the generated boundary,
+    :func:`gearopt.contact.boundary.boundary_cells`: the flank's own interpolant is poor near
+    the envelope's fold; on a flank without them, two cells above the lowest generated nodes),
+    the generated cells, the fine cells' tables (``fine``), the grid's cell size.
 
     A cell's entry is ``(c0, c1)``: its points at unit coordinates ``(u, v)`` are in where
     ``v >= c0 + c1 u`` (:func:`gearopt.contact.kernels.clearance_at`; ``(2, 0)``: none,
@@ -77,8 +77,6 @@ def node_tables(pinion) -> dict:
         "nodes": nodes,
         "slot": slot,
         "geometry": geometry,
-        "points": geometry[:3],
-        "normals": geometry[3:],
         "keep": keep.ravel(),
         "cells": limits,
         "generated": generated,
