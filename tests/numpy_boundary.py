@@ -8,10 +8,10 @@ import math
 
 import numpy as np
 
-from gearopt.contact.boundary import BELOW_MM, REACH_MM, ROWS_ABOVE, STEP_MM, exact_polar
-from gearopt.flank import hermite_coefficients
+from gearopt.contact.boundary import BELOW_MM, REACH_MM, ROWS_ABOVE, STEP_MM
+from gearopt.flank import hermite_coefficients, polar_gradient
 
-__all__ = ["boundary_cells", "extend_down"]
+__all__ = ["boundary_cells", "exact_polar", "extend_down"]
 
 
 def boundary_cells(pinion):
@@ -115,3 +115,20 @@ def extend_down(theta, d_s, d_h, exact, step) -> None:
     )[below]
     d_h[below] = (d_h[r, e][:, None] + t_hh[:, None] * gap)[below]
     d_s[below] = (d_s[r, e][:, None] + t_sh[:, None] * gap)[below]
+
+
+def exact_polar(pinion, point, normal, near, s_pts, t_pts):
+    """The polar angle and its grid gradient ``(theta, d_s, d_h)`` of exact surface points
+    ``point`` (normals ``normal``) at grid coordinates ``(s_pts, t_pts)``, by numpy: the angle
+    on the branch nearest ``near`` (the flank's own interpolant there), the gradient to grid
+    coordinates by the chain rule where the depth tapers (the boundary cells take these from
+    :func:`gearopt.contact.boundary_kernels.exact_values` and the same chain rule)."""
+    th = np.arctan2(point[:, 1], point[:, 0]) - near
+    th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
+    g_s, g_h = polar_gradient(
+        th, normal, np.hypot(point[:, 0], point[:, 1]), pinion.pitch_angle_deg
+    )
+    if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
+        g_s = g_s + g_h * pinion.taper.dheight_dface(t_pts)
+        g_h = g_h * pinion.taper.dheight_dprofile(s_pts)
+    return th, g_s, g_h

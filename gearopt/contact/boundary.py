@@ -50,9 +50,9 @@ from gearopt.contact.boundary_kernels import (
     local_theta,
 )
 from gearopt.errors import GearoptError
-from gearopt.flank import hermite_cells, hermite_coefficients, polar_gradient
+from gearopt.flank import hermite_cells, hermite_coefficients
 
-__all__ = ["BELOW_MM", "STEP_MM", "boundary_cells", "band_theta", "exact_polar"]
+__all__ = ["BELOW_MM", "STEP_MM", "boundary_cells", "band_theta"]
 
 #: the fine cells' height along the profile at most (mm)
 STEP_MM = 0.1
@@ -121,7 +121,7 @@ def _made(pinion):
         t_pts,
     )
     g = math.radians(pinion.pitch_angle_deg)
-    values = exact_values(point, normal, near, (math.sin(g), math.cos(g)))  # exact_polar's
+    values = exact_values(point, normal, near, (math.sin(g), math.cos(g)))
     if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
         values[1] = values[1] + values[2] * pinion.taper.dheight_dface(t_pts)
         values[2] = values[2] * pinion.taper.dheight_dprofile(s_pts)
@@ -137,23 +137,6 @@ def _made(pinion):
     )
     coef = hermite_coefficients(*corners, np.diff(face), np.full(exact.shape[1] - 1, step))
     return band, coef
-
-
-def exact_polar(pinion, point, normal, near, s_pts, t_pts):
-    """The polar angle and its grid gradient ``(theta, d_s, d_h)`` of exact surface points
-    ``point`` (normals ``normal``) at grid coordinates ``(s_pts, t_pts)``: the angle on the
-    branch nearest ``near`` (the flank's own interpolant there), the gradient to grid
-    coordinates by the chain rule where the depth tapers. (The boundary cells take these from
-    :func:`gearopt.contact.boundary_kernels.exact_values`, the same bits in one pass.)"""
-    th = np.arctan2(point[:, 1], point[:, 0]) - near
-    th = near + (th + math.pi) % (2.0 * math.pi) - math.pi
-    g_s, g_h = polar_gradient(
-        th, normal, np.hypot(point[:, 0], point[:, 1]), pinion.pitch_angle_deg
-    )
-    if pinion.taper is not None:  # to grid coordinates (s, t): the chain rule
-        g_s = g_s + g_h * pinion.taper.dheight_dface(t_pts)
-        g_h = g_h * pinion.taper.dheight_dprofile(s_pts)
-    return th, g_s, g_h
 
 
 def band_theta(coef, band, band_coef, cell, u, v):

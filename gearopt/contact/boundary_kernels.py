@@ -132,7 +132,7 @@ def local_theta(cells, coef, s, t):
 def exact_values(point, normal, near, sin_cos_pitch):
     """``(3, n)``: the polar angle and its gradient ``(theta, d_s, d_h)`` of exact surface
     points ``point`` (unit normals ``normal``, each ``(n, 3)``) in cone coordinates (s, h), the
-    angle on the branch nearest ``near``: :func:`gearopt.contact.boundary.exact_polar` on
+    angle on the branch nearest ``near``: the numpy reference's (``tests/numpy_boundary.py``) on
     uniform depth (:func:`gearopt.flank.polar_gradient`), its operations in its order point by
     point. ``sin_cos_pitch``: the pitch angle's sine and cosine (Python's)."""
     sg, cg = sin_cos_pitch
