@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from functools import cached_property, lru_cache, partial
+from functools import cached_property, partial
 from typing import Any
 
 import numpy as np
@@ -213,7 +213,7 @@ class MeshCycle:
         p1 = self.fields[0].pinion.pitch_rad
         self.pitch = p1
         self.sense = np.array([f.sense for f in self.fields], float)
-        self.t = _positions(-0.5 * cycles * p1, 0.5 * cycles * p1, positions).copy()
+        self.t = np.linspace(-0.5 * cycles * p1, 0.5 * cycles * p1, positions)
         self.step = self.t[1] - self.t[0]
         self.offsets = np.arange(pairs) - (pairs - 1) // 2
         #: each side's window (pair offsets), :attr:`offsets` unless widened (:meth:`widen`)
@@ -601,13 +601,6 @@ class MeshCycle:
                 )
             )
         return out
-
-
-@lru_cache(maxsize=64)
-def _positions(start: float, end: float, positions: int) -> NDArray:
-    """``np.linspace(start, end, positions)``, made once per range and count (a study's trials
-    share them; callers take a copy)."""
-    return np.linspace(start, end, positions)
 
 
 def _gathered_factors(lines, counts) -> NDArray:
