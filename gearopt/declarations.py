@@ -297,53 +297,20 @@ def report_metrics(evaluator: Any, report: Mapping[str, Any]) -> dict[str, float
     dotted places (booleans as 0/1, list items by index); a declared metric the report does
     not hold (one present only under some conditions) is left out."""
     out: dict[str, float] = {}
-    for name, places in _places(evaluator):
-        value: Any = report
-        for part, index in places:
-            if (type(value) is dict or isinstance(value, Mapping)) and part in value:
-                value = value[part]
-            elif isinstance(value, list | tuple) and index is not None and index < len(value):
-                value = value[index]
-            else:
-                value = None
-                break
-        finite = type(value) is float and math.isfinite(value)  # (most metrics: no more tests)
-        if finite or isinstance(value, bool) or _number(value):
-            out[name] = float(value)
+    for metric in evaluator.metrics:
+        for name in metric_names(evaluator, metric):
+            value: Any = report
+            for part in name.split("."):
+                if isinstance(value, Mapping) and part in value:
+                    value = value[part]
+                elif isinstance(value, list | tuple) and part.isdigit() and int(part) < len(value):
+                    value = value[int(part)]
+                else:
+                    value = None
+                    break
+            if isinstance(value, bool) or _number(value):
+                out[name] = float(value)
     return out
-
-
-#: the last few evaluators' metrics as :func:`_places` reads them, with what they were read from
-_PLACES: list[tuple[Any, tuple, list]] = []
-
-
-def _places(evaluator: Any) -> list[tuple[str, tuple[tuple[str, int | None], ...]]]:
-    """``(name, places)`` of each declared metric of ``evaluator`` (:func:`metric_names`): its
-    dotted parts, each with its list index (None: not digits); read again only when the
-    evaluator's metrics or sections change."""
-    sections = getattr(evaluator, "sections", None)
-    declared = (
-        *evaluator.metrics,
-        getattr(evaluator, "section", None),
-        *(() if sections is None else sections.values()),
-    )
-    for i, (known, was, places) in enumerate(_PLACES):
-        if known is evaluator and len(was) == len(declared) and all(map(_same, was, declared)):
-            if i:
-                _PLACES.insert(0, _PLACES.pop(i))
-            return places
-    places = [
-        (name, tuple((part, int(part) if part.isdigit() else None) for part in name.split(".")))
-        for metric in evaluator.metrics
-        for name in metric_names(evaluator, metric)
-    ]
-    _PLACES.insert(0, (evaluator, declared, places))
-    del _PLACES[16:]
-    return places
-
-
-def _same(a: Any, b: Any) -> bool:
-    return a is b or (type(a) is str and a == b)
 
 
 def describe(plugin: Any) -> dict[str, Any]:

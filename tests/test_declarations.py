@@ -291,7 +291,7 @@ def test_a_third_party_evaluator_reaches_the_study_tables(toy_evaluator_site, tm
 
 
 def test_report_metrics_read_the_declared_places():
-    # the places are read once per evaluator, and again when its declarations change
+    # the declared places as the report holds them, read anew when the declarations change
     from gearopt.declarations import Metric, report_metrics
 
     class Toy:
