@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import copy
 import datetime
-import weakref
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -39,10 +38,6 @@ __all__ = [
 ]
 
 
-#: the designs :func:`parse_design` made, by identity: their parsed tables are their source's, so
-#: a design derived from one (:func:`with_overrides`: a study's trial) takes the tables its
-#: overrides leave alone from it as parsed
-_PARSED: weakref.WeakValueDictionary[int, Design] = weakref.WeakValueDictionary()
 #: the values a TOML document holds besides tables and arrays (immutable: copies share them)
 _ATOMS = frozenset(
     {str, int, float, bool, type(None), datetime.datetime, datetime.date, datetime.time}
@@ -106,13 +101,6 @@ def parse_design(
     among the registered plugins (``plugin_manager``, default: the built-ins and every installed
     plugin).
     """
-    return _parsed(data, plugin_manager, path, None, ())
-
-
-def _parsed(data, plugin_manager, path, base: Design | None, touched) -> Design:
-    """:func:`parse_design`; with ``base`` (a design it made from its source, of which ``data``
-    is a copy with the top-level tables ``touched`` changed) each table left alone is taken
-    from ``base`` as parsed (frozen, or copied), not parsed again: the same design."""
     if not isinstance(data, Mapping):
         raise DesignError("design", data, "must be a TOML document (a table of tables)")
     tables = {name: read_table(data, name, "") for name in SECTIONS}
@@ -121,12 +109,7 @@ def _parsed(data, plugin_manager, path, base: Design | None, touched) -> Design:
         raise DesignError("pair", rule="the [pair] table is required")
     if "machine" not in data:
         raise DesignError("machine", rule='the [machine] table is required (model = "...")')
-    kept = set() if base is None else set(SECTIONS).difference(touched)
-    if {"pair", "blank"} <= kept:
-        pair, standard = base.pair, base.standard_blank
-    else:
-        blank = tables["blank"] if "blank" in data else None
-        pair, standard = pair_from_tables(tables["pair"], blank)
+    pair, standard = pair_from_tables(tables["pair"], tables["blank"] if "blank" in data else None)
     machine_table = dict(tables["machine"])
     if "model" not in machine_table:
         raise DesignError("machine.model", rule="required key is missing")
@@ -138,38 +121,22 @@ def _parsed(data, plugin_manager, path, base: Design | None, touched) -> Design:
         machine = model.synthesize(machine_table, tables["synthesis"], pair)
     else:
         machine = model.parse_machine(machine_table, pair)
-    if "meta" not in kept:
-        check_keys(tables["meta"], ("name", "description", "source"), "meta")
-    design = Design(
+    meta_table = tables["meta"]
+    check_keys(meta_table, ("name", "description", "source"), "meta")
+    return Design(
         pair=pair,
         model=model.name,
         machine=machine,
-        misalignment=(
-            base.misalignment
-            if "misalignment" in kept
-            else Misalignment.from_table(tables["misalignment"], "misalignment")
-        ),
-        compensation=(
-            base.compensation
-            if "compensation" in kept
-            else Misalignment.from_table(tables["compensation"], "compensation")
-        ),
-        meta=base.meta if "meta" in kept else Meta(**tables["meta"]),
-        analysis=dict(base.analysis) if "analysis" in kept else _analysis_table(tables["analysis"]),
-        load=dict(base.load) if "load" in kept else _load_table(tables["load"]),
-        te_target=(
-            base.te_target
-            if {"te_target", "pair", "blank"} <= kept
-            else _te_target(tables["te_target"], pair)
-            if "te_target" in data
-            else None
-        ),
+        misalignment=Misalignment.from_table(tables["misalignment"], "misalignment"),
+        compensation=Misalignment.from_table(tables["compensation"], "compensation"),
+        meta=Meta(**meta_table),
+        analysis=_analysis_table(tables["analysis"]),
+        load=_load_table(tables["load"]),
+        te_target=_te_target(tables["te_target"], pair) if "te_target" in data else None,
         standard_blank=standard,
         source=_copied(dict(data)),
         path=path,
     )
-    _PARSED[id(design)] = design
-    return design
 
 
 def loads_design(text: str, *, plugin_manager: pluggy.PluginManager | None = None) -> Design:
@@ -206,7 +173,7 @@ def source_with_machine(design: Design, table: Mapping[str, Any]) -> dict[str, A
     """A copy of ``design``'s source tables with ``[machine]`` replaced by ``table`` (settings
     written out, without ``model``) and no ``[synthesis]``: what a design with plain settings
     parses from (:func:`parse_design`) or writes out (``tomli_w``)."""
-    data = copy.deepcopy(dict(design.source))
+    data = _copied(dict(design.source))
     data.pop("synthesis", None)
     data["machine"] = {"model": design.model, **table}
     return data
@@ -221,10 +188,8 @@ def with_overrides(
     """Return a new design with dotted keys replaced, e.g.
     ``{"machine.pinion.inner_cutter_radius_mm": 76.0}``; the result is validated anew."""
     data = _copied(dict(design.source))
-    touched = set()
     for dotted, value in overrides.items():
         parts = dotted.split(".")
-        touched.add(parts[0])
         node = data
         for part in parts[:-1]:
             child = node.setdefault(part, {})
@@ -234,5 +199,4 @@ def with_overrides(
                 )
             node = child
         node[parts[-1]] = value
-    base = design if _PARSED.get(id(design)) is design else None
-    return _parsed(data, plugin_manager, design.path, base, touched)
+    return parse_design(data, plugin_manager=plugin_manager, path=design.path)

@@ -47,8 +47,7 @@ def test_overrides_make_a_new_validated_design(table3_design):
     ],
 )
 def test_overrides_equal_a_design_parsed_anew(table3_design, overrides):
-    # the tables an override leaves alone are taken from the base design as parsed: the same
-    # design as parsing the changed document, with a source of its own
+    # the same design as parsing the changed document, with a source of its own
     changed = gearopt.with_overrides(table3_design, overrides)
     data = copy.deepcopy(dict(table3_design.source))
     for dotted, value in overrides.items():
